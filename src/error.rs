@@ -1,0 +1,83 @@
+//! The crate's one error type.
+
+use std::fmt;
+use std::path::PathBuf;
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The operating system refused a read or write.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+
+    /// A file's content is malformed; `at` names the line (text) or byte offset (binary).
+    #[error("{}{}: {msg}", path.display(), at.as_ref().map(|a| format!(": {a}")).unwrap_or_default())]
+    Parse {
+        path: PathBuf,
+        at: Option<Location>,
+        msg: String,
+    },
+
+    /// The mesh is structurally unusable (bad indices, NaN coordinates, empty, ...).
+    #[error("invalid mesh: {0}")]
+    InvalidMesh(String),
+
+    /// The mesh has inverted or degenerate elements; optimisation needs a feasible start.
+    #[error(
+        "mesh has {count} inverted or degenerate element(s) (first ids: {}); untangling is not supported yet",
+        fmt_ids(first)
+    )]
+    Inverted { count: usize, first: Vec<usize> },
+
+    /// Something meshsmooth does not handle (yet), such as pyramids.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+
+    /// A caller passed an unusable option.
+    #[error("invalid argument: {0}")]
+    InvalidArgument(String),
+}
+
+/// Where in a file a parse error happened.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Location {
+    Line(usize),
+    Byte(u64),
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::Line(l) => write!(f, "line {l}"),
+            Location::Byte(b) => write!(f, "byte {b}"),
+        }
+    }
+}
+
+fn fmt_ids(ids: &[usize]) -> String {
+    ids.iter()
+        .map(|i| i.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+impl Error {
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    pub fn parse(path: impl Into<PathBuf>, at: Option<Location>, msg: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.into(),
+            at,
+            msg: msg.into(),
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! Mesh generators and perturbations for tests and benchmarks.

@@ -1,0 +1,1 @@
+//! Mesh files: VTK legacy and XML, Gmsh, Medit; atomic writes.

@@ -1,0 +1,17 @@
+//! meshsmooth: mesh quality improvement by vertex repositioning.
+//!
+//! Data flows `io -> Mesh -> Problem -> solve -> positions -> io`; see the
+//! README for the command-line tool and a library example.
+
+pub mod error;
+pub mod generate;
+pub mod io;
+pub mod mesh;
+pub mod metric;
+pub mod objective;
+pub mod problem;
+pub mod report;
+pub mod solve;
+
+pub use error::{Error, Result};
+pub use mesh::{ElementKind, Mesh};

@@ -1,0 +1,205 @@
+//! Element kinds and their corner tables.
+//!
+//! Node ordering is VTK's for every kind; Gmsh and Medit use the same ordering
+//! for linear elements, so files convert without permutation.
+
+use std::fmt;
+
+/// The element kinds meshsmooth can optimise.
+///
+/// Every corner of every kind has exactly `dim` incident edges inside the
+/// element, which the corner-based metrics need (pyramids do not, and are
+/// refused when a file is read).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ElementKind {
+    Triangle,
+    Quadrilateral,
+    Tetrahedron,
+    Hexahedron,
+    Prism,
+}
+
+impl ElementKind {
+    pub const ALL: [ElementKind; 5] = [
+        ElementKind::Triangle,
+        ElementKind::Quadrilateral,
+        ElementKind::Tetrahedron,
+        ElementKind::Hexahedron,
+        ElementKind::Prism,
+    ];
+
+    /// Topological (and metric) dimension.
+    pub fn dim(self) -> usize {
+        match self {
+            ElementKind::Triangle | ElementKind::Quadrilateral => 2,
+            _ => 3,
+        }
+    }
+
+    pub fn num_vertices(self) -> usize {
+        match self {
+            ElementKind::Triangle => 3,
+            ElementKind::Quadrilateral => 4,
+            ElementKind::Tetrahedron => 4,
+            ElementKind::Hexahedron => 8,
+            ElementKind::Prism => 6,
+        }
+    }
+
+    /// For each corner: the corner vertex followed by its `dim` neighbours, ordered
+    /// so that det[x_a - x_c, x_b - x_c, ...] > 0 for a well-oriented element.
+    pub fn corners(self) -> &'static [[usize; 4]] {
+        match self {
+            ElementKind::Triangle => &[[0, 1, 2, 0], [1, 2, 0, 0], [2, 0, 1, 0]],
+            ElementKind::Quadrilateral => &[[0, 1, 3, 0], [1, 2, 0, 0], [2, 3, 1, 0], [3, 0, 2, 0]],
+            ElementKind::Tetrahedron => &[[0, 1, 2, 3], [1, 2, 0, 3], [2, 0, 1, 3], [3, 0, 2, 1]],
+            ElementKind::Hexahedron => &[
+                [0, 1, 3, 4],
+                [1, 2, 0, 5],
+                [2, 3, 1, 6],
+                [3, 0, 2, 7],
+                [4, 7, 5, 0],
+                [5, 4, 6, 1],
+                [6, 5, 7, 2],
+                [7, 6, 4, 3],
+            ],
+            ElementKind::Prism => &[
+                [0, 1, 2, 3],
+                [1, 2, 0, 4],
+                [2, 0, 1, 5],
+                [3, 5, 4, 0],
+                [4, 3, 5, 1],
+                [5, 4, 3, 2],
+            ],
+        }
+    }
+
+    /// Faces (for 3D kinds) or edges (for 2D kinds) as local vertex lists; a facet
+    /// used by exactly one element lies on the boundary skin.
+    pub fn facets(self) -> &'static [&'static [usize]] {
+        match self {
+            ElementKind::Triangle => &[&[0, 1], &[1, 2], &[2, 0]],
+            ElementKind::Quadrilateral => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
+            ElementKind::Tetrahedron => &[&[0, 1, 2], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]],
+            ElementKind::Hexahedron => &[
+                &[0, 1, 2, 3],
+                &[4, 5, 6, 7],
+                &[0, 1, 5, 4],
+                &[1, 2, 6, 5],
+                &[2, 3, 7, 6],
+                &[3, 0, 4, 7],
+            ],
+            ElementKind::Prism => &[
+                &[0, 1, 2],
+                &[3, 4, 5],
+                &[0, 1, 4, 3],
+                &[1, 2, 5, 4],
+                &[2, 0, 3, 5],
+            ],
+        }
+    }
+
+    /// Edges as local vertex pairs.
+    pub fn edges(self) -> &'static [[usize; 2]] {
+        match self {
+            ElementKind::Triangle => &[[0, 1], [1, 2], [2, 0]],
+            ElementKind::Quadrilateral => &[[0, 1], [1, 2], [2, 3], [3, 0]],
+            ElementKind::Tetrahedron => &[[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]],
+            ElementKind::Hexahedron => &[
+                [0, 1],
+                [1, 2],
+                [2, 3],
+                [3, 0],
+                [4, 5],
+                [5, 6],
+                [6, 7],
+                [7, 4],
+                [0, 4],
+                [1, 5],
+                [2, 6],
+                [3, 7],
+            ],
+            ElementKind::Prism => &[
+                [0, 1],
+                [1, 2],
+                [2, 0],
+                [3, 4],
+                [4, 5],
+                [5, 3],
+                [0, 3],
+                [1, 4],
+                [2, 5],
+            ],
+        }
+    }
+
+    /// VTK cell type id.
+    pub fn vtk_id(self) -> u8 {
+        match self {
+            ElementKind::Triangle => 5,
+            ElementKind::Quadrilateral => 9,
+            ElementKind::Tetrahedron => 10,
+            ElementKind::Hexahedron => 12,
+            ElementKind::Prism => 13,
+        }
+    }
+
+    pub fn from_vtk_id(id: u8) -> Option<Self> {
+        ElementKind::ALL.into_iter().find(|k| k.vtk_id() == id)
+    }
+
+    /// Gmsh element type number.
+    pub fn gmsh_id(self) -> u32 {
+        match self {
+            ElementKind::Triangle => 2,
+            ElementKind::Quadrilateral => 3,
+            ElementKind::Tetrahedron => 4,
+            ElementKind::Hexahedron => 5,
+            ElementKind::Prism => 6,
+        }
+    }
+
+    pub fn from_gmsh_id(id: u32) -> Option<Self> {
+        ElementKind::ALL.into_iter().find(|k| k.gmsh_id() == id)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ElementKind::Triangle => "triangle",
+            ElementKind::Quadrilateral => "quadrilateral",
+            ElementKind::Tetrahedron => "tetrahedron",
+            ElementKind::Hexahedron => "hexahedron",
+            ElementKind::Prism => "prism",
+        }
+    }
+}
+
+impl fmt::Display for ElementKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corner_tables_use_each_vertex_once_as_corner() {
+        for kind in ElementKind::ALL {
+            let corners = kind.corners();
+            assert_eq!(corners.len(), kind.num_vertices(), "{kind}");
+            for (i, c) in corners.iter().enumerate() {
+                assert_eq!(c[0], i, "{kind}");
+                for &n in &c[1..=kind.dim()] {
+                    assert!(n < kind.num_vertices() && n != i, "{kind}");
+                    let is_edge = kind
+                        .edges()
+                        .iter()
+                        .any(|e| (e[0] == i && e[1] == n) || (e[1] == i && e[0] == n));
+                    assert!(is_edge, "{kind}: corner {i} neighbour {n} is not an edge");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,198 @@
+//! The mesh model: coordinates and elements, nothing about metrics or devices.
+
+pub mod element;
+pub mod order;
+pub mod topology;
+
+pub use element::ElementKind;
+
+use crate::error::{Error, Result};
+
+/// Cells of lower dimension than the mesh (Gmsh and Medit boundary lines,
+/// triangles, points). They are kept for round trips and their vertices are
+/// treated as fixed; they are never optimised.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LowerKind {
+    Vertex,
+    Line,
+    Triangle,
+    Quadrilateral,
+}
+
+impl LowerKind {
+    pub fn num_vertices(self) -> usize {
+        match self {
+            LowerKind::Vertex => 1,
+            LowerKind::Line => 2,
+            LowerKind::Triangle => 3,
+            LowerKind::Quadrilateral => 4,
+        }
+    }
+}
+
+/// An unstructured mesh: points, elements of mixed kinds (in file order), optional
+/// boundary cells, and user-fixed vertex flags.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Coordinates; planar meshes keep their (constant) z so files round-trip.
+    pub points: Vec<[f64; 3]>,
+    /// Kind of each element.
+    pub kinds: Vec<ElementKind>,
+    /// CSR offsets into `conn`, `kinds.len() + 1` entries.
+    pub offsets: Vec<usize>,
+    /// Vertex ids of all elements, concatenated.
+    pub conn: Vec<u32>,
+    /// Lower-dimensional cells (boundary lines/faces, points) read from a file.
+    pub lower: Vec<(LowerKind, Vec<u32>)>,
+    /// Vertices the user marked fixed (empty means none).
+    pub fixed: Vec<bool>,
+}
+
+impl Mesh {
+    pub fn new(points: Vec<[f64; 3]>) -> Self {
+        Mesh {
+            points,
+            offsets: vec![0],
+            ..Default::default()
+        }
+    }
+
+    pub fn push_element(&mut self, kind: ElementKind, vertices: &[u32]) {
+        debug_assert_eq!(vertices.len(), kind.num_vertices());
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        self.kinds.push(kind);
+        self.conn.extend_from_slice(vertices);
+        self.offsets.push(self.conn.len());
+    }
+
+    pub fn num_points(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn num_elements(&self) -> usize {
+        self.kinds.len()
+    }
+
+    pub fn element(&self, e: usize) -> &[u32] {
+        &self.conn[self.offsets[e]..self.offsets[e + 1]]
+    }
+
+    /// Metric dimension: 3 if any element is a volume element, else 2.
+    pub fn dim(&self) -> usize {
+        if self.kinds.iter().any(|k| k.dim() == 3) {
+            3
+        } else {
+            2
+        }
+    }
+
+    pub fn is_fixed(&self, v: usize) -> bool {
+        self.fixed.get(v).copied().unwrap_or(false)
+    }
+
+    /// Element ids per kind, for reports.
+    pub fn count_kind(&self, kind: ElementKind) -> usize {
+        self.kinds.iter().filter(|&&k| k == kind).count()
+    }
+
+    /// Structural checks every reader and generator runs: non-empty, one
+    /// dimension, finite coordinates, indices in range, no repeated vertex in an
+    /// element, no unused or coincident vertices.
+    pub fn validate(&self) -> Result<()> {
+        if self.points.is_empty() {
+            return Err(Error::InvalidMesh("mesh has no vertices".into()));
+        }
+        if self.kinds.is_empty() {
+            return Err(Error::InvalidMesh("mesh has no elements".into()));
+        }
+        if self.offsets.len() != self.kinds.len() + 1
+            || *self.offsets.last().unwrap() != self.conn.len()
+        {
+            return Err(Error::InvalidMesh(
+                "element offsets do not match connectivity".into(),
+            ));
+        }
+        let dim = self.dim();
+        if let Some(e) = self.kinds.iter().position(|k| k.dim() != dim) {
+            return Err(Error::InvalidMesh(format!(
+                "element {e} is a {} ({}D) in a {dim}D mesh; mixed 2D and 3D elements are not supported",
+                self.kinds[e],
+                self.kinds[e].dim()
+            )));
+        }
+        if !self.fixed.is_empty() && self.fixed.len() != self.points.len() {
+            return Err(Error::InvalidMesh(format!(
+                "fixed flags cover {} vertices but the mesh has {}",
+                self.fixed.len(),
+                self.points.len()
+            )));
+        }
+        if let Some(v) = self
+            .points
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
+            return Err(Error::InvalidMesh(format!(
+                "vertex {v} has a non-finite coordinate {:?}",
+                self.points[v]
+            )));
+        }
+        let n = self.points.len();
+        let mut used = vec![false; n];
+        for e in 0..self.num_elements() {
+            let vs = self.element(e);
+            if vs.len() != self.kinds[e].num_vertices() {
+                return Err(Error::InvalidMesh(format!(
+                    "element {e} ({}) has {} vertices, expected {}",
+                    self.kinds[e],
+                    vs.len(),
+                    self.kinds[e].num_vertices()
+                )));
+            }
+            for (i, &v) in vs.iter().enumerate() {
+                if v as usize >= n {
+                    return Err(Error::InvalidMesh(format!(
+                        "element {e} refers to vertex {v}, but the mesh has only {n} vertices (ids 0..{})",
+                        n - 1
+                    )));
+                }
+                if vs[..i].contains(&v) {
+                    return Err(Error::InvalidMesh(format!(
+                        "element {e} uses vertex {v} twice: {vs:?}"
+                    )));
+                }
+                used[v as usize] = true;
+            }
+        }
+        for (kind, vs) in &self.lower {
+            if vs.len() != kind.num_vertices() || vs.iter().any(|&v| v as usize >= n) {
+                return Err(Error::InvalidMesh(format!(
+                    "boundary cell {kind:?} {vs:?} is malformed"
+                )));
+            }
+        }
+        let unused: Vec<usize> = (0..n).filter(|&v| !used[v]).collect();
+        if !unused.is_empty() {
+            return Err(Error::InvalidMesh(format!(
+                "{} vertices are used by no element (first ids: {:?})",
+                unused.len(),
+                &unused[..unused.len().min(5)]
+            )));
+        }
+        let mut sorted: Vec<usize> = (0..n).collect();
+        sorted.sort_unstable_by(|&a, &b| self.points[a].partial_cmp(&self.points[b]).unwrap());
+        if let Some(w) = sorted
+            .windows(2)
+            .find(|w| self.points[w[0]] == self.points[w[1]])
+        {
+            let (a, b) = (w[0].min(w[1]), w[0].max(w[1]));
+            return Err(Error::InvalidMesh(format!(
+                "vertices {a} and {b} are duplicates: both at {:?}",
+                self.points[a]
+            )));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,1 @@
+//! Vertex adjacency and boundary skin.

@@ -1,0 +1,230 @@
+//! Inverse mean ratio of a tetrahedron, eta = |S|_F^2 / (3 det(S)^(2/3)) with
+//! S = A W^-1, computed through the QR trick: W = Q R, only R^-1 is kept
+//! (Frobenius norm and determinant ignore the rotation Q).
+//!
+//! Writing S = X B with X the 3x4 vertex coordinates and B = D R^-1 (D the
+//! 4x3 edge-difference matrix) makes every derivative a contraction with the
+//! rows of B; `b[k]` is vertex k's row.
+
+use super::mat3::{Mat3, Vec3, cofactor, det, frobenius_sq, mul_vec, upper_inverse};
+
+/// Precomputed reference data for one tetrahedron shape.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TetShape {
+    b: [Vec3; 4],
+}
+
+/// The 9x9 second derivative of eta with respect to S, index 3*i + j for S[i][j].
+type Hess9 = [[f64; 9]; 9];
+
+/// Value and gradient of eta with respect to S, plus what the Hessian reuses.
+struct SParts {
+    s: Mat3,
+    cof: Mat3,
+    d: f64,
+    f: f64,
+    eta: f64,
+    grad_s: Mat3,
+}
+
+impl TetShape {
+    /// The regular (equilateral) tetrahedron of unit edge as reference.
+    pub fn equilateral() -> Self {
+        let r = [
+            [1.0, 0.5, 0.5],
+            [0.0, 3f64.sqrt() / 2.0, 3f64.sqrt() / 6.0],
+            [0.0, 0.0, (2.0f64 / 3.0).sqrt()],
+        ];
+        Self::from_r(&r)
+    }
+
+    /// From the upper-triangular factor R of a reference W = Q R.
+    pub fn from_r(r: &Mat3) -> Self {
+        let m = upper_inverse(r);
+        let b0 = [
+            -(m[0][0] + m[1][0] + m[2][0]),
+            -(m[0][1] + m[1][1] + m[2][1]),
+            -(m[0][2] + m[1][2] + m[2][2]),
+        ];
+        TetShape {
+            b: [b0, m[0], m[1], m[2]],
+        }
+    }
+
+    fn s_of(&self, x: &[Vec3; 4]) -> Mat3 {
+        let mut s = [[0.0; 3]; 3];
+        for (xk, bk) in x.iter().zip(&self.b) {
+            for i in 0..3 {
+                for j in 0..3 {
+                    s[i][j] += xk[i] * bk[j];
+                }
+            }
+        }
+        s
+    }
+
+    /// Inverse mean ratio, or `None` when the element is inverted or degenerate.
+    #[inline]
+    pub fn value(&self, x: &[Vec3; 4]) -> Option<f64> {
+        let s = self.s_of(x);
+        let d = det(&s);
+        if d <= 0.0 || !d.is_finite() {
+            return None;
+        }
+        let eta = frobenius_sq(&s) / (3.0 * cbrt_sq(d));
+        eta.is_finite().then_some(eta)
+    }
+
+    #[inline]
+    fn parts(&self, x: &[Vec3; 4]) -> Option<SParts> {
+        let s = self.s_of(x);
+        let d = det(&s);
+        if d <= 0.0 || !d.is_finite() {
+            return None;
+        }
+        let g = cbrt_sq(d);
+        let f = frobenius_sq(&s);
+        let eta = f / (3.0 * g);
+        if !eta.is_finite() {
+            return None;
+        }
+        let cof = cofactor(&s);
+        let a = 2.0 / (3.0 * g);
+        let c = 2.0 * eta / (3.0 * d);
+        let mut grad_s = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                grad_s[i][j] = a * s[i][j] - c * cof[i][j];
+            }
+        }
+        Some(SParts {
+            s,
+            cof,
+            d,
+            f,
+            eta,
+            grad_s,
+        })
+    }
+
+    /// Value and gradient with respect to the four vertices.
+    pub fn gradient(&self, x: &[Vec3; 4]) -> Option<(f64, [Vec3; 4])> {
+        let p = self.parts(x)?;
+        let g = self.b.map(|bk| mul_vec(&p.grad_s, &bk));
+        Some((p.eta, g))
+    }
+
+    /// Value, gradient and the 12x12 Hessian (index 3*vertex + coordinate).
+    pub fn hessian(&self, x: &[Vec3; 4]) -> Option<(f64, [Vec3; 4], [[f64; 12]; 12])> {
+        let p = self.parts(x)?;
+        let g = self.b.map(|bk| mul_vec(&p.grad_s, &bk));
+        let h9 = hess_s(&p);
+        // Hess_X[(k,i),(l,q)] = sum_{j,n} H[(i,j),(q,n)] b_k[j] b_l[n]
+        let mut hx = [[0.0; 12]; 12];
+        for k in 0..4 {
+            for l in k..4 {
+                for i in 0..3 {
+                    for q in 0..3 {
+                        let mut v = 0.0;
+                        for j in 0..3 {
+                            let row = &h9[3 * i + j];
+                            let t = row[3 * q] * self.b[l][0]
+                                + row[3 * q + 1] * self.b[l][1]
+                                + row[3 * q + 2] * self.b[l][2];
+                            v += self.b[k][j] * t;
+                        }
+                        hx[3 * k + i][3 * l + q] = v;
+                        hx[3 * l + q][3 * k + i] = v;
+                    }
+                }
+            }
+        }
+        Some((p.eta, g, hx))
+    }
+
+    /// Value, gradient and 3x3 Hessian with respect to vertex `k` only — what
+    /// block coordinate descent needs. The det-curvature term drops out here
+    /// because det(S) is linear in each single vertex.
+    #[inline]
+    pub fn vertex_gradient_hessian(&self, x: &[Vec3; 4], k: usize) -> Option<(f64, Vec3, Mat3)> {
+        let p = self.parts(x)?;
+        let b = &self.b[k];
+        let grad = mul_vec(&p.grad_s, b);
+        let sb = mul_vec(&p.s, b);
+        let cb = mul_vec(&p.cof, b);
+        let bb = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+        let h = 1.0 / cbrt_sq(p.d);
+        let dm53 = h / p.d; // d^(-5/3)
+        let dm83 = dm53 / p.d; // d^(-8/3)
+        let diag = 2.0 * h * bb / 3.0;
+        let cross = -(4.0 / 9.0) * dm53;
+        let cc = (10.0 / 27.0) * p.f * dm83;
+        let mut hess = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for l in 0..3 {
+                hess[i][l] = cross * (sb[i] * cb[l] + cb[i] * sb[l]) + cc * cb[i] * cb[l];
+            }
+            hess[i][i] += diag;
+        }
+        Some((p.eta, grad, hess))
+    }
+}
+
+/// d^(2/3) through the real cube root (exact for negative zero and powers of two).
+#[inline]
+fn cbrt_sq(d: f64) -> f64 {
+    let c = d.cbrt();
+    c * c
+}
+
+/// Hessian of eta = f h / 3 with f = |S|^2, h = det(S)^(-2/3):
+/// (1/3) [2 h I + 2 S (x) dh + dh (x) 2 S + f d2h],
+/// dh = -(2/3) d^(-5/3) C, d2h = (10/9) d^(-8/3) C (x) C - (2/3) d^(-5/3) d2(det),
+/// d2(det)[(i,j),(k,l)] = sum_{m,n} eps_ikm eps_jln S[m][n].
+fn hess_s(p: &SParts) -> Hess9 {
+    let h = 1.0 / cbrt_sq(p.d);
+    let dm53 = h / p.d;
+    let dm83 = dm53 / p.d;
+    let mut out = [[0.0; 9]; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            for k in 0..3 {
+                for l in 0..3 {
+                    let a = 3 * i + j;
+                    let b = 3 * k + l;
+                    let mut v =
+                        -(4.0 / 9.0) * dm53 * (p.s[i][j] * p.cof[k][l] + p.cof[i][j] * p.s[k][l])
+                            + (10.0 / 27.0) * p.f * dm83 * p.cof[i][j] * p.cof[k][l];
+                    if a == b {
+                        v += 2.0 * h / 3.0;
+                    }
+                    if i != k && j != l {
+                        let m = 3 - i - k;
+                        let n = 3 - j - l;
+                        let sign = levi(i, k, m) * levi(j, l, n);
+                        v -= (2.0 / 9.0) * p.f * dm53 * sign * p.s[m][n];
+                    }
+                    out[a][b] = v;
+                }
+            }
+        }
+    }
+    out
+}
+
+fn levi(i: usize, j: usize, k: usize) -> f64 {
+    match (i, j, k) {
+        (0, 1, 2) | (1, 2, 0) | (2, 0, 1) => 1.0,
+        (0, 2, 1) | (2, 1, 0) | (1, 0, 2) => -1.0,
+        _ => 0.0,
+    }
+}
+
+/// Signed volume determinant det[x1-x0, x2-x0, x3-x0] (six times the volume).
+pub fn tet_det(x: &[Vec3; 4]) -> f64 {
+    use super::mat3::sub;
+    let a = sub(&x[1], &x[0]);
+    let b = sub(&x[2], &x[0]);
+    let c = sub(&x[3], &x[0]);
+    det(&[[a[0], b[0], c[0]], [a[1], b[1], c[1]], [a[2], b[2], c[2]]])
+}

@@ -1,0 +1,1 @@
+//! Templates: global objective, gradient.
