@@ -1,1 +1,146 @@
-//! Vertex adjacency and boundary skin.
+//! Vertex-to-element adjacency, vertex neighbours and the boundary skin.
+
+use super::Mesh;
+use std::collections::HashMap;
+
+/// Compressed lists: `items[offsets[i]..offsets[i + 1]]` belong to entry `i`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Csr {
+    pub offsets: Vec<u32>,
+    pub items: Vec<u32>,
+}
+
+impl Csr {
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    #[inline]
+    pub fn of(&self, i: usize) -> &[u32] {
+        &self.items[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// Builds lists from (entry, item) pairs by counting sort, keeping pair order per entry.
+    pub fn from_pairs(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> Csr {
+        let mut offsets = vec![0u32; n + 1];
+        for (i, _) in pairs.clone() {
+            offsets[i as usize + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut items = vec![0u32; offsets[n] as usize];
+        for (i, item) in pairs {
+            items[fill[i as usize] as usize] = item;
+            fill[i as usize] += 1;
+        }
+        Csr { offsets, items }
+    }
+}
+
+/// Elements incident to each vertex, in increasing element order.
+pub fn vertex_elements(mesh: &Mesh) -> Csr {
+    let pairs =
+        (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
+    Csr::from_pairs(mesh.num_points(), pairs)
+}
+
+/// Vertices sharing an element edge with each vertex, sorted.
+pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
+    let mut pairs = Vec::new();
+    for e in 0..mesh.num_elements() {
+        let vs = mesh.element(e);
+        for [a, b] in mesh.kinds[e].edges() {
+            pairs.push((vs[*a], vs[*b]));
+            pairs.push((vs[*b], vs[*a]));
+        }
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    Csr::from_pairs(mesh.num_points(), pairs.iter().copied())
+}
+
+/// Vertices on a facet (face in 3D, edge in 2D) used by exactly one element.
+pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
+    let mut count: HashMap<[u32; 4], u32> = HashMap::with_capacity(mesh.num_elements() * 3);
+    let key = |vs: &[u32], local: &[usize]| {
+        let mut k = [u32::MAX; 4];
+        for (slot, &l) in k.iter_mut().zip(local) {
+            *slot = vs[l];
+        }
+        k.sort_unstable();
+        k
+    };
+    for e in 0..mesh.num_elements() {
+        let vs = mesh.element(e);
+        for f in mesh.kinds[e].facets() {
+            *count.entry(key(vs, f)).or_default() += 1;
+        }
+    }
+    let mut skin = vec![false; mesh.num_points()];
+    for (k, c) in count {
+        if c == 1 {
+            for &v in k.iter().filter(|&&v| v != u32::MAX) {
+                skin[v as usize] = true;
+            }
+        }
+    }
+    skin
+}
+
+/// Vertices that must not move: the skin plus everything the user fixed.
+pub fn fixed_vertices(mesh: &Mesh) -> Vec<bool> {
+    let mut fixed = skin_vertices(mesh);
+    for (f, &u) in fixed.iter_mut().zip(&mesh.fixed) {
+        *f |= u;
+    }
+    fixed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ElementKind;
+
+    /// Two tets sharing face (1,2,3): every vertex is on the skin.
+    fn two_tets() -> Mesh {
+        let mut m = Mesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]]);
+        m.push_element(ElementKind::Tetrahedron, &[0, 1, 2, 3]);
+        m.push_element(ElementKind::Tetrahedron, &[1, 4, 2, 3]);
+        m
+    }
+
+    #[test]
+    fn adjacency_lists_every_incidence() {
+        let m = two_tets();
+        let ve = vertex_elements(&m);
+        assert_eq!(ve.of(0), &[0]);
+        assert_eq!(ve.of(1), &[0, 1]);
+        assert_eq!(ve.of(4), &[1]);
+        let nb = vertex_neighbours(&m);
+        assert_eq!(nb.of(0), &[1, 2, 3]);
+        assert_eq!(nb.of(1), &[0, 2, 3, 4]);
+    }
+
+    #[test]
+    fn quad_patch_skin_leaves_centre_free() {
+        // 3x3 vertices, 2x2 quads: only the centre is interior
+        let pts = (0..9).map(|i| [(i % 3) as f64, (i / 3) as f64, 0.0]).collect();
+        let mut m = Mesh::new(pts);
+        for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let v = a + 3 * b;
+            m.push_element(ElementKind::Quadrilateral, &[v, v + 1, v + 4, v + 3]);
+        }
+        let skin = skin_vertices(&m);
+        assert_eq!(skin.iter().filter(|&&s| !s).count(), 1);
+        assert!(!skin[4]);
+        m.fixed = vec![false; 9];
+        m.fixed[4] = true;
+        assert!(fixed_vertices(&m).iter().all(|&f| f));
+    }
+}

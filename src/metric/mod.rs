@@ -5,3 +5,40 @@ pub mod mat3;
 pub mod mean_ratio;
 
 pub use mean_ratio::{TetShape, tet_det};
+
+use crate::mesh::{ElementKind, Mesh};
+use mat3::{Vec3, sub};
+
+/// Smallest corner Jacobian determinant of an element (2D kinds use the xy
+/// plane). An element is feasible when this is positive.
+pub fn min_corner_det(kind: ElementKind, x: &[Vec3]) -> f64 {
+    let mut min = f64::INFINITY;
+    for c in kind.corners() {
+        let o = &x[c[0]];
+        let d = if kind.dim() == 2 {
+            let a = sub(&x[c[1]], o);
+            let b = sub(&x[c[2]], o);
+            a[0] * b[1] - a[1] * b[0]
+        } else {
+            let (a, b, e) = (sub(&x[c[1]], o), sub(&x[c[2]], o), sub(&x[c[3]], o));
+            mat3::det(&[[a[0], b[0], e[0]], [a[1], b[1], e[1]], [a[2], b[2], e[2]]])
+        };
+        min = min.min(d);
+    }
+    min
+}
+
+/// Smallest corner determinant of element `e` of `mesh` at positions `points`.
+pub fn element_min_det(mesh: &Mesh, points: &[Vec3], e: usize) -> f64 {
+    let mut x = [[0.0; 3]; 8];
+    let vs = mesh.element(e);
+    for (slot, &v) in x.iter_mut().zip(vs) {
+        *slot = points[v as usize];
+    }
+    min_corner_det(mesh.kinds[e], &x[..vs.len()])
+}
+
+/// Ids of elements with a non-positive corner determinant.
+pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {
+    (0..mesh.num_elements()).filter(|&e| !(element_min_det(mesh, points, e) > 0.0)).collect()
+}
