@@ -2,6 +2,7 @@
 //! per vertex. Each file here is the CPU twin of a WGSL kernel in `shaders/metric/`.
 
 pub mod mat3;
+pub mod corner;
 pub mod mean_ratio;
 
 pub use mean_ratio::{TetShape, tet_det};
@@ -41,4 +42,14 @@ pub fn element_min_det(mesh: &Mesh, points: &[Vec3], e: usize) -> f64 {
 /// Ids of elements with a non-positive corner determinant.
 pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {
     (0..mesh.num_elements()).filter(|&e| !(element_min_det(mesh, points, e) > 0.0)).collect()
+}
+
+/// Inverse mean ratio of element `e` at `points`, `None` if it is inverted.
+pub fn element_eta(mesh: &Mesh, points: &[Vec3], e: usize) -> Option<f64> {
+    let mut x = [[0.0; 3]; 8];
+    let vs = mesh.element(e);
+    for (slot, &v) in x.iter_mut().zip(vs) {
+        *slot = points[v as usize];
+    }
+    corner::element_eta(mesh.kinds[e], &x[..vs.len()])
 }
