@@ -1,1 +1,61 @@
-//! Templates: global objective, gradient.
+//! The harmonic-mean template (equation 2 of the Newton paper):
+//! F = (1/|E|) sum_e 1/q_e = mean inverse mean ratio; its gradient over the
+//! free vertices and that gradient's 2-norm.
+
+use crate::metric::mat3::Vec3;
+use crate::problem::Problem;
+use rayon::prelude::*;
+
+const CHUNK: usize = 4096;
+
+/// Objective value; `None` when any element is inverted or degenerate.
+pub fn value(p: &Problem, x: &[Vec3]) -> Option<f64> {
+    let n = p.num_elements();
+    // fixed chunks summed in a fixed order: the value repeats bit for bit
+    let partial: Option<Vec<f64>> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            (c * CHUNK..((c + 1) * CHUNK).min(n))
+                .map(|e| p.shape.value(&p.tet_points(x, e)))
+                .sum()
+        })
+        .collect();
+    partial.map(|v| v.iter().sum::<f64>() / n as f64)
+}
+
+/// Objective and its gradient (zero at fixed vertices); `None` if infeasible.
+pub fn gradient(p: &Problem, x: &[Vec3]) -> Option<(f64, Vec<Vec3>)> {
+    let n = p.num_elements();
+    let scale = 1.0 / n as f64;
+    let grads: Option<Vec<(f64, [Vec3; 4])>> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|e| p.shape.gradient(&p.tet_points(x, e)))
+        .collect();
+    let grads = grads?;
+    // gather per vertex (not scatter) so that the sum order is fixed and the
+    // result repeats bit for bit
+    let g: Vec<Vec3> = (0..p.num_vertices())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|v| {
+            let mut acc = [0.0; 3];
+            if p.free[v] {
+                for &packed in p.incidence.of(v) {
+                    let gv = &grads[(packed >> 2) as usize].1[(packed & 3) as usize];
+                    for i in 0..3 {
+                        acc[i] += gv[i];
+                    }
+                }
+            }
+            acc.map(|c| c * scale)
+        })
+        .collect();
+    let f = grads.iter().map(|(eta, _)| eta).sum::<f64>() * scale;
+    Some((f, g))
+}
+
+/// Euclidean norm of a gradient field.
+pub fn norm(g: &[Vec3]) -> f64 {
+    g.iter().flatten().map(|c| c * c).sum::<f64>().sqrt()
+}

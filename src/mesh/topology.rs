@@ -109,7 +109,13 @@ mod tests {
 
     /// Two tets sharing face (1,2,3): every vertex is on the skin.
     fn two_tets() -> Mesh {
-        let mut m = Mesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]]);
+        let mut m = Mesh::new(vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+        ]);
         m.push_element(ElementKind::Tetrahedron, &[0, 1, 2, 3]);
         m.push_element(ElementKind::Tetrahedron, &[1, 4, 2, 3]);
         m
@@ -130,7 +136,9 @@ mod tests {
     #[test]
     fn quad_patch_skin_leaves_centre_free() {
         // 3x3 vertices, 2x2 quads: only the centre is interior
-        let pts = (0..9).map(|i| [(i % 3) as f64, (i / 3) as f64, 0.0]).collect();
+        let pts = (0..9)
+            .map(|i| [(i % 3) as f64, (i / 3) as f64, 0.0])
+            .collect();
         let mut m = Mesh::new(pts);
         for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
             let v = a + 3 * b;

@@ -10,8 +10,14 @@ pub fn ideal_corner(kind: ElementKind) -> Mat3 {
     let h = 3f64.sqrt() / 2.0;
     match kind {
         ElementKind::Triangle => [[1.0, 0.5, 0.0], [0.0, h, 0.0], [0.0, 0.0, 1.0]],
-        ElementKind::Quadrilateral | ElementKind::Hexahedron => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        ElementKind::Tetrahedron => [[1.0, 0.5, 0.5], [0.0, h, 3f64.sqrt() / 6.0], [0.0, 0.0, (2.0f64 / 3.0).sqrt()]],
+        ElementKind::Quadrilateral | ElementKind::Hexahedron => {
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        }
+        ElementKind::Tetrahedron => [
+            [1.0, 0.5, 0.5],
+            [0.0, h, 3f64.sqrt() / 6.0],
+            [0.0, 0.0, (2.0f64 / 3.0).sqrt()],
+        ],
         ElementKind::Prism => [[1.0, 0.5, 0.0], [0.0, h, 0.0], [0.0, 0.0, 1.0]],
     }
 }
@@ -25,14 +31,21 @@ pub fn corner_eta(a: &Mat3, winv: &Mat3, n: usize) -> Option<f64> {
         }
     }
     let (d, f) = if n == 2 {
-        (s[0][0] * s[1][1] - s[0][1] * s[1][0], s[0][0].powi(2) + s[0][1].powi(2) + s[1][0].powi(2) + s[1][1].powi(2))
+        (
+            s[0][0] * s[1][1] - s[0][1] * s[1][0],
+            s[0][0].powi(2) + s[0][1].powi(2) + s[1][0].powi(2) + s[1][1].powi(2),
+        )
     } else {
         (mat3::det(&s), mat3::frobenius_sq(&s))
     };
     if d <= 0.0 || !d.is_finite() {
         return None;
     }
-    let eta = if n == 2 { f / (2.0 * d) } else { f / (3.0 * d.cbrt().powi(2)) };
+    let eta = if n == 2 {
+        f / (2.0 * d)
+    } else {
+        f / (3.0 * d.cbrt().powi(2))
+    };
     eta.is_finite().then_some(eta)
 }
 
@@ -42,7 +55,11 @@ pub fn element_eta(kind: ElementKind, x: &[Vec3]) -> Option<f64> {
     let n = kind.dim();
     let winv = mat3::upper_inverse(&ideal_corner(kind));
     let corners = kind.corners();
-    let corners = if kind == ElementKind::Tetrahedron { &corners[..1] } else { corners };
+    let corners = if kind == ElementKind::Tetrahedron {
+        &corners[..1]
+    } else {
+        corners
+    };
     let mut sum = 0.0;
     for c in corners {
         let mut a = [[0.0; 3]; 3];
@@ -66,7 +83,12 @@ mod tests {
     fn ideal_elements_have_eta_one() {
         let h = 3f64.sqrt() / 2.0;
         let tri = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, h, 0.0]];
-        let quad = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let quad = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         let mut hex = [[0.0; 3]; 8];
         for (i, p) in hex.iter_mut().enumerate() {
             *p = [quad[i % 4][0], quad[i % 4][1], (i / 4) as f64];
@@ -88,7 +110,12 @@ mod tests {
 
     #[test]
     fn tet_value_matches_qr_form() {
-        let x = [[0.1, 0.0, 0.2], [1.0, 0.1, 0.0], [0.3, 0.9, 0.1], [0.2, 0.3, 0.7]];
+        let x = [
+            [0.1, 0.0, 0.2],
+            [1.0, 0.1, 0.0],
+            [0.3, 0.9, 0.1],
+            [0.2, 0.3, 0.7],
+        ];
         let a = element_eta(ElementKind::Tetrahedron, &x).unwrap();
         let b = TetShape::equilateral().value(&x).unwrap();
         assert!((a - b).abs() < 1e-13 * b);

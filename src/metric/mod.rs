@@ -1,8 +1,8 @@
 //! Element quality metrics in f64: value, gradient and Hessian per element and
 //! per vertex. Each file here is the CPU twin of a WGSL kernel in `shaders/metric/`.
 
-pub mod mat3;
 pub mod corner;
+pub mod mat3;
 pub mod mean_ratio;
 
 pub use mean_ratio::{TetShape, tet_det};
@@ -41,7 +41,9 @@ pub fn element_min_det(mesh: &Mesh, points: &[Vec3], e: usize) -> f64 {
 
 /// Ids of elements with a non-positive corner determinant.
 pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {
-    (0..mesh.num_elements()).filter(|&e| !(element_min_det(mesh, points, e) > 0.0)).collect()
+    (0..mesh.num_elements())
+        .filter(|&e| !(element_min_det(mesh, points, e) > 0.0))
+        .collect()
 }
 
 /// Inverse mean ratio of element `e` at `points`, `None` if it is inverted.

@@ -1,1 +1,188 @@
-//! Solvers.
+//! Solvers: they own the iteration loop, line searches, termination and
+//! history; metrics and objective evaluation come from `metric` and `objective`.
+
+pub mod bcd;
+pub mod history;
+pub mod laplace;
+
+pub use history::{History, Record, StopReason};
+
+use crate::Mesh;
+use crate::error::{Error, Result};
+use crate::metric::mat3::Vec3;
+use crate::objective;
+use crate::problem::Problem;
+use std::fmt;
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+/// Which optimiser moves the vertices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Block coordinate descent: per-vertex Newton with Armijo backtracking.
+    #[default]
+    Bcd,
+    /// Smart Laplacian smoothing (a baseline, not an optimiser).
+    Laplace,
+}
+
+impl FromStr for Method {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "bcd" => Ok(Method::Bcd),
+            "laplace" => Ok(Method::Laplace),
+            _ => Err(Error::InvalidArgument(format!(
+                "unknown method '{s}' (expected bcd or laplace)"
+            ))),
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Method::Bcd => "bcd",
+            Method::Laplace => "laplace",
+        })
+    }
+}
+
+/// Termination and line-search settings shared by the solvers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Stop when the 2-norm of the free-vertex gradient of F is below this.
+    pub tol: f64,
+    /// Most sweeps (BCD, Laplace) or iterations.
+    pub max_iter: usize,
+    pub time_limit: Option<Duration>,
+    pub line_search: bcd::LineSearch,
+    /// Laplace stops when no vertex moves farther than this fraction of the mean edge length.
+    pub min_move: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            tol: 1e-6,
+            max_iter: 1000,
+            time_limit: None,
+            line_search: bcd::LineSearch::default(),
+            min_move: 1e-9,
+        }
+    }
+}
+
+/// What a solve did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Info {
+    pub method: Method,
+    pub iterations: usize,
+    pub stop: StopReason,
+    pub history: History,
+    pub objective: f64,
+    pub grad_norm: f64,
+    /// Wall time of the iterations (problem setup excluded).
+    pub seconds: f64,
+    pub setup_seconds: f64,
+}
+
+/// Runs `method` from positions `x` (problem numbering), updating them in place.
+/// `progress` sees every history record and may return `false` to stop.
+pub fn solve(
+    p: &Problem,
+    x: &mut [Vec3],
+    method: Method,
+    params: &Params,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    if !(params.tol >= 0.0) {
+        return Err(Error::InvalidArgument(format!(
+            "tolerance must be non-negative, got {}",
+            params.tol
+        )));
+    }
+    p.check_feasible(x)?;
+    let start = Instant::now();
+    let deadline = params.time_limit.map(|t| start + t);
+    let edge = p.mean_edge_length(x);
+    let mut history = History::default();
+    let evaluate = |x: &[Vec3]| -> Result<(f64, f64)> {
+        let (f, g) = objective::gradient(p, x).ok_or_else(|| {
+            Error::InvalidMesh("an accepted step inverted an element (solver bug)".into())
+        })?;
+        Ok((f, objective::norm(&g)))
+    };
+    let (mut f, mut gnorm) = evaluate(x)?;
+    let mut record = Record {
+        iteration: 0,
+        seconds: 0.0,
+        objective: f,
+        grad_norm: gnorm,
+    };
+    history.push(record);
+    let mut stop = if progress(&record) {
+        None
+    } else {
+        Some(StopReason::Cancelled)
+    };
+    let mut iterations = 0;
+    while stop.is_none() {
+        if gnorm < params.tol {
+            stop = Some(StopReason::Converged);
+            break;
+        }
+        if iterations >= params.max_iter {
+            stop = Some(StopReason::MaxIterations);
+            break;
+        }
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            stop = Some(StopReason::TimeLimit);
+            break;
+        }
+        let max_sq = match method {
+            Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
+            Method::Laplace => laplace::sweep(p, x, deadline),
+        };
+        iterations += 1;
+        (f, gnorm) = evaluate(x)?;
+        record = Record {
+            iteration: iterations,
+            seconds: start.elapsed().as_secs_f64(),
+            objective: f,
+            grad_norm: gnorm,
+        };
+        history.push(record);
+        if !progress(&record) {
+            stop = Some(StopReason::Cancelled);
+        } else if max_sq.sqrt() <= params.min_move * edge && gnorm >= params.tol {
+            stop = Some(StopReason::Stalled);
+        }
+    }
+    Ok(Info {
+        method,
+        iterations,
+        stop: stop.unwrap_or(StopReason::Converged),
+        history,
+        objective: f,
+        grad_norm: gnorm,
+        seconds: start.elapsed().as_secs_f64(),
+        setup_seconds: p.setup_time.as_secs_f64(),
+    })
+}
+
+/// Smooths `mesh` in place (the library's one-call entry point): builds the
+/// problem, checks the start is feasible, runs `method` and writes the
+/// optimised positions back in the mesh's own vertex numbering.
+pub fn smooth_mesh(
+    mesh: &mut Mesh,
+    method: Method,
+    params: &Params,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let p = Problem::new(mesh)?;
+    let mut x = p.gather(&mesh.points);
+    let info = solve(&p, &mut x, method, params, progress)?;
+    mesh.points = p.scatter(&x);
+    Ok(info)
+}
