@@ -22,6 +22,8 @@ struct SParts {
     s: Mat3,
     cof: Mat3,
     d: f64,
+    /// d^(-2/3)
+    h: f64,
     f: f64,
     eta: f64,
     grad_s: Mat3,
@@ -82,14 +84,14 @@ impl TetShape {
         if d <= 0.0 || !d.is_finite() {
             return None;
         }
-        let g = cbrt_sq(d);
+        let h = 1.0 / cbrt_sq(d);
         let f = frobenius_sq(&s);
-        let eta = f / (3.0 * g);
+        let eta = f * h / 3.0;
         if !eta.is_finite() {
             return None;
         }
         let cof = cofactor(&s);
-        let a = 2.0 / (3.0 * g);
+        let a = 2.0 * h / 3.0;
         let c = 2.0 * eta / (3.0 * d);
         let mut grad_s = [[0.0; 3]; 3];
         for i in 0..3 {
@@ -101,6 +103,7 @@ impl TetShape {
             s,
             cof,
             d,
+            h,
             f,
             eta,
             grad_s,
@@ -153,7 +156,7 @@ impl TetShape {
         let sb = mul_vec(&p.s, b);
         let cb = mul_vec(&p.cof, b);
         let bb = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
-        let h = 1.0 / cbrt_sq(p.d);
+        let h = p.h;
         let dm53 = h / p.d; // d^(-5/3)
         let dm83 = dm53 / p.d; // d^(-8/3)
         let diag = 2.0 * h * bb / 3.0;
@@ -182,7 +185,7 @@ fn cbrt_sq(d: f64) -> f64 {
 /// dh = -(2/3) d^(-5/3) C, d2h = (10/9) d^(-8/3) C (x) C - (2/3) d^(-5/3) d2(det),
 /// d2(det)[(i,j),(k,l)] = sum_{m,n} eps_ikm eps_jln S[m][n].
 fn hess_s(p: &SParts) -> Hess9 {
-    let h = 1.0 / cbrt_sq(p.d);
+    let h = p.h;
     let dm53 = h / p.d;
     let dm83 = dm53 / p.d;
     let mut out = [[0.0; 9]; 9];

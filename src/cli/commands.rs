@@ -1,0 +1,167 @@
+//! The subcommands.
+
+use super::progress::Progress;
+use super::{BoxArgs, DemoArgs, QualityArgs, SmoothArgs, SolverArgs};
+use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::io::{self, CellData, Format};
+use meshsmooth::report::quality_report;
+use meshsmooth::solve::{self, Info, Method, Params};
+use meshsmooth::{Error, Mesh, Result, metric};
+use std::path::Path;
+use std::time::Duration;
+
+impl SolverArgs {
+    fn method(&self) -> Result<Method> {
+        self.method.parse()
+    }
+
+    fn params(&self) -> Result<Params> {
+        if !(self.tol.is_finite() && self.tol >= 0.0) {
+            return Err(Error::InvalidArgument(format!("--tol must be a non-negative number, got {}", self.tol)));
+        }
+        let time_limit = match self.time_limit {
+            None => None,
+            Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
+            Some(t) => return Err(Error::InvalidArgument(format!("--time-limit must be a positive number of seconds, got {t}"))),
+        };
+        Ok(Params { tol: self.tol, max_iter: self.max_iter, time_limit, ..Params::default() })
+    }
+}
+
+fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
+    match name {
+        Some(n) => Format::from_name(n).ok_or_else(|| {
+            Error::InvalidArgument(format!(
+                "unknown format '{n}' (expected vtk, vtk-binary, vtu, vtu-binary, msh2, msh2-binary, msh4, msh4-binary or medit)"
+            ))
+        }),
+        None => Format::from_path(path),
+    }
+}
+
+/// Per-element inverse mean ratio, written as cell data so ParaView can colour by it.
+fn eta_field(mesh: &Mesh) -> Vec<f64> {
+    (0..mesh.num_elements()).map(|e| metric::element_eta(mesh, &mesh.points, e).unwrap_or(f64::INFINITY)).collect()
+}
+
+fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
+    // the last line of defence: an output mesh never holds an inverted element
+    let bad = metric::inverted_elements(mesh, &mesh.points);
+    if !bad.is_empty() {
+        return Err(Error::Inverted { count: bad.len(), first: bad.into_iter().take(5).collect() });
+    }
+    let eta = eta_field(mesh);
+    io::write(path, mesh, format, &[CellData { name: "inverse_mean_ratio", values: &eta }])
+}
+
+fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
+    if io::atomic::same_file(input, output) {
+        return Err(Error::InvalidArgument(format!(
+            "output {} is the input file; meshsmooth never overwrites its input",
+            output.display()
+        )));
+    }
+    Ok(())
+}
+
+fn summary(info: &Info, f0: f64) -> String {
+    let change = if f0 != 0.0 { 100.0 * (info.objective - f0) / f0 } else { 0.0 };
+    format!(
+        "{} on cpu (f64): {} after {} sweeps in {:.3} s (setup {:.3} s); F {:.8} -> {:.8} ({:+.2}%), |grad F| = {:.3e}",
+        info.method,
+        info.stop,
+        info.iterations,
+        info.seconds,
+        info.setup_seconds,
+        f0,
+        info.objective,
+        change,
+        info.grad_norm
+    )
+}
+
+/// Smooths `mesh` in place, printing reports and iterations unless `quiet`.
+fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool) -> Result<Info> {
+    let method = solver.method()?;
+    let params = solver.params()?;
+    let before = quality_report(mesh, &mesh.points);
+    if !quiet {
+        println!("== initial mesh ==\n{before}");
+    }
+    let mut progress = Progress::new(params.max_iter, !quiet);
+    let result = solve::smooth_mesh(mesh, method, &params, &mut |r| progress.update(r));
+    progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
+    let info = result?;
+    if !quiet {
+        println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
+    }
+    let f0 = info.history.first().map_or(info.objective, |r| r.objective);
+    println!("{}", summary(&info, f0));
+    Ok(info)
+}
+
+pub fn smooth(a: &SmoothArgs) -> Result<()> {
+    let format = output_format(&a.output, a.format.as_deref())?;
+    refuse_overwrite(&a.input, &a.output)?;
+    if let Some(h) = &a.history {
+        refuse_overwrite(&a.input, h)?;
+    }
+    let mut mesh = io::read(&a.input)?;
+    let info = run_solver(&mut mesh, &a.solver, a.quiet)?;
+    write_mesh(&a.output, &mesh, format)?;
+    if let Some(h) = &a.history {
+        io::atomic::write_bytes(h, info.history.to_csv().as_bytes())?;
+    }
+    if !a.quiet {
+        println!("wrote {}", a.output.display());
+    }
+    Ok(())
+}
+
+pub fn quality(a: &QualityArgs) -> Result<()> {
+    let mesh = io::read(&a.input)?;
+    let report = quality_report(&mesh, &mesh.points);
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report).expect("report serialises"));
+    } else {
+        println!("{}\n{report}", a.input.display());
+    }
+    Ok(())
+}
+
+pub fn generate_box(a: &BoxArgs) -> Result<()> {
+    let format = output_format(&a.output, a.format.as_deref())?;
+    let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
+    if nx == 0 || ny == 0 || nz == 0 {
+        return Err(Error::InvalidArgument("--cells needs three positive counts".into()));
+    }
+    let mut mesh = generate::tet_box(nx, ny, nz, [nx as f64, ny as f64, nz as f64]);
+    if let Some(spec) = &a.perturb {
+        let perturbation: Perturbation = spec.parse()?;
+        if !(a.fraction > 0.0 && a.fraction <= 1.0) {
+            return Err(Error::InvalidArgument(format!("--fraction must be in (0, 1], got {}", a.fraction)));
+        }
+        let stats = generate::perturb(&mut mesh, &PerturbOptions { perturbation, fraction: a.fraction, seed: a.seed })?;
+        println!("perturbed {} vertices ({} shortened to keep elements valid)", stats.moved, stats.backtracked);
+    }
+    write_mesh(&a.output, &mesh, format)?;
+    println!("wrote {} ({} vertices, {} tetrahedra)", a.output.display(), mesh.num_points(), mesh.num_elements());
+    Ok(())
+}
+
+pub fn demo(a: &DemoArgs) -> Result<()> {
+    let n = a.cells.max(1);
+    let mut mesh = generate::tet_box(n, n, n, [1.0, 1.0, 1.0]);
+    let opts = PerturbOptions { perturbation: Perturbation::Random { alpha: 0.3 }, fraction: 1.0, seed: 1 };
+    generate::perturb(&mut mesh, &opts)?;
+    println!(
+        "meshsmooth demo: a {n}x{n}x{n} box of {} tetrahedra, interior vertices perturbed randomly by 0.3 of the edge length\n",
+        mesh.num_elements()
+    );
+    run_solver(&mut mesh, &a.solver, false)?;
+    if let Some(out) = &a.output {
+        write_mesh(out, &mesh, Format::from_path(out)?)?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,147 @@
+//! Argument parsing and the subcommands. No numerics live here: every
+//! command calls the library and prints what it returns.
+
+mod commands;
+mod progress;
+
+use clap::{Args, Parser, Subcommand};
+use std::ffi::OsString;
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(name = "meshsmooth", version, about = "Improve the shape quality of unstructured meshes by moving their vertices.")]
+#[command(long_about = "Improve the shape quality of unstructured meshes by moving their vertices.\n\n\
+    Without a command, smooths a built-in perturbed box mesh and prints the quality reports (same as `meshsmooth demo`).")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Optimise vertex positions and write the improved mesh.
+    Smooth(SmoothArgs),
+    /// Print the quality report of a mesh.
+    Quality(QualityArgs),
+    /// Generate a test mesh.
+    #[command(subcommand)]
+    Generate(GenerateCommand),
+    /// Smooth a built-in perturbed mesh and print the reports.
+    Demo(DemoArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct SmoothArgs {
+    /// Input mesh (.vtk, .vtu, .msh, .mesh).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension unless --format is given.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub solver: SolverArgs,
+    /// Write the iteration history as CSV (iteration, seconds, objective, gradient norm).
+    #[arg(long, value_name = "FILE.csv")]
+    pub history: Option<PathBuf>,
+    /// Output format: vtk, vtk-binary, vtu, vtu-binary, msh2, msh2-binary, msh4, msh4-binary, medit.
+    #[arg(long)]
+    pub format: Option<String>,
+    /// Print only the final summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct SolverArgs {
+    /// bcd: block coordinate descent (per-vertex Newton); laplace: smart Laplacian smoothing.
+    #[arg(long, default_value = "bcd", value_parser = ["bcd", "laplace"])]
+    pub method: String,
+    /// Where to run; only the CPU backend exists so far.
+    #[arg(long, default_value = "cpu", value_parser = ["cpu"])]
+    pub device: String,
+    /// Stop when the 2-norm of the objective's gradient falls below this.
+    #[arg(long, default_value_t = 1e-6)]
+    pub tol: f64,
+    /// Most sweeps over the free vertices.
+    #[arg(long, default_value_t = 1000)]
+    pub max_iter: usize,
+    /// Stop after this many seconds (the mesh so far is kept; it is always valid).
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
+}
+
+#[derive(Args, Debug)]
+pub struct QualityArgs {
+    pub input: PathBuf,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum GenerateCommand {
+    /// A box of tetrahedra: NX x NY x NZ cubes, each split into 6 tetrahedra.
+    Box(BoxArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct BoxArgs {
+    /// Cells along x, y and z.
+    #[arg(long, num_args = 3, value_names = ["NX", "NY", "NZ"], required = true)]
+    pub cells: Vec<usize>,
+    /// Perturb interior vertices: random:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA
+    /// (ALPHA in units of the local edge length).
+    #[arg(long)]
+    pub perturb: Option<String>,
+    /// Fraction of the interior vertices to perturb.
+    #[arg(long, default_value_t = 1.0)]
+    pub fraction: f64,
+    /// Seed of the perturbation's random numbers.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output format (see `smooth --format`).
+    #[arg(long)]
+    pub format: Option<String>,
+}
+
+#[derive(Args, Debug)]
+pub struct DemoArgs {
+    /// Also write the smoothed demo mesh here.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Cells per side of the demo box.
+    #[arg(long, default_value_t = 16)]
+    pub cells: usize,
+    #[command(flatten)]
+    pub solver: SolverArgs,
+}
+
+/// Parses `args` and runs the command; returns the process exit code.
+pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return e.exit_code();
+        }
+    };
+    let result = match cli.command {
+        None => commands::demo(&DemoArgs {
+            output: None,
+            cells: 16,
+            solver: SolverArgs { method: "bcd".into(), device: "cpu".into(), tol: 1e-6, max_iter: 1000, time_limit: None },
+        }),
+        Some(Command::Demo(a)) => commands::demo(&a),
+        Some(Command::Smooth(a)) => commands::smooth(&a),
+        Some(Command::Quality(a)) => commands::quality(&a),
+        Some(Command::Generate(GenerateCommand::Box(a))) => commands::generate_box(&a),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            1
+        }
+    }
+}
