@@ -91,13 +91,11 @@ fn perturbations_leave_boundary_and_never_invert() {
             let mut m = base.clone();
             let stats = perturb(&mut m, &opts(p, 1.0, 7)).unwrap();
             assert!(inverted_elements(&m, &m.points).is_empty(), "{p}");
-            for v in 0..m.num_points() {
-                if fixed[v] {
-                    assert_eq!(
-                        m.points[v], base.points[v],
-                        "{p}: boundary vertex {v} moved"
-                    );
-                }
+            for (v, _) in fixed.iter().enumerate().filter(|(_, f)| **f) {
+                assert_eq!(
+                    m.points[v], base.points[v],
+                    "{p}: boundary vertex {v} moved"
+                );
             }
             assert_eq!(stats.selected, 9 * 9 * 9, "{p}");
             assert_eq!(stats.moved + stats.untouched, stats.selected, "{p}");
