@@ -1,1 +1,443 @@
-//! Quality reports.
+//! Quality reports: the columns of the papers' mesh tables (inverse mean
+//! ratio and element volume: avg, median, sigma_n, max, max:min), an eta
+//! histogram, the worst elements, and displacement statistics.
+
+use std::fmt;
+
+use rayon::prelude::*;
+
+use crate::mesh::topology::fixed_vertices;
+use crate::mesh::{ElementKind, Mesh};
+use crate::metric::{element_eta, element_min_det};
+
+/// Summary of a set of values. `sigma_n` is the population standard deviation
+/// divided by the mean, as in the papers' tables. Empty sets give NaN (null in JSON).
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq)]
+pub struct Stats {
+    pub count: usize,
+    pub avg: f64,
+    pub median: f64,
+    pub sigma_n: f64,
+    pub min: f64,
+    pub max: f64,
+    /// max / min; infinite when min <= 0 (useful for volumes only).
+    pub max_min_ratio: f64,
+}
+
+impl Stats {
+    pub fn of(values: &[f64]) -> Stats {
+        let n = values.len();
+        if n == 0 {
+            let nan = f64::NAN;
+            return Stats {
+                count: 0,
+                avg: nan,
+                median: nan,
+                sigma_n: nan,
+                min: nan,
+                max: nan,
+                max_min_ratio: nan,
+            };
+        }
+        let mut sorted = values.to_vec();
+        sorted.sort_unstable_by(f64::total_cmp);
+        let median = if n % 2 == 1 {
+            sorted[n / 2]
+        } else {
+            0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+        };
+        let avg = values.iter().sum::<f64>() / n as f64;
+        let var = values.iter().map(|v| (v - avg).powi(2)).sum::<f64>() / n as f64;
+        let (min, max) = (sorted[0], sorted[n - 1]);
+        Stats {
+            count: n,
+            avg,
+            median,
+            sigma_n: var.sqrt() / avg,
+            min,
+            max,
+            max_min_ratio: if min > 0.0 { max / min } else { f64::INFINITY },
+        }
+    }
+}
+
+/// One histogram bin `[lo, hi)`; `hi` is `None` for the open last bin. The
+/// first bin also holds values just below 1 from rounding.
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
+pub struct Bin {
+    pub lo: f64,
+    pub hi: Option<f64>,
+    pub count: usize,
+}
+
+/// Bin edges of the eta histogram: fine near the optimum 1, coarse in the tail.
+pub const ETA_BIN_EDGES: [f64; 9] = [1.0, 1.05, 1.1, 1.2, 1.5, 2.0, 3.0, 5.0, 10.0];
+
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
+pub struct Worst {
+    pub id: usize,
+    pub kind: String,
+    /// `None` for an inverted element.
+    pub eta: Option<f64>,
+    pub centroid: [f64; 3],
+}
+
+#[derive(serde::Serialize, Clone, Debug)]
+pub struct QualityReport {
+    pub vertices: usize,
+    pub elements: usize,
+    pub free_vertices: usize,
+    /// Skin plus user-fixed vertices.
+    pub fixed_vertices: usize,
+    /// (kind name, count) for each kind present.
+    pub kinds: Vec<(String, usize)>,
+    pub dim: usize,
+    /// Inverse mean ratio over the non-inverted elements.
+    pub eta: Stats,
+    /// Element volume (area in 2D) over all elements; see [`element_volume`].
+    pub volume: Stats,
+    pub inverted: usize,
+    /// The first 10 inverted element ids.
+    pub inverted_ids: Vec<usize>,
+    /// The objective F = mean eta over all elements; `None` if any is inverted.
+    pub objective: Option<f64>,
+    pub histogram: Vec<Bin>,
+    /// The 5 worst elements, inverted ones first, then by decreasing eta.
+    pub worst: Vec<Worst>,
+}
+
+const WORST: usize = 5;
+const INVERTED_IDS: usize = 10;
+
+/// Quality of `mesh` with its vertices at `points` (which may differ from `mesh.points`).
+///
+/// # Panics
+/// If `points` does not have one entry per mesh vertex.
+pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
+    assert_eq!(
+        points.len(),
+        mesh.num_points(),
+        "one position per mesh vertex"
+    );
+    let ne = mesh.num_elements();
+    // (eta, volume); eta None when any corner determinant is not positive
+    let per_element: Vec<(Option<f64>, f64)> = (0..ne)
+        .into_par_iter()
+        .map(|e| {
+            let min_det = element_min_det(mesh, points, e);
+            let eta = element_eta(mesh, points, e).filter(|_| min_det > 0.0);
+            (eta, element_volume(mesh.kinds[e], &gather(mesh, points, e)))
+        })
+        .collect();
+
+    let etas: Vec<f64> = per_element.iter().filter_map(|p| p.0).collect();
+    let volumes: Vec<f64> = per_element.iter().map(|p| p.1).collect();
+    let inverted_all: Vec<usize> = (0..ne).filter(|&e| per_element[e].0.is_none()).collect();
+    let objective =
+        (inverted_all.is_empty() && ne > 0).then(|| etas.iter().sum::<f64>() / ne as f64);
+
+    let mut histogram: Vec<Bin> = ETA_BIN_EDGES
+        .iter()
+        .enumerate()
+        .map(|(i, &lo)| Bin {
+            lo,
+            hi: ETA_BIN_EDGES.get(i + 1).copied(),
+            count: 0,
+        })
+        .collect();
+    for &eta in &etas {
+        let bin = ETA_BIN_EDGES[1..]
+            .iter()
+            .take_while(|&&edge| eta >= edge)
+            .count();
+        histogram[bin].count += 1;
+    }
+
+    let fixed = fixed_vertices(mesh);
+    let nfixed = fixed.iter().filter(|&&f| f).count();
+    QualityReport {
+        vertices: mesh.num_points(),
+        elements: ne,
+        free_vertices: mesh.num_points() - nfixed,
+        fixed_vertices: nfixed,
+        kinds: ElementKind::ALL
+            .iter()
+            .map(|&k| (k.name().to_string(), mesh.count_kind(k)))
+            .filter(|(_, c)| *c > 0)
+            .collect(),
+        dim: mesh.dim(),
+        eta: Stats::of(&etas),
+        volume: Stats::of(&volumes),
+        inverted: inverted_all.len(),
+        inverted_ids: inverted_all.into_iter().take(INVERTED_IDS).collect(),
+        objective,
+        histogram,
+        worst: worst_elements(mesh, points, &per_element),
+    }
+}
+
+fn gather(mesh: &Mesh, points: &[[f64; 3]], e: usize) -> Vec<[f64; 3]> {
+    mesh.element(e)
+        .iter()
+        .map(|&v| points[v as usize])
+        .collect()
+}
+
+fn worst_elements(
+    mesh: &Mesh,
+    points: &[[f64; 3]],
+    per_element: &[(Option<f64>, f64)],
+) -> Vec<Worst> {
+    let badness = |e: usize| per_element[e].0.unwrap_or(f64::INFINITY);
+    // a bounded insertion list: one pass, no sort of all elements
+    let mut ids: Vec<usize> = Vec::with_capacity(WORST + 1);
+    for e in 0..per_element.len() {
+        let pos = ids
+            .iter()
+            .position(|&w| badness(e) > badness(w))
+            .unwrap_or(ids.len());
+        if pos < WORST {
+            ids.insert(pos, e);
+            ids.truncate(WORST);
+        }
+    }
+    ids.into_iter()
+        .map(|id| {
+            let x = gather(mesh, points, id);
+            let centroid =
+                std::array::from_fn(|i| x.iter().map(|p| p[i]).sum::<f64>() / x.len() as f64);
+            Worst {
+                id,
+                kind: mesh.kinds[id].name().to_string(),
+                eta: per_element[id].0,
+                centroid,
+            }
+        })
+        .collect()
+}
+
+/// Signed volume of an element (area in the xy plane for 2D kinds), positive
+/// for a well-oriented element. Exact for the isoparametric (bilinear,
+/// trilinear) elements: tets and triangles by their determinant, quads by the
+/// shoelace formula, hexahedra by 2x2x2 Gauss quadrature of the trilinear
+/// Jacobian, prisms by centroid x 2-point Gauss (the Jacobian determinants are
+/// polynomials those rules integrate exactly).
+pub fn element_volume(kind: ElementKind, x: &[[f64; 3]]) -> f64 {
+    let d = |a: usize, b: usize| -> [f64; 3] { std::array::from_fn(|i| x[b][i] - x[a][i]) };
+    match kind {
+        ElementKind::Triangle => 0.5 * cross2(&d(0, 1), &d(0, 2)),
+        ElementKind::Quadrilateral => {
+            0.5 * (0..4).map(|i| cross2(&x[i], &x[(i + 1) % 4])).sum::<f64>()
+        }
+        ElementKind::Tetrahedron => det3(&d(0, 1), &d(0, 2), &d(0, 3)) / 6.0,
+        ElementKind::Hexahedron => hex_volume(x),
+        ElementKind::Prism => prism_volume(x),
+    }
+}
+
+fn cross2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+fn det3(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> f64 {
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+        + a[2] * (b[0] * c[1] - b[1] * c[0])
+}
+
+/// Gauss points of the 2-point rule on [0, 1].
+fn gauss2() -> [f64; 2] {
+    let g = 0.5 / 3f64.sqrt();
+    [0.5 - g, 0.5 + g]
+}
+
+/// Jacobian columns `sum_i x_i dN_i/ds_a` from shape derivatives `dn[i][a]`.
+fn jacobian_det(x: &[[f64; 3]], dn: impl Fn(usize) -> [f64; 3]) -> f64 {
+    let mut j = [[0.0; 3]; 3];
+    for (i, p) in x.iter().enumerate() {
+        let g = dn(i);
+        for (col, ga) in j.iter_mut().zip(g) {
+            for (c, pc) in col.iter_mut().zip(p) {
+                *c += ga * pc;
+            }
+        }
+    }
+    det3(&j[0], &j[1], &j[2])
+}
+
+fn hex_volume(x: &[[f64; 3]]) -> f64 {
+    // VTK node i sits at reference corner REF[i] of the unit cube
+    const REF: [[f64; 3]; 8] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [1.0, 1.0, 1.0],
+        [0.0, 1.0, 1.0],
+    ];
+    let mut vol = 0.0;
+    for a in gauss2() {
+        for b in gauss2() {
+            for c in gauss2() {
+                let s = [a, b, c];
+                // 1D factor of node corner r at coordinate t, and its derivative
+                let f = |r: f64, t: f64| if r > 0.5 { t } else { 1.0 - t };
+                let df = |r: f64| if r > 0.5 { 1.0 } else { -1.0 };
+                vol += 0.125
+                    * jacobian_det(x, |i| {
+                        let r = REF[i];
+                        let v: [f64; 3] = std::array::from_fn(|k| f(r[k], s[k]));
+                        [
+                            df(r[0]) * v[1] * v[2],
+                            v[0] * df(r[1]) * v[2],
+                            v[0] * v[1] * df(r[2]),
+                        ]
+                    });
+            }
+        }
+    }
+    vol
+}
+
+fn prism_volume(x: &[[f64; 3]]) -> f64 {
+    // triangle coordinates at the centroid: L = (1 - xi - eta, xi, eta)
+    const L: f64 = 1.0 / 3.0;
+    const DL_DXI: [f64; 3] = [-1.0, 1.0, 0.0];
+    const DL_DETA: [f64; 3] = [-1.0, 0.0, 1.0];
+    let mut vol = 0.0;
+    for z in gauss2() {
+        // weight: triangle area 1/2 times Gauss weight 1/2
+        vol += 0.25
+            * jacobian_det(x, |i| {
+                let (t, top) = (i % 3, i >= 3);
+                let zf = if top { z } else { 1.0 - z };
+                [DL_DXI[t] * zf, DL_DETA[t] * zf, if top { L } else { -L }]
+            });
+    }
+    vol
+}
+
+/// How far vertices moved between two position sets.
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq)]
+pub struct DisplacementStats {
+    pub max: f64,
+    pub mean: f64,
+    /// The vertex that moved furthest (`None` when there are no vertices).
+    pub max_vertex: Option<usize>,
+}
+
+/// # Panics
+/// If the two position sets differ in length.
+pub fn displacement_stats(before: &[[f64; 3]], after: &[[f64; 3]]) -> DisplacementStats {
+    assert_eq!(before.len(), after.len(), "position sets differ in length");
+    let mut out = DisplacementStats {
+        max: 0.0,
+        mean: 0.0,
+        max_vertex: None,
+    };
+    let mut sum = 0.0;
+    for (v, (p, q)) in before.iter().zip(after).enumerate() {
+        let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+        sum += d;
+        if out.max_vertex.is_none() || d > out.max {
+            out.max = d;
+            out.max_vertex = Some(v);
+        }
+    }
+    if !before.is_empty() {
+        out.mean = sum / before.len() as f64;
+    }
+    out
+}
+
+/// Numbers in a table column: fixed point near 1, scientific otherwise.
+fn num(x: f64) -> String {
+    if x.is_nan() {
+        "-".into()
+    } else if x.is_infinite() {
+        "inf".into()
+    } else if x == 0.0 || (1e-3..1e5).contains(&x.abs()) {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+impl fmt::Display for QualityReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let kinds: Vec<String> = self.kinds.iter().map(|(k, c)| format!("{c} {k}")).collect();
+        writeln!(
+            f,
+            "{}D mesh: {} vertices ({} free, {} fixed), {} elements ({})",
+            self.dim,
+            self.vertices,
+            self.free_vertices,
+            self.fixed_vertices,
+            self.elements,
+            kinds.join(", ")
+        )?;
+        let measure = if self.dim == 2 { "area" } else { "volume" };
+        writeln!(
+            f,
+            "{:<20}{:>12}{:>12}{:>12}{:>12}{:>12}{:>12}",
+            "", "avg", "median", "sigma_n", "min", "max", "max:min"
+        )?;
+        for (name, s, ratio) in [
+            ("inverse mean ratio", &self.eta, "".to_string()),
+            (measure, &self.volume, num(self.volume.max_min_ratio)),
+        ] {
+            writeln!(
+                f,
+                "{:<20}{:>12}{:>12}{:>12}{:>12}{:>12}{:>12}",
+                name,
+                num(s.avg),
+                num(s.median),
+                num(s.sigma_n),
+                num(s.min),
+                num(s.max),
+                ratio
+            )?;
+        }
+        match self.objective {
+            Some(obj) => writeln!(f, "objective F (mean eta): {}", num(obj))?,
+            None => writeln!(
+                f,
+                "inverted elements: {} (first ids: {:?}); objective undefined",
+                self.inverted, self.inverted_ids
+            )?,
+        }
+        writeln!(f, "eta histogram:")?;
+        let top = self
+            .histogram
+            .iter()
+            .map(|b| b.count)
+            .max()
+            .unwrap_or(0)
+            .max(1);
+        for b in &self.histogram {
+            let range = match b.hi {
+                Some(hi) => format!("[{:.2}, {:.2})", b.lo, hi),
+                None => format!("[{:.2}, inf)", b.lo),
+            };
+            let bar = "#".repeat((40 * b.count).div_ceil(top));
+            writeln!(f, "  {range:<14}{:>10} {bar}", b.count)?;
+        }
+        writeln!(f, "worst elements:")?;
+        for w in &self.worst {
+            let eta = w.eta.map_or("inverted".to_string(), num);
+            let c = w.centroid;
+            writeln!(
+                f,
+                "  #{:<10} {:<14}eta {:>10}  at ({}, {}, {})",
+                w.id,
+                w.kind,
+                eta,
+                num(c[0]),
+                num(c[1]),
+                num(c[2])
+            )?;
+        }
+        Ok(())
+    }
+}

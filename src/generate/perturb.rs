@@ -1,0 +1,301 @@
+//! Perturbations of an (optimal) mesh for the initial-configuration study
+//! (random, translational and oscillatory moves of the free vertices).
+
+use std::fmt;
+use std::str::FromStr;
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::mesh::topology::{fixed_vertices, vertex_elements, vertex_neighbours};
+use crate::metric::{element_min_det, inverted_elements};
+
+/// How each selected vertex moves. `alpha` is relative to the vertex's local
+/// length scale `h` = mean length of its edges, so one value means the same
+/// thing on coarse and fine meshes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Perturbation {
+    /// `x + alpha h r`, each coordinate of `r` uniform in [-1, 1].
+    Random { alpha: f64 },
+    /// `x + alpha h [1, 0, 0]` (the paper's "R" shift).
+    ShiftR { alpha: f64 },
+    /// `x + alpha h [1, 1, 0] / sqrt(2)` (the paper's "NE" shift, normalised
+    /// so that it moves as far as `ShiftR` for the same alpha).
+    ShiftNe { alpha: f64 },
+    /// `x_i + alpha h sin(omega u_i)` per coordinate, where `u_i` is `x_i`
+    /// rescaled to [0, 1] over the mesh bounding box: `omega = 2 pi` is one
+    /// wave across the mesh.
+    Oscillatory { alpha: f64, omega: f64 },
+}
+
+impl Perturbation {
+    pub fn alpha(&self) -> f64 {
+        match *self {
+            Perturbation::Random { alpha }
+            | Perturbation::ShiftR { alpha }
+            | Perturbation::ShiftNe { alpha }
+            | Perturbation::Oscillatory { alpha, .. } => alpha,
+        }
+    }
+}
+
+/// Same text as [`FromStr`] accepts; `f64` Display round-trips exactly.
+impl fmt::Display for Perturbation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Perturbation::Random { alpha } => write!(f, "random:{alpha}"),
+            Perturbation::ShiftR { alpha } => write!(f, "shift-r:{alpha}"),
+            Perturbation::ShiftNe { alpha } => write!(f, "shift-ne:{alpha}"),
+            Perturbation::Oscillatory { alpha, omega } => write!(f, "osc:{alpha}:{omega}"),
+        }
+    }
+}
+
+const SYNTAX: &str = "expected random:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA";
+
+fn parse_number(text: &str, what: &str, whole: &str) -> Result<f64> {
+    let v: f64 = text.trim().parse().map_err(|_| {
+        Error::InvalidArgument(format!(
+            "perturbation '{whole}': {what} '{text}' is not a number"
+        ))
+    })?;
+    if !v.is_finite() || v < 0.0 {
+        return Err(Error::InvalidArgument(format!(
+            "perturbation '{whole}': {what} must be finite and >= 0, got {text}"
+        )));
+    }
+    Ok(v)
+}
+
+impl FromStr for Perturbation {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        let parts: Vec<&str> = s.trim().split(':').collect();
+        let arity = |n: usize| {
+            if parts.len() == n {
+                Ok(())
+            } else {
+                Err(Error::InvalidArgument(format!(
+                    "perturbation '{s}': '{}' takes {} parameter(s), got {}; {SYNTAX}",
+                    parts[0],
+                    n - 1,
+                    parts.len() - 1
+                )))
+            }
+        };
+        let name = parts[0].to_ascii_lowercase();
+        match name.as_str() {
+            "random" | "shift-r" | "shift-ne" => {
+                arity(2)?;
+                let alpha = parse_number(parts[1], "alpha", s)?;
+                Ok(match name.as_str() {
+                    "random" => Perturbation::Random { alpha },
+                    "shift-r" => Perturbation::ShiftR { alpha },
+                    _ => Perturbation::ShiftNe { alpha },
+                })
+            }
+            "osc" => {
+                arity(3)?;
+                Ok(Perturbation::Oscillatory {
+                    alpha: parse_number(parts[1], "alpha", s)?,
+                    omega: parse_number(parts[2], "omega", s)?,
+                })
+            }
+            _ => Err(Error::InvalidArgument(format!(
+                "unknown perturbation '{s}'; {SYNTAX}"
+            ))),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct PerturbOptions {
+    pub perturbation: Perturbation,
+    /// Share of the free vertices to move: 1.0 = all, else a random subset of
+    /// `round(fraction * free)` vertices.
+    pub fraction: f64,
+    pub seed: u64,
+}
+
+impl Default for PerturbOptions {
+    fn default() -> Self {
+        PerturbOptions {
+            perturbation: Perturbation::Random { alpha: 0.1 },
+            fraction: 1.0,
+            seed: 0,
+        }
+    }
+}
+
+/// What [`perturb`] did. `selected = moved + untouched`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PerturbStats {
+    /// Free vertices chosen to move.
+    pub selected: usize,
+    /// Vertices that moved, by the full or a shortened displacement.
+    pub moved: usize,
+    /// Of `moved`, those whose displacement had to be shortened.
+    pub backtracked: usize,
+    /// Selected vertices left in place: every shortened move inverted an element.
+    pub untouched: usize,
+}
+
+/// Halvings tried before a vertex is left where it is.
+const MAX_HALVINGS: u32 = 30;
+
+/// Moves the free vertices (not on the skin, not user-fixed) of a valid mesh.
+///
+/// Vertices move one at a time in a seeded random order; a move that would
+/// give any incident element a non-positive corner determinant is halved
+/// until it does not (at most 30 times, then the vertex stays). So a mesh
+/// without inverted elements stays without them. Planar meshes move in x and
+/// y only. The result depends only on the mesh, the options and the seed.
+pub fn perturb(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
+    let f = opts.fraction;
+    if !(f > 0.0 && f <= 1.0) {
+        return Err(Error::InvalidArgument(format!(
+            "perturbation fraction must be in (0, 1], got {f}"
+        )));
+    }
+    // re-check what FromStr checks, for values built in code
+    let p = opts.perturbation;
+    let omega_ok = match p {
+        Perturbation::Oscillatory { omega, .. } => omega.is_finite(),
+        _ => true,
+    };
+    if !(p.alpha().is_finite() && p.alpha() >= 0.0 && omega_ok) {
+        return Err(Error::InvalidArgument(format!(
+            "perturbation {p} has a bad parameter"
+        )));
+    }
+    mesh.validate()?;
+    let inverted = inverted_elements(mesh, &mesh.points);
+    if !inverted.is_empty() {
+        return Err(Error::Inverted {
+            count: inverted.len(),
+            first: inverted.into_iter().take(10).collect(),
+        });
+    }
+
+    let fixed = fixed_vertices(mesh);
+    let mut order: Vec<usize> = (0..mesh.num_points()).filter(|&v| !fixed[v]).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    shuffle(&mut order, &mut rng);
+    let count = if f >= 1.0 {
+        order.len()
+    } else {
+        (f * order.len() as f64).round() as usize
+    };
+    order.truncate(count);
+
+    let h = mean_edge_lengths(mesh);
+    let (lo, hi) = bounding_box(&mesh.points);
+    let planar = mesh.dim() == 2;
+    let ve = vertex_elements(mesh);
+    let mut stats = PerturbStats {
+        selected: order.len(),
+        ..Default::default()
+    };
+    for v in order {
+        let x0 = mesh.points[v];
+        let mut d = displacement(&p, x0, h[v], &lo, &hi, &mut rng);
+        if planar {
+            d[2] = 0.0;
+        }
+        let mut placed = false;
+        for halvings in 0..=MAX_HALVINGS {
+            mesh.points[v] = std::array::from_fn(|i| x0[i] + d[i]);
+            if ve
+                .of(v)
+                .iter()
+                .all(|&e| element_min_det(mesh, &mesh.points, e as usize) > 0.0)
+            {
+                stats.moved += 1;
+                stats.backtracked += (halvings > 0) as usize;
+                placed = true;
+                break;
+            }
+            d = d.map(|c| 0.5 * c);
+        }
+        if !placed {
+            mesh.points[v] = x0;
+            stats.untouched += 1;
+        }
+    }
+    Ok(stats)
+}
+
+/// Fisher-Yates over `u64` draws, so the order does not depend on `usize` width.
+fn shuffle(items: &mut [usize], rng: &mut ChaCha8Rng) {
+    for i in (1..items.len()).rev() {
+        let j = rng.random_range(0..=i as u64) as usize;
+        items.swap(i, j);
+    }
+}
+
+fn displacement(
+    p: &Perturbation,
+    x: [f64; 3],
+    h: f64,
+    lo: &[f64; 3],
+    hi: &[f64; 3],
+    rng: &mut ChaCha8Rng,
+) -> [f64; 3] {
+    match *p {
+        Perturbation::Random { alpha } => {
+            std::array::from_fn(|_| alpha * h * rng.random_range(-1.0..=1.0))
+        }
+        Perturbation::ShiftR { alpha } => [alpha * h, 0.0, 0.0],
+        Perturbation::ShiftNe { alpha } => {
+            let s = alpha * h * std::f64::consts::FRAC_1_SQRT_2;
+            [s, s, 0.0]
+        }
+        Perturbation::Oscillatory { alpha, omega } => std::array::from_fn(|i| {
+            let extent = hi[i] - lo[i];
+            // a flat axis (z of a planar mesh) has nothing to oscillate over
+            if extent > 0.0 {
+                alpha * h * (omega * (x[i] - lo[i]) / extent).sin()
+            } else {
+                0.0
+            }
+        }),
+    }
+}
+
+/// Mean length of the edges at each vertex.
+fn mean_edge_lengths(mesh: &Mesh) -> Vec<f64> {
+    let nb = vertex_neighbours(mesh);
+    (0..mesh.num_points())
+        .map(|v| {
+            let others = nb.of(v);
+            let x = mesh.points[v];
+            let sum: f64 = others
+                .iter()
+                .map(|&w| {
+                    let y = mesh.points[w as usize];
+                    ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
+                })
+                .sum();
+            if others.is_empty() {
+                0.0
+            } else {
+                sum / others.len() as f64
+            }
+        })
+        .collect()
+}
+
+fn bounding_box(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for i in 0..3 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    (lo, hi)
+}
