@@ -17,14 +17,26 @@ impl SolverArgs {
 
     fn params(&self) -> Result<Params> {
         if !(self.tol.is_finite() && self.tol >= 0.0) {
-            return Err(Error::InvalidArgument(format!("--tol must be a non-negative number, got {}", self.tol)));
+            return Err(Error::InvalidArgument(format!(
+                "--tol must be a non-negative number, got {}",
+                self.tol
+            )));
         }
         let time_limit = match self.time_limit {
             None => None,
             Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
-            Some(t) => return Err(Error::InvalidArgument(format!("--time-limit must be a positive number of seconds, got {t}"))),
+            Some(t) => {
+                return Err(Error::InvalidArgument(format!(
+                    "--time-limit must be a positive number of seconds, got {t}"
+                )));
+            }
         };
-        Ok(Params { tol: self.tol, max_iter: self.max_iter, time_limit, ..Params::default() })
+        Ok(Params {
+            tol: self.tol,
+            max_iter: self.max_iter,
+            time_limit,
+            ..Params::default()
+        })
     }
 }
 
@@ -41,17 +53,30 @@ fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
 
 /// Per-element inverse mean ratio, written as cell data so ParaView can colour by it.
 fn eta_field(mesh: &Mesh) -> Vec<f64> {
-    (0..mesh.num_elements()).map(|e| metric::element_eta(mesh, &mesh.points, e).unwrap_or(f64::INFINITY)).collect()
+    (0..mesh.num_elements())
+        .map(|e| metric::element_eta(mesh, &mesh.points, e).unwrap_or(f64::INFINITY))
+        .collect()
 }
 
 fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     // the last line of defence: an output mesh never holds an inverted element
     let bad = metric::inverted_elements(mesh, &mesh.points);
     if !bad.is_empty() {
-        return Err(Error::Inverted { count: bad.len(), first: bad.into_iter().take(5).collect() });
+        return Err(Error::Inverted {
+            count: bad.len(),
+            first: bad.into_iter().take(5).collect(),
+        });
     }
     let eta = eta_field(mesh);
-    io::write(path, mesh, format, &[CellData { name: "inverse_mean_ratio", values: &eta }])
+    io::write(
+        path,
+        mesh,
+        format,
+        &[CellData {
+            name: "inverse_mean_ratio",
+            values: &eta,
+        }],
+    )
 }
 
 fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
@@ -65,7 +90,11 @@ fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
 }
 
 fn summary(info: &Info, f0: f64) -> String {
-    let change = if f0 != 0.0 { 100.0 * (info.objective - f0) / f0 } else { 0.0 };
+    let change = if f0 != 0.0 {
+        100.0 * (info.objective - f0) / f0
+    } else {
+        0.0
+    };
     format!(
         "{} on cpu (f64): {} after {} sweeps in {:.3} s (setup {:.3} s); F {:.8} -> {:.8} ({:+.2}%), |grad F| = {:.3e}",
         info.method,
@@ -93,7 +122,10 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool) -> Result<Info>
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
     let info = result?;
     if !quiet {
-        println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
+        println!(
+            "\n== optimised mesh ==\n{}",
+            quality_report(mesh, &mesh.points)
+        );
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
     println!("{}", summary(&info, f0));
@@ -122,7 +154,10 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
     let mesh = io::read(&a.input)?;
     let report = quality_report(&mesh, &mesh.points);
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report).expect("report serialises"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).expect("report serialises")
+        );
     } else {
         println!("{}\n{report}", a.input.display());
     }
@@ -133,26 +168,50 @@ pub fn generate_box(a: &BoxArgs) -> Result<()> {
     let format = output_format(&a.output, a.format.as_deref())?;
     let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
     if nx == 0 || ny == 0 || nz == 0 {
-        return Err(Error::InvalidArgument("--cells needs three positive counts".into()));
+        return Err(Error::InvalidArgument(
+            "--cells needs three positive counts".into(),
+        ));
     }
     let mut mesh = generate::tet_box(nx, ny, nz, [nx as f64, ny as f64, nz as f64]);
     if let Some(spec) = &a.perturb {
         let perturbation: Perturbation = spec.parse()?;
         if !(a.fraction > 0.0 && a.fraction <= 1.0) {
-            return Err(Error::InvalidArgument(format!("--fraction must be in (0, 1], got {}", a.fraction)));
+            return Err(Error::InvalidArgument(format!(
+                "--fraction must be in (0, 1], got {}",
+                a.fraction
+            )));
         }
-        let stats = generate::perturb(&mut mesh, &PerturbOptions { perturbation, fraction: a.fraction, seed: a.seed })?;
-        println!("perturbed {} vertices ({} shortened to keep elements valid)", stats.moved, stats.backtracked);
+        let stats = generate::perturb(
+            &mut mesh,
+            &PerturbOptions {
+                perturbation,
+                fraction: a.fraction,
+                seed: a.seed,
+            },
+        )?;
+        println!(
+            "perturbed {} vertices ({} shortened to keep elements valid)",
+            stats.moved, stats.backtracked
+        );
     }
     write_mesh(&a.output, &mesh, format)?;
-    println!("wrote {} ({} vertices, {} tetrahedra)", a.output.display(), mesh.num_points(), mesh.num_elements());
+    println!(
+        "wrote {} ({} vertices, {} tetrahedra)",
+        a.output.display(),
+        mesh.num_points(),
+        mesh.num_elements()
+    );
     Ok(())
 }
 
 pub fn demo(a: &DemoArgs) -> Result<()> {
     let n = a.cells.max(1);
     let mut mesh = generate::tet_box(n, n, n, [1.0, 1.0, 1.0]);
-    let opts = PerturbOptions { perturbation: Perturbation::Random { alpha: 0.3 }, fraction: 1.0, seed: 1 };
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.3 },
+        fraction: 1.0,
+        seed: 1,
+    };
     generate::perturb(&mut mesh, &opts)?;
     println!(
         "meshsmooth demo: a {n}x{n}x{n} box of {} tetrahedra, interior vertices perturbed randomly by 0.3 of the edge length\n",

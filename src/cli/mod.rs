@@ -9,9 +9,15 @@ use std::ffi::OsString;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
-#[command(name = "meshsmooth", version, about = "Improve the shape quality of unstructured meshes by moving their vertices.")]
-#[command(long_about = "Improve the shape quality of unstructured meshes by moving their vertices.\n\n\
-    Without a command, smooths a built-in perturbed box mesh and prints the quality reports (same as `meshsmooth demo`).")]
+#[command(
+    name = "meshsmooth",
+    version,
+    about = "Improve the shape quality of unstructured meshes by moving their vertices."
+)]
+#[command(
+    long_about = "Improve the shape quality of unstructured meshes by moving their vertices.\n\n\
+    Without a command, smooths a built-in perturbed box mesh and prints the quality reports (same as `meshsmooth demo`)."
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -130,7 +136,13 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         None => commands::demo(&DemoArgs {
             output: None,
             cells: 16,
-            solver: SolverArgs { method: "bcd".into(), device: "cpu".into(), tol: 1e-6, max_iter: 1000, time_limit: None },
+            solver: SolverArgs {
+                method: "bcd".into(),
+                device: "cpu".into(),
+                tol: 1e-6,
+                max_iter: 1000,
+                time_limit: None,
+            },
         }),
         Some(Command::Demo(a)) => commands::demo(&a),
         Some(Command::Smooth(a)) => commands::smooth(&a),

@@ -14,13 +14,18 @@ impl Progress {
         let bar = std::io::stderr().is_terminal().then(|| {
             let bar = ProgressBar::new(max_iter as u64);
             bar.set_style(
-                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} sweeps  {msg}")
-                    .expect("valid template"),
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} sweeps  {msg}",
+                )
+                .expect("valid template"),
             );
             bar
         });
         if log {
-            println!("{:>6} {:>10} {:>20} {:>12}", "iter", "seconds", "objective F", "|grad F|");
+            println!(
+                "{:>6} {:>10} {:>20} {:>12}",
+                "iter", "seconds", "objective F", "|grad F|"
+            );
         }
         Progress { bar, log }
     }
@@ -34,7 +39,10 @@ impl Progress {
         }
         if let Some(bar) = &self.bar {
             bar.set_position(i as u64);
-            bar.set_message(format!("F = {:.8}  |grad F| = {:.3e}", r.objective, r.grad_norm));
+            bar.set_message(format!(
+                "F = {:.8}  |grad F| = {:.3e}",
+                r.objective, r.grad_norm
+            ));
         }
         true
     }
@@ -54,7 +62,10 @@ impl Progress {
     }
 
     fn line(&self, r: &Record) {
-        let msg = format!("{:>6} {:>10.3} {:>20.12} {:>12.4e}", r.iteration, r.seconds, r.objective, r.grad_norm);
+        let msg = format!(
+            "{:>6} {:>10.3} {:>20.12} {:>12.4e}",
+            r.iteration, r.seconds, r.objective, r.grad_norm
+        );
         match &self.bar {
             Some(bar) => bar.println(msg),
             None => println!("{msg}"),

@@ -68,18 +68,64 @@ impl TetShape {
     /// Inverse mean ratio, or `None` when the element is inverted or degenerate.
     #[inline]
     pub fn value(&self, x: &[Vec3; 4]) -> Option<f64> {
-        let s = self.s_of(x);
-        let d = det(&s);
+        Self::value_of_s(&self.s_of(x))
+    }
+
+    /// Row `k` of B: how vertex `k` enters S.
+    #[inline]
+    pub fn b(&self, k: usize) -> &Vec3 {
+        &self.b[k]
+    }
+
+    /// S without vertex `k`'s term, so that S(x_k = y) = rest + y b_k^T.
+    /// Block coordinate descent evaluates a vertex's trial points from this.
+    #[inline]
+    pub fn s_rest(&self, x: &[Vec3; 4], k: usize) -> Mat3 {
+        let mut s = [[0.0; 3]; 3];
+        for (j, (xj, bj)) in x.iter().zip(&self.b).enumerate() {
+            if j == k {
+                continue;
+            }
+            for i in 0..3 {
+                for c in 0..3 {
+                    s[i][c] += xj[i] * bj[c];
+                }
+            }
+        }
+        s
+    }
+
+    /// rest + y b_k^T
+    #[inline]
+    pub fn s_with(&self, rest: &Mat3, k: usize, y: &Vec3) -> Mat3 {
+        let b = &self.b[k];
+        let mut s = *rest;
+        for i in 0..3 {
+            for c in 0..3 {
+                s[i][c] += y[i] * b[c];
+            }
+        }
+        s
+    }
+
+    /// Inverse mean ratio from S directly.
+    #[inline]
+    pub fn value_of_s(s: &Mat3) -> Option<f64> {
+        let d = det(s);
         if d <= 0.0 || !d.is_finite() {
             return None;
         }
-        let eta = frobenius_sq(&s) / (3.0 * cbrt_sq(d));
+        let eta = frobenius_sq(s) / (3.0 * cbrt_sq(d));
         eta.is_finite().then_some(eta)
     }
 
     #[inline]
     fn parts(&self, x: &[Vec3; 4]) -> Option<SParts> {
-        let s = self.s_of(x);
+        Self::parts_of_s(self.s_of(x))
+    }
+
+    #[inline]
+    fn parts_of_s(s: Mat3) -> Option<SParts> {
         let d = det(&s);
         if d <= 0.0 || !d.is_finite() {
             return None;
@@ -150,7 +196,13 @@ impl TetShape {
     /// because det(S) is linear in each single vertex.
     #[inline]
     pub fn vertex_gradient_hessian(&self, x: &[Vec3; 4], k: usize) -> Option<(f64, Vec3, Mat3)> {
-        let p = self.parts(x)?;
+        self.vertex_gradient_hessian_of_s(self.s_of(x), k)
+    }
+
+    /// As `vertex_gradient_hessian`, from S = rest + x_k b_k^T.
+    #[inline]
+    pub fn vertex_gradient_hessian_of_s(&self, s: Mat3, k: usize) -> Option<(f64, Vec3, Mat3)> {
+        let p = Self::parts_of_s(s)?;
         let b = &self.b[k];
         let grad = mul_vec(&p.grad_s, b);
         let sb = mul_vec(&p.s, b);

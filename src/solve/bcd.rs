@@ -2,6 +2,7 @@
 //! step per free vertex on its 3x3 block, Armijo backtracking on the elements
 //! around it, vertices in the problem's locality order.
 
+use crate::metric::TetShape;
 use crate::metric::mat3::{Mat3, Vec3, cholesky_solve, dot};
 use crate::problem::Problem;
 use std::time::Instant;
@@ -27,45 +28,68 @@ impl Default for LineSearch {
     }
 }
 
-/// Sum of the inverse mean ratios around `v` with `v` at `at`; `None` if any
-/// of those elements would be inverted.
-#[inline]
-pub fn patch_value(p: &Problem, x: &[Vec3], v: usize, at: &Vec3) -> Option<f64> {
-    let mut sum = 0.0;
-    for &packed in p.incidence.of(v) {
-        let (e, k) = ((packed >> 2) as usize, (packed & 3) as usize);
-        let mut xe = p.tet_points(x, e);
-        xe[k] = *at;
-        sum += p.shape.value(&xe)?;
-    }
-    Some(sum)
+/// The elements around one vertex, each as S without the vertex's term
+/// (`TetShape::s_rest`) and the vertex's corner: trial points then cost one
+/// rank-one update per element instead of a gather.
+#[derive(Default)]
+pub struct Patch {
+    rest: Vec<(Mat3, usize)>,
 }
 
-/// Gradient and 3x3 Hessian of the patch sum with respect to `v`, with the sum itself.
-#[inline]
-pub fn patch_gradient_hessian(p: &Problem, x: &[Vec3], v: usize) -> Option<(f64, Vec3, Mat3)> {
-    let mut f = 0.0;
-    let mut g = [0.0; 3];
-    let mut h = [[0.0; 3]; 3];
-    for &packed in p.incidence.of(v) {
-        let (e, k) = ((packed >> 2) as usize, (packed & 3) as usize);
-        let (eta, ge, he) = p.shape.vertex_gradient_hessian(&p.tet_points(x, e), k)?;
-        f += eta;
-        for i in 0..3 {
-            g[i] += ge[i];
-            for j in 0..3 {
-                h[i][j] += he[i][j];
-            }
+impl Patch {
+    pub fn load(&mut self, p: &Problem, x: &[Vec3], v: usize) {
+        self.rest.clear();
+        for &packed in p.incidence.of(v) {
+            let (e, k) = ((packed >> 2) as usize, (packed & 3) as usize);
+            self.rest.push((p.shape.s_rest(&p.tet_points(x, e), k), k));
         }
     }
-    Some((f, g, h))
+
+    /// Sum of the inverse mean ratios with the vertex at `at`; `None` if any
+    /// element would be inverted.
+    #[inline]
+    pub fn value(&self, p: &Problem, at: &Vec3) -> Option<f64> {
+        let mut sum = 0.0;
+        for (rest, k) in &self.rest {
+            sum += TetShape::value_of_s(&p.shape.s_with(rest, *k, at))?;
+        }
+        Some(sum)
+    }
+
+    /// The sum, its gradient and 3x3 Hessian with respect to the vertex at `at`.
+    #[inline]
+    pub fn gradient_hessian(&self, p: &Problem, at: &Vec3) -> Option<(f64, Vec3, Mat3)> {
+        let mut f = 0.0;
+        let mut g = [0.0; 3];
+        let mut h = [[0.0; 3]; 3];
+        for (rest, k) in &self.rest {
+            let (eta, ge, he) = p
+                .shape
+                .vertex_gradient_hessian_of_s(p.shape.s_with(rest, *k, at), *k)?;
+            f += eta;
+            for i in 0..3 {
+                g[i] += ge[i];
+                for j in 0..3 {
+                    h[i][j] += he[i][j];
+                }
+            }
+        }
+        Some((f, g, h))
+    }
 }
 
 /// Moves vertex `v` by one safeguarded Newton step; returns the squared
 /// displacement (0 when it stays).
 #[inline]
-pub fn relax_vertex(p: &Problem, x: &mut [Vec3], v: usize, ls: &LineSearch) -> f64 {
-    let Some((f0, g, h)) = patch_gradient_hessian(p, x, v) else {
+pub fn relax_vertex(
+    p: &Problem,
+    x: &mut [Vec3],
+    v: usize,
+    ls: &LineSearch,
+    patch: &mut Patch,
+) -> f64 {
+    patch.load(p, x, v);
+    let Some((f0, g, h)) = patch.gradient_hessian(p, &x[v]) else {
         return 0.0;
     };
     let neg_g = [-g[0], -g[1], -g[2]];
@@ -87,7 +111,7 @@ pub fn relax_vertex(p: &Problem, x: &mut [Vec3], v: usize, ls: &LineSearch) -> f
             x[v][1] + alpha * d[1],
             x[v][2] + alpha * d[2],
         ];
-        if let Some(f) = patch_value(p, x, v, &trial)
+        if let Some(f) = patch.value(p, &trial)
             && f <= f0 + ls.sigma * alpha * slope
         {
             x[v] = trial;
@@ -102,11 +126,12 @@ pub fn relax_vertex(p: &Problem, x: &mut [Vec3], v: usize, ls: &LineSearch) -> f
 /// `deadline`. Returns the largest squared displacement.
 pub fn sweep(p: &Problem, x: &mut [Vec3], ls: &LineSearch, deadline: Option<Instant>) -> f64 {
     let mut max_sq: f64 = 0.0;
+    let mut patch = Patch::default();
     for (i, &v) in p.free_vertices.iter().enumerate() {
         if i % 4096 == 4095 && deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        max_sq = max_sq.max(relax_vertex(p, x, v as usize, ls));
+        max_sq = max_sq.max(relax_vertex(p, x, v as usize, ls, &mut patch));
     }
     max_sq
 }
