@@ -14,7 +14,11 @@ const BOX_OPTIMUM: f64 = 1.322_834_2;
 
 fn perturbed_box(n: usize, alpha: f64, seed: u64) -> Mesh {
     let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
-    let opts = PerturbOptions { perturbation: Perturbation::Random { alpha }, fraction: 1.0, seed };
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha },
+        fraction: 1.0,
+        seed,
+    };
     generate::perturb(&mut m, &opts).unwrap();
     m
 }
@@ -31,14 +35,32 @@ fn bcd_converges_on_perturbed_20_box_to_the_known_optimum() {
     let fixed = topology::fixed_vertices(&mesh);
     let info = smooth(&mut mesh, Method::Bcd, &Params::default());
 
-    assert_eq!(info.stop, StopReason::Converged, "{:?}", info.history.last());
+    assert_eq!(
+        info.stop,
+        StopReason::Converged,
+        "{:?}",
+        info.history.last()
+    );
     assert!(info.grad_norm < 1e-6);
     let h = &info.history.records;
-    assert!(h[0].objective > BOX_OPTIMUM + 0.05, "the perturbation should matter: F0 = {}", h[0].objective);
+    assert!(
+        h[0].objective > BOX_OPTIMUM + 0.05,
+        "the perturbation should matter: F0 = {}",
+        h[0].objective
+    );
     for w in h.windows(2) {
-        assert!(w[1].objective <= w[0].objective, "objective rose: {:?} -> {:?}", w[0], w[1]);
+        assert!(
+            w[1].objective <= w[0].objective,
+            "objective rose: {:?} -> {:?}",
+            w[0],
+            w[1]
+        );
     }
-    assert!((info.objective - BOX_OPTIMUM).abs() < 1e-5, "F = {}", info.objective);
+    assert!(
+        (info.objective - BOX_OPTIMUM).abs() < 1e-5,
+        "F = {}",
+        info.objective
+    );
     for v in 0..mesh.num_points() {
         if fixed[v] {
             assert_eq!(mesh.points[v], start[v], "fixed vertex {v} moved");
@@ -56,7 +78,14 @@ fn bcd_returns_to_the_unperturbed_grid() {
     // the paper's perturbation study: the optimum is the grid the vertices came from
     let grid = generate::tet_box(6, 6, 6, [6.0; 3]);
     let mut mesh = perturbed_box(6, 0.25, 3);
-    let info = smooth(&mut mesh, Method::Bcd, &Params { tol: 1e-9, ..Params::default() });
+    let info = smooth(
+        &mut mesh,
+        Method::Bcd,
+        &Params {
+            tol: 1e-9,
+            ..Params::default()
+        },
+    );
     assert_eq!(info.stop, StopReason::Converged);
     let worst = mesh
         .points
@@ -71,14 +100,30 @@ fn bcd_returns_to_the_unperturbed_grid() {
 fn smoothing_commutes_with_similarity_transforms() {
     let mesh = perturbed_box(5, 0.3, 11);
     let mut a = mesh.clone();
-    let params = Params { tol: 1e-10, ..Params::default() };
+    let params = Params {
+        tol: 1e-10,
+        ..Params::default()
+    };
     smooth(&mut a, Method::Bcd, &params);
     let (c, s) = (0.6f64.cos(), 0.6f64.sin());
-    let transform = |p: [f64; 3]| [3.0 * (c * p[0] - s * p[1]) + 10.0, 3.0 * (s * p[0] + c * p[1]) - 4.0, 3.0 * p[2] + 0.5];
+    let transform = |p: [f64; 3]| {
+        [
+            3.0 * (c * p[0] - s * p[1]) + 10.0,
+            3.0 * (s * p[0] + c * p[1]) - 4.0,
+            3.0 * p[2] + 0.5,
+        ]
+    };
     let mut b = mesh.clone();
     b.points = b.points.iter().map(|&p| transform(p)).collect();
     // the gradient scales as 1/length and the objective is invariant
-    smooth(&mut b, Method::Bcd, &Params { tol: 1e-10 / 3.0, ..Params::default() });
+    smooth(
+        &mut b,
+        Method::Bcd,
+        &Params {
+            tol: 1e-10 / 3.0,
+            ..Params::default()
+        },
+    );
     for (pa, pb) in a.points.iter().zip(&b.points) {
         let ta = transform(*pa);
         for i in 0..3 {
@@ -90,14 +135,28 @@ fn smoothing_commutes_with_similarity_transforms() {
 #[test]
 fn laplace_keeps_the_mesh_valid_and_never_worsens_the_worst_element() {
     let mut mesh = perturbed_box(8, 0.3, 5);
-    let worst = |m: &Mesh| (0..m.num_elements()).map(|e| metric::element_eta(m, &m.points, e).unwrap()).fold(0.0, f64::max);
+    let worst = |m: &Mesh| {
+        (0..m.num_elements())
+            .map(|e| metric::element_eta(m, &m.points, e).unwrap())
+            .fold(0.0, f64::max)
+    };
     let fixed = topology::fixed_vertices(&mesh);
     let start = mesh.clone();
-    let info = smooth(&mut mesh, Method::Laplace, &Params { max_iter: 50, ..Params::default() });
+    let info = smooth(
+        &mut mesh,
+        Method::Laplace,
+        &Params {
+            max_iter: 50,
+            ..Params::default()
+        },
+    );
     assert!(info.iterations > 0);
     assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
     assert!(worst(&mesh) <= worst(&start));
-    assert!(info.objective < info.history.records[0].objective, "Laplace should improve this mesh");
+    assert!(
+        info.objective < info.history.records[0].objective,
+        "Laplace should improve this mesh"
+    );
     for v in 0..mesh.num_points() {
         if fixed[v] {
             assert_eq!(mesh.points[v], start.points[v]);
@@ -108,11 +167,25 @@ fn laplace_keeps_the_mesh_valid_and_never_worsens_the_worst_element() {
 #[test]
 fn limits_stop_the_solver_with_a_valid_mesh() {
     let mut mesh = perturbed_box(10, 0.3, 2);
-    let info = smooth(&mut mesh, Method::Bcd, &Params { max_iter: 3, ..Params::default() });
+    let info = smooth(
+        &mut mesh,
+        Method::Bcd,
+        &Params {
+            max_iter: 3,
+            ..Params::default()
+        },
+    );
     assert_eq!(info.stop, StopReason::MaxIterations);
     assert_eq!(info.iterations, 3);
     assert_eq!(info.history.records.len(), 4);
-    let info = smooth(&mut mesh, Method::Bcd, &Params { time_limit: Some(Duration::from_nanos(1)), ..Params::default() });
+    let info = smooth(
+        &mut mesh,
+        Method::Bcd,
+        &Params {
+            time_limit: Some(Duration::from_nanos(1)),
+            ..Params::default()
+        },
+    );
     assert_eq!(info.stop, StopReason::TimeLimit);
     let mut calls = 0;
     let info = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| {
@@ -128,11 +201,16 @@ fn limits_stop_the_solver_with_a_valid_mesh() {
 #[test]
 fn an_inverted_start_is_refused_with_element_ids() {
     let mut mesh = generate::tet_box(3, 3, 3, [3.0; 3]);
-    let centre = mesh.points.iter().position(|p| *p == [1.0, 1.0, 1.0]).unwrap();
+    let centre = mesh
+        .points
+        .iter()
+        .position(|p| *p == [1.0, 1.0, 1.0])
+        .unwrap();
     mesh.points[centre] = [2.6, 2.6, 2.6];
     let bad = metric::inverted_elements(&mesh, &mesh.points);
     assert!(!bad.is_empty());
-    let err = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap_err();
+    let err =
+        solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap_err();
     let msg = err.to_string();
     assert!(msg.contains(&format!("{} inverted", bad.len())), "{msg}");
     assert!(msg.contains(&bad[0].to_string()), "{msg}");
