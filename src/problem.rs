@@ -5,7 +5,7 @@
 
 use crate::error::{Error, Result};
 use crate::mesh::topology::{self, Csr};
-use crate::mesh::{ElementKind, Mesh, order};
+use crate::mesh::{ElementKind, Mesh, color, order};
 use crate::metric::TetShape;
 use crate::metric::mat3::Vec3;
 use std::time::{Duration, Instant};
@@ -26,6 +26,9 @@ pub struct Problem {
     pub free: Vec<bool>,
     /// Free vertices in sweep order (ascending new ids).
     pub free_vertices: Vec<u32>,
+    /// Colour classes of the free vertices: no two vertices of a class share an
+    /// element. Each class is in sweep order.
+    pub colors: Csr,
     /// Reference shape of every element (the equilateral tetrahedron).
     pub shape: TetShape,
     /// Time spent building this problem.
@@ -99,7 +102,13 @@ impl Problem {
         nb_pairs.sort_unstable();
         let neighbours = Csr::from_pairs(n, nb_pairs.into_iter());
         let free: Vec<bool> = order.iter().map(|&o| !fixed_old[o as usize]).collect();
-        let free_vertices = (0..n as u32).filter(|&v| free[v as usize]).collect();
+        let free_vertices: Vec<u32> = (0..n as u32).filter(|&v| free[v as usize]).collect();
+        let colors = color::greedy(&free_vertices, n, |v| {
+            incidence
+                .of(v)
+                .iter()
+                .flat_map(|&packed| tets[(packed >> 2) as usize])
+        });
         Ok(Problem {
             order,
             elem_order,
@@ -108,6 +117,7 @@ impl Problem {
             neighbours,
             free,
             free_vertices,
+            colors,
             shape: TetShape::equilateral(),
             setup_time: start.elapsed(),
         })

@@ -1,5 +1,6 @@
 //! The mesh model: coordinates and elements, nothing about metrics or devices.
 
+pub mod color;
 pub mod element;
 pub mod order;
 pub mod topology;

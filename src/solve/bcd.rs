@@ -5,6 +5,7 @@
 use crate::metric::TetShape;
 use crate::metric::mat3::{Mat3, Vec3, cholesky_solve, dot};
 use crate::problem::Problem;
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Armijo backtracking constants.
@@ -78,20 +79,18 @@ impl Patch {
     }
 }
 
-/// Moves vertex `v` by one safeguarded Newton step; returns the squared
-/// displacement (0 when it stays).
+/// One safeguarded Newton step for vertex `v`: the accepted new position, or
+/// `None` when no trial point decreased the patch objective enough.
 #[inline]
-pub fn relax_vertex(
+pub fn newton_step(
     p: &Problem,
-    x: &mut [Vec3],
+    x: &[Vec3],
     v: usize,
     ls: &LineSearch,
     patch: &mut Patch,
-) -> f64 {
+) -> Option<Vec3> {
     patch.load(p, x, v);
-    let Some((f0, g, h)) = patch.gradient_hessian(p, &x[v]) else {
-        return 0.0;
-    };
+    let (f0, g, h) = patch.gradient_hessian(p, &x[v])?;
     let neg_g = [-g[0], -g[1], -g[2]];
     // the block is positive definite for the mean ratio; fall back to a scaled
     // steepest descent step should rounding say otherwise
@@ -102,7 +101,7 @@ pub fn relax_vertex(
     });
     let slope = dot(&g, &d);
     if !(slope < 0.0) {
-        return 0.0;
+        return None;
     }
     let mut alpha = 1.0;
     for _ in 0..=ls.max_backtracks {
@@ -114,12 +113,15 @@ pub fn relax_vertex(
         if let Some(f) = patch.value(p, &trial)
             && f <= f0 + ls.sigma * alpha * slope
         {
-            x[v] = trial;
-            return alpha * alpha * dot(&d, &d);
+            return Some(trial);
         }
         alpha *= ls.beta;
     }
-    0.0
+    None
+}
+
+fn dist_sq(a: &Vec3, b: &Vec3) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum()
 }
 
 /// One sweep over all free vertices; stops early (leaving a valid state) at
@@ -131,7 +133,44 @@ pub fn sweep(p: &Problem, x: &mut [Vec3], ls: &LineSearch, deadline: Option<Inst
         if i % 4096 == 4095 && deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        max_sq = max_sq.max(relax_vertex(p, x, v as usize, ls, &mut patch));
+        let v = v as usize;
+        if let Some(y) = newton_step(p, x, v, ls, &mut patch) {
+            max_sq = max_sq.max(dist_sq(&x[v], &y));
+            x[v] = y;
+        }
+    }
+    max_sq
+}
+
+/// One sweep colour by colour: the vertices of a colour share no element, so
+/// their steps are independent and run in parallel (the CPU twin of the GPU
+/// sweep). Returns the largest squared displacement.
+pub fn sweep_colored(
+    p: &Problem,
+    x: &mut [Vec3],
+    ls: &LineSearch,
+    deadline: Option<Instant>,
+) -> f64 {
+    let mut max_sq: f64 = 0.0;
+    for c in 0..p.colors.len() {
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            break;
+        }
+        let xs: &[Vec3] = x;
+        let moves: Vec<(usize, Vec3)> = p
+            .colors
+            .of(c)
+            .par_iter()
+            .with_min_len(256)
+            .map_init(Patch::default, |patch, &v| {
+                newton_step(p, xs, v as usize, ls, patch).map(|y| (v as usize, y))
+            })
+            .flatten()
+            .collect();
+        for (v, y) in moves {
+            max_sq = max_sq.max(dist_sq(&x[v], &y));
+            x[v] = y;
+        }
     }
     max_sq
 }

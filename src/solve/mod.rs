@@ -22,6 +22,8 @@ pub enum Method {
     /// Block coordinate descent: per-vertex Newton with Armijo backtracking.
     #[default]
     Bcd,
+    /// Block coordinate descent colour by colour, the vertices of a colour in parallel.
+    BcdColored,
     /// Smart Laplacian smoothing (a baseline, not an optimiser).
     Laplace,
 }
@@ -31,9 +33,10 @@ impl FromStr for Method {
     fn from_str(s: &str) -> Result<Self> {
         match s {
             "bcd" => Ok(Method::Bcd),
+            "bcd-colored" => Ok(Method::BcdColored),
             "laplace" => Ok(Method::Laplace),
             _ => Err(Error::InvalidArgument(format!(
-                "unknown method '{s}' (expected bcd or laplace)"
+                "unknown method '{s}' (expected bcd, bcd-colored or laplace)"
             ))),
         }
     }
@@ -43,6 +46,7 @@ impl fmt::Display for Method {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             Method::Bcd => "bcd",
+            Method::BcdColored => "bcd-colored",
             Method::Laplace => "laplace",
         })
     }
@@ -142,6 +146,7 @@ pub fn solve(
         }
         let max_sq = match method {
             Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
+            Method::BcdColored => bcd::sweep_colored(p, x, &params.line_search, deadline),
             Method::Laplace => laplace::sweep(p, x, deadline),
         };
         iterations += 1;
