@@ -1,1 +1,363 @@
 //! Mesh files: VTK legacy and XML, Gmsh, Medit; atomic writes.
+//!
+//! Readers produce a [`RawMesh`] (every cell in file order, with its shape);
+//! [`RawMesh::into_mesh`] then splits top-dimensional elements from lower
+//! cells the same way for every format, and [`read`] validates the result.
+
+mod atomic;
+mod gmsh;
+mod lex;
+mod medit;
+mod vtk;
+mod vtu;
+
+pub use atomic::{same_file, write_atomic};
+
+use std::fmt;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::mesh::{ElementKind, LowerKind, Mesh};
+
+/// File formats meshsmooth reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Format {
+    VtkAscii,
+    VtkBinary,
+    VtuAscii,
+    /// Inline base64, uncompressed.
+    VtuBinary,
+    Msh22Ascii,
+    Msh22Binary,
+    Msh41Ascii,
+    Msh41Binary,
+    Medit,
+}
+
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
+
+impl Format {
+    pub const ALL: [Format; 9] = [
+        Format::VtkAscii,
+        Format::VtkBinary,
+        Format::VtuAscii,
+        Format::VtuBinary,
+        Format::Msh22Ascii,
+        Format::Msh22Binary,
+        Format::Msh41Ascii,
+        Format::Msh41Binary,
+        Format::Medit,
+    ];
+
+    /// Default format for a file name's extension (used for writing; reading
+    /// also looks at the content).
+    pub fn from_path(path: &Path) -> Result<Format> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("vtk") => Ok(Format::VtkAscii),
+            Some("vtu") => Ok(Format::VtuAscii),
+            Some("msh") => Ok(Format::Msh41Ascii),
+            Some("mesh") => Ok(Format::Medit),
+            _ => Err(Error::Unsupported(format!(
+                "{}: unknown mesh file extension; supported: {EXTENSIONS}",
+                path.display()
+            ))),
+        }
+    }
+
+    /// Parse a command-line format name.
+    pub fn from_name(name: &str) -> Option<Format> {
+        Format::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::VtkAscii => "vtk",
+            Format::VtkBinary => "vtk-binary",
+            Format::VtuAscii => "vtu",
+            Format::VtuBinary => "vtu-binary",
+            Format::Msh22Ascii => "msh2",
+            Format::Msh22Binary => "msh2-binary",
+            Format::Msh41Ascii => "msh4",
+            Format::Msh41Binary => "msh4-binary",
+            Format::Medit => "medit",
+        }
+    }
+
+    /// Whether the format stores lower-dimensional cells (VTK and VTU do not:
+    /// ParaView would mix them with the elements).
+    pub fn keeps_lower_cells(self) -> bool {
+        !matches!(
+            self,
+            Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary
+        )
+    }
+
+    /// Whether the format stores per-element data given to [`write`].
+    pub fn keeps_cell_data(self) -> bool {
+        !self.keeps_lower_cells()
+    }
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One value per element, written as cell data where the format supports it.
+#[derive(Clone, Copy, Debug)]
+pub struct CellData<'a> {
+    pub name: &'a str,
+    pub values: &'a [f64],
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Family {
+    Vtk,
+    Vtu,
+    Gmsh,
+    Medit,
+}
+
+fn sniff(data: &[u8]) -> Option<Family> {
+    let start = data.iter().position(|b| !b.is_ascii_whitespace())?;
+    let head = &data[start..data.len().min(start + 256)];
+    let starts = |p: &str| {
+        head.get(..p.len())
+            .is_some_and(|h| h.eq_ignore_ascii_case(p.as_bytes()))
+    };
+    if starts("# vtk DataFile") {
+        Some(Family::Vtk)
+    } else if starts("<?xml") || starts("<VTKFile") {
+        Some(Family::Vtu)
+    } else if starts("$MeshFormat") {
+        Some(Family::Gmsh)
+    } else if starts("MeshVersionFormatted") {
+        Some(Family::Medit)
+    } else {
+        None
+    }
+}
+
+/// Read a mesh, detecting the format from the content (falling back to the
+/// extension), and validate it.
+pub fn read(path: &Path) -> Result<Mesh> {
+    let data = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    if data.iter().all(|b| b.is_ascii_whitespace()) {
+        return Err(Error::parse(path, None, "file is empty"));
+    }
+    let family = match sniff(&data) {
+        Some(f) => f,
+        None => match Format::from_path(path)? {
+            Format::VtkAscii | Format::VtkBinary => Family::Vtk,
+            Format::VtuAscii | Format::VtuBinary => Family::Vtu,
+            Format::Medit => Family::Medit,
+            _ => Family::Gmsh,
+        },
+    };
+    let raw = match family {
+        Family::Vtk => vtk::read(path, &data)?,
+        Family::Vtu => vtu::read(path, &data)?,
+        Family::Gmsh => gmsh::read(path, &data)?,
+        Family::Medit => medit::read(path, &data)?,
+    };
+    let mesh = raw.into_mesh(path)?;
+    mesh.validate().map_err(|e| match e {
+        Error::InvalidMesh(msg) => Error::parse(path, None, msg),
+        other => other,
+    })?;
+    Ok(mesh)
+}
+
+/// Write `mesh` atomically: either the complete file replaces `path`, or
+/// `path` is left as it was.
+pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -> Result<()> {
+    check_structure(mesh)?;
+    write_atomic(path, |w| match format {
+        Format::VtkAscii => vtk::write(w, mesh, cell_data, false),
+        Format::VtkBinary => vtk::write(w, mesh, cell_data, true),
+        Format::VtuAscii => vtu::write(w, mesh, cell_data, false),
+        Format::VtuBinary => vtu::write(w, mesh, cell_data, true),
+        Format::Msh22Ascii => gmsh::write22(w, mesh, cell_data, false),
+        Format::Msh22Binary => gmsh::write22(w, mesh, cell_data, true),
+        Format::Msh41Ascii => gmsh::write41(w, mesh, cell_data, false),
+        Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
+        Format::Medit => medit::write(w, mesh, cell_data),
+    })
+}
+
+/// The writers index freely, so refuse meshes whose arrays disagree.
+fn check_structure(mesh: &Mesh) -> Result<()> {
+    let n = mesh.points.len();
+    let ok = mesh.offsets.len() == mesh.kinds.len() + 1
+        && mesh.offsets.first() == Some(&0)
+        && mesh.offsets.last() == Some(&mesh.conn.len())
+        && mesh.offsets.windows(2).all(|w| w[0] <= w[1])
+        && mesh.conn.iter().all(|&v| (v as usize) < n)
+        && mesh
+            .lower
+            .iter()
+            .all(|(_, vs)| vs.iter().all(|&v| (v as usize) < n))
+        && (mesh.fixed.is_empty() || mesh.fixed.len() == n);
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::InvalidMesh(
+            "cannot write: element offsets, connectivity, vertex ids or fixed flags are inconsistent"
+                .into(),
+        ))
+    }
+}
+
+/// Errors inside a writer: OS errors get the path attached by [`write_atomic`].
+#[derive(Debug)]
+pub enum WriteError {
+    Io(std::io::Error),
+    Other(Error),
+}
+
+impl From<std::io::Error> for WriteError {
+    fn from(e: std::io::Error) -> Self {
+        WriteError::Io(e)
+    }
+}
+
+impl From<Error> for WriteError {
+    fn from(e: Error) -> Self {
+        WriteError::Other(e)
+    }
+}
+
+pub type WriteResult = std::result::Result<(), WriteError>;
+
+/// Checked by every writer right before it writes cell data, so a bad array
+/// fails the write midway and exercises the atomic clean-up.
+fn check_cell_data(mesh: &Mesh, cell_data: &[CellData]) -> Result<()> {
+    for cd in cell_data {
+        if cd.values.len() != mesh.num_elements() {
+            return Err(Error::InvalidArgument(format!(
+                "cell data '{}' has {} values but the mesh has {} elements",
+                cd.name,
+                cd.values.len(),
+                mesh.num_elements()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Shape of a cell as read from a file; whether a triangle is an element or a
+/// boundary face depends on the other cells, so it is decided afterwards.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Shape {
+    Vertex,
+    Line,
+    Elem(ElementKind),
+}
+
+impl Shape {
+    pub fn num_vertices(self) -> usize {
+        match self {
+            Shape::Vertex => 1,
+            Shape::Line => 2,
+            Shape::Elem(k) => k.num_vertices(),
+        }
+    }
+}
+
+/// Everything a reader found, before elements and lower cells are separated.
+#[derive(Default)]
+pub(crate) struct RawMesh {
+    pub points: Vec<[f64; 3]>,
+    pub shapes: Vec<Shape>,
+    pub offsets: Vec<usize>,
+    pub conn: Vec<u32>,
+    /// Fixed flags from the file (VTK `fixed` data, Medit RequiredVertices);
+    /// empty when the file has none.
+    pub fixed: Vec<bool>,
+}
+
+impl RawMesh {
+    pub fn push(&mut self, shape: Shape, vertices: &[u32]) {
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        self.shapes.push(shape);
+        self.conn.extend_from_slice(vertices);
+        self.offsets.push(self.conn.len());
+    }
+
+    /// Mark vertex `v` fixed (ids are checked by the caller).
+    pub fn fix(&mut self, v: usize) {
+        if self.fixed.len() != self.points.len() {
+            self.fixed.resize(self.points.len(), false);
+        }
+        if let Some(f) = self.fixed.get_mut(v) {
+            *f = true;
+        }
+    }
+
+    pub fn into_mesh(self, path: &Path) -> Result<Mesh> {
+        if self.points.is_empty() {
+            return Err(Error::parse(path, None, "the file has no points"));
+        }
+        let has3d = self
+            .shapes
+            .iter()
+            .any(|s| matches!(s, Shape::Elem(k) if k.dim() == 3));
+        let mut mesh = Mesh::new(self.points);
+        let n = mesh.points.len();
+        let mut fixed = self.fixed;
+        fixed.resize(n, false);
+        for (c, &shape) in self.shapes.iter().enumerate() {
+            let vs = &self.conn[self.offsets[c]..self.offsets[c + 1]];
+            if let Some(&v) = vs.iter().find(|&&v| v as usize >= n) {
+                return Err(Error::parse(
+                    path,
+                    None,
+                    format!("cell {c} refers to vertex {v}, but the file has {n} points"),
+                ));
+            }
+            let lower = match shape {
+                Shape::Elem(k) if k.dim() == 3 || !has3d => {
+                    mesh.push_element(k, vs);
+                    continue;
+                }
+                Shape::Elem(ElementKind::Triangle) => LowerKind::Triangle,
+                Shape::Elem(_) => LowerKind::Quadrilateral,
+                Shape::Vertex => LowerKind::Vertex,
+                Shape::Line => LowerKind::Line,
+            };
+            for &v in vs {
+                fixed[v as usize] = true;
+            }
+            mesh.lower.push((lower, vs.to_vec()));
+        }
+        if fixed.iter().any(|&f| f) {
+            mesh.fixed = fixed;
+        }
+        if mesh.kinds.is_empty() {
+            return Err(Error::parse(
+                path,
+                None,
+                "the file has no elements (triangles, quadrilaterals, tetrahedra, hexahedra or prisms)",
+            ));
+        }
+        Ok(mesh)
+    }
+}
+
+/// Shortest text that parses back to exactly `x` (`{:?}` switches to
+/// exponent notation for very large or small magnitudes, unlike `{}`).
+pub(crate) fn fmt_f64(x: f64) -> String {
+    format!("{x:?}")
+}
+
+/// Elements are 2D only when no element is 3D; used to pick 2D output.
+pub(crate) fn is_planar_z0(mesh: &Mesh) -> bool {
+    mesh.dim() == 2 && mesh.points.iter().all(|p| p[2].to_bits() == 0)
+}

@@ -100,7 +100,7 @@ impl Mesh {
 
     /// Structural checks every reader and generator runs: non-empty, one
     /// dimension, finite coordinates, indices in range, no repeated vertex in an
-    /// element, no unused or coincident vertices.
+    /// element, no unused vertices, no coincident vertices unless both are fixed.
     pub fn validate(&self) -> Result<()> {
         if self.points.is_empty() {
             return Err(Error::InvalidMesh("mesh has no vertices".into()));
@@ -186,7 +186,12 @@ impl Mesh {
         sorted.sort_unstable_by(|&a, &b| self.points[a].partial_cmp(&self.points[b]).unwrap());
         if let Some(w) = sorted
             .windows(2)
-            .find(|w| self.points[w[0]] == self.points[w[1]])
+            // Coincident fixed vertices never move (real meshes have them on
+            // seams, e.g. Mesquite's tire.vtk), so only a free duplicate is an error.
+            .find(|w| {
+                self.points[w[0]] == self.points[w[1]]
+                    && !(self.is_fixed(w[0]) && self.is_fixed(w[1]))
+            })
         {
             let (a, b) = (w[0].min(w[1]), w[0].max(w[1]));
             return Err(Error::InvalidMesh(format!(

@@ -1,0 +1,619 @@
+//! Legacy VTK (`.vtk`), DATASET UNSTRUCTURED_GRID, ASCII or BINARY (big-endian).
+//!
+//! Both the classic `CELLS n size` layout and VTK 5.1's OFFSETS/CONNECTIVITY
+//! layout are read; the classic layout is written (every VTK reader takes it).
+
+use std::io::Write;
+use std::path::Path;
+
+use super::lex::{Cursor, Endian, Scalar, as_index};
+use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
+use crate::error::{Error, Result};
+use crate::mesh::{ElementKind, Mesh};
+
+/// Human name of a VTK cell type, for error messages.
+pub(crate) fn vtk_type_name(t: i64) -> &'static str {
+    match t {
+        1 => "vertex",
+        2 => "poly-vertex",
+        3 => "line",
+        4 => "poly-line",
+        5 => "triangle",
+        6 => "triangle strip",
+        7 => "polygon",
+        8 => "pixel",
+        9 => "quad",
+        10 => "tetrahedron",
+        11 => "voxel",
+        12 => "hexahedron",
+        13 => "wedge (prism)",
+        14 => "pyramid",
+        15 => "pentagonal prism",
+        16 => "hexagonal prism",
+        21 => "quadratic edge",
+        22 => "quadratic triangle",
+        23 => "quadratic quad",
+        24 => "quadratic tetrahedron",
+        25 => "quadratic hexahedron",
+        26 => "quadratic wedge",
+        27 => "quadratic pyramid",
+        28 => "biquadratic quad",
+        29 => "triquadratic hexahedron",
+        42 => "polyhedron",
+        _ => "cell of unknown type",
+    }
+}
+
+/// Map a VTK cell type to a shape, or explain why it is refused.
+pub(crate) fn vtk_shape(e: usize, t: i64) -> std::result::Result<Shape, String> {
+    match t {
+        1 => Ok(Shape::Vertex),
+        3 => Ok(Shape::Line),
+        14 => Err(format!(
+            "element {e} is a pyramid (VTK type 14); pyramids are not supported: \
+             the corner-based metrics need exactly 3 edges at every corner"
+        )),
+        _ => u8::try_from(t)
+            .ok()
+            .and_then(ElementKind::from_vtk_id)
+            .map(Shape::Elem)
+            .ok_or_else(|| {
+                format!(
+                    "element {e} is a {} (VTK type {t}), which is not supported; \
+                     supported: vertex 1, line 3, triangle 5, quad 9, tetrahedron 10, \
+                     hexahedron 12, wedge 13",
+                    vtk_type_name(t)
+                )
+            }),
+    }
+}
+
+fn scalar_type(name: &str) -> Option<Scalar> {
+    Some(match name.to_ascii_lowercase().as_str() {
+        "char" | "signed_char" => Scalar::I8,
+        "unsigned_char" => Scalar::U8,
+        "short" => Scalar::I16,
+        "unsigned_short" => Scalar::U16,
+        "int" | "vtktypeint32" => Scalar::I32,
+        "unsigned_int" | "vtktypeuint32" => Scalar::U32,
+        "long" | "vtktypeint64" | "vtkidtype" => Scalar::I64,
+        "unsigned_long" | "vtktypeuint64" => Scalar::U64,
+        "float" => Scalar::F32,
+        "double" => Scalar::F64,
+        _ => return None,
+    })
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Attach {
+    None,
+    Points,
+    Cells,
+}
+
+struct Reader<'a> {
+    c: Cursor<'a>,
+    binary: bool,
+    raw: RawMesh,
+    npoints: Option<usize>,
+    /// Cell offsets and connectivity, before CELL_TYPES gives the shapes.
+    cells: Option<(Vec<usize>, Vec<u32>)>,
+    has_types: bool,
+}
+
+pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
+    let mut c = Cursor::new(path, data);
+    let (_, head) = c.line_tokens().ok_or_else(|| c.eof("the header"))?;
+    if head.first() != Some(&"#") || !head.get(1).is_some_and(|t| t.eq_ignore_ascii_case("vtk")) {
+        return Err(
+            c.err("not a legacy VTK file: the first line must be '# vtk DataFile Version x.y'")
+        );
+    }
+    c.end_line(); // title, free text
+    let (_, fmt) = c
+        .line_tokens()
+        .ok_or_else(|| c.eof("the ASCII/BINARY line"))?;
+    let binary = match fmt.first().map(|t| t.to_ascii_uppercase()).as_deref() {
+        Some("ASCII") => false,
+        Some("BINARY") => true,
+        _ => {
+            return Err(c.err(format!(
+                "expected ASCII or BINARY on line 3, found '{}'",
+                fmt.join(" ")
+            )));
+        }
+    };
+    let mut r = Reader {
+        c,
+        binary,
+        raw: RawMesh::default(),
+        npoints: None,
+        cells: None,
+        has_types: false,
+    };
+    r.sections()?;
+    let path = r.c.path;
+    if r.npoints.is_none() {
+        return Err(Error::parse(path, None, "missing POINTS section"));
+    }
+    if r.cells.is_none() {
+        return Err(Error::parse(path, None, "missing CELLS section"));
+    }
+    if !r.has_types {
+        return Err(Error::parse(path, None, "missing CELL_TYPES section"));
+    }
+    Ok(r.raw)
+}
+
+impl Reader<'_> {
+    fn sections(&mut self) -> Result<()> {
+        let mut attach = Attach::None;
+        let mut dataset = false;
+        while let Some((_, toks)) = self.c.line_tokens() {
+            let key = toks[0].to_ascii_uppercase();
+            let arg = |i: usize| toks.get(i).copied().unwrap_or("");
+            if !dataset && key != "DATASET" && key != "FIELD" {
+                return Err(self.c.err(format!(
+                    "expected 'DATASET UNSTRUCTURED_GRID', found '{}'",
+                    toks.join(" ")
+                )));
+            }
+            match key.as_str() {
+                "DATASET" => {
+                    if !arg(1).eq_ignore_ascii_case("UNSTRUCTURED_GRID") {
+                        return Err(self.c.err(format!(
+                            "DATASET {} is not supported; only UNSTRUCTURED_GRID is",
+                            arg(1)
+                        )));
+                    }
+                    dataset = true;
+                }
+                "POINTS" => self.points(&toks)?,
+                "CELLS" => self.cell_conn(&toks)?,
+                "CELL_TYPES" => self.cell_types(&toks)?,
+                "POINT_DATA" | "CELL_DATA" => {
+                    let n = self.header_count(&toks, 1)?;
+                    let (want, what) = if key == "POINT_DATA" {
+                        attach = Attach::Points;
+                        (self.npoints, "points")
+                    } else {
+                        attach = Attach::Cells;
+                        (self.cells.as_ref().map(|c| c.0.len() - 1), "cells")
+                    };
+                    if let Some(want) = want
+                        && want != n
+                    {
+                        return Err(self.c.err(format!(
+                            "{key} {n} does not match the {want} {what} of the mesh"
+                        )));
+                    }
+                }
+                "METADATA" => self.c.skip_to_blank_line(),
+                _ => self.attribute(&key, &toks, attach)?,
+            }
+        }
+        Ok(())
+    }
+
+    fn header_count(&self, toks: &[&str], i: usize) -> Result<usize> {
+        let t = toks.get(i).copied().unwrap_or("");
+        t.parse().map_err(|_| {
+            self.c.err(format!(
+                "{}: expected a count, found '{t}'",
+                toks.first().copied().unwrap_or("header")
+            ))
+        })
+    }
+
+    fn header_type(&self, toks: &[&str], i: usize) -> Result<Scalar> {
+        let t = toks.get(i).copied().unwrap_or("");
+        scalar_type(t).ok_or_else(|| {
+            self.c.err(format!(
+                "{}: unsupported or missing data type '{t}'",
+                toks.first().copied().unwrap_or("header")
+            ))
+        })
+    }
+
+    /// Read `n` values of type `ty`, calling `f(index, value)` on each; `f`'s
+    /// complaint becomes an error at the value's line (text) or byte (binary).
+    fn array(
+        &mut self,
+        ty: Scalar,
+        n: usize,
+        what: &str,
+        mut f: impl FnMut(usize, f64) -> std::result::Result<(), String>,
+    ) -> Result<()> {
+        if self.binary {
+            let size = ty.size();
+            let have = self.c.remaining() / size;
+            if have < n {
+                return Err(self.c.err_byte(format!(
+                    "unexpected end of file while reading {what}: expected {n} values, found {have}"
+                )));
+            }
+            let start = self.c.pos();
+            let bytes = self.c.bytes(n * size, what)?;
+            for (i, chunk) in bytes.chunks_exact(size).enumerate() {
+                f(i, ty.get(Endian::Big, chunk))
+                    .map_err(|m| self.c.err_at_byte(start + i * size, m))?;
+            }
+        } else {
+            for i in 0..n {
+                let Some(t) = self.c.token() else {
+                    return Err(Error::parse(
+                        self.c.path,
+                        None,
+                        format!(
+                            "unexpected end of file while reading {what}: expected {n} values, found {i}"
+                        ),
+                    ));
+                };
+                let v: f64 = t.parse().map_err(|_| {
+                    self.c
+                        .err(format!("expected a number in {what}, found '{t}'"))
+                })?;
+                f(i, v).map_err(|m| self.c.err(m))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn points(&mut self, toks: &[&str]) -> Result<()> {
+        if self.npoints.is_some() {
+            return Err(self.c.err("a second POINTS section"));
+        }
+        let n = self.header_count(toks, 1)?;
+        let ty = self.header_type(toks, 2)?;
+        let total = n
+            .checked_mul(3)
+            .ok_or_else(|| self.c.err("POINTS count too large"))?;
+        let mut pts = Vec::with_capacity(self.c.cap(n, 3 * ty.size().min(2)));
+        let mut p = [0.0; 3];
+        self.array(ty, total, "POINTS", |i, v| {
+            if !v.is_finite() {
+                return Err(format!("point {} has a non-finite coordinate ({v})", i / 3));
+            }
+            p[i % 3] = v;
+            if i % 3 == 2 {
+                pts.push(p);
+            }
+            Ok(())
+        })?;
+        self.npoints = Some(n);
+        self.raw.points = pts;
+        Ok(())
+    }
+
+    fn cell_conn(&mut self, toks: &[&str]) -> Result<()> {
+        let Some(np) = self.npoints else {
+            return Err(self.c.err("CELLS before POINTS"));
+        };
+        if self.cells.is_some() {
+            return Err(self.c.err("a second CELLS section"));
+        }
+        let a = self.header_count(toks, 1)?;
+        let b = self.header_count(toks, 2)?;
+        let ok_index = |e: usize, v: f64| {
+            as_index(v, np).map(|v| v as u32).ok_or_else(|| {
+                format!("element {e} refers to vertex {v}, but the file has {np} points")
+            })
+        };
+        if self.c.looking_at("OFFSETS") {
+            // VTK 5.1: `a` offsets (cells + 1), `b` connectivity entries.
+            let (_, t) = self.c.line_tokens().unwrap_or_default();
+            let ty = self.header_type(&t, 1)?;
+            let mut offsets = Vec::with_capacity(self.c.cap(a, 2));
+            self.array(ty, a, "OFFSETS", |i, v| {
+                let prev = offsets.last().copied().unwrap_or(0);
+                match as_index(v, b.saturating_add(1)) {
+                    Some(o) if o >= prev && (i > 0 || o == 0) => {
+                        offsets.push(o);
+                        Ok(())
+                    }
+                    _ => Err(format!(
+                        "offset {i} is {v}; offsets must start at 0 and increase up to {b}"
+                    )),
+                }
+            })?;
+            if offsets.last().copied().unwrap_or(0) != b || offsets.is_empty() {
+                return Err(self.c.err(format!(
+                    "the last offset must equal the connectivity size {b}"
+                )));
+            }
+            if !self.c.looking_at("CONNECTIVITY") {
+                return Err(self.c.err("expected CONNECTIVITY after OFFSETS"));
+            }
+            let (_, t) = self.c.line_tokens().unwrap_or_default();
+            let ty = self.header_type(&t, 1)?;
+            let mut conn = Vec::with_capacity(self.c.cap(b, 2));
+            let mut e = 0;
+            self.array(ty, b, "CONNECTIVITY", |j, v| {
+                while offsets[e + 1] <= j {
+                    e += 1;
+                }
+                conn.push(ok_index(e, v)?);
+                Ok(())
+            })?;
+            self.cells = Some((offsets, conn));
+        } else {
+            // Classic: per cell a vertex count, then the vertex ids.
+            let ty = if self.binary {
+                Scalar::I32
+            } else {
+                Scalar::F64
+            };
+            let mut offsets = Vec::with_capacity(self.c.cap(a + 1, 2));
+            offsets.push(0);
+            let mut conn = Vec::with_capacity(self.c.cap(b, 2));
+            let mut left = 0usize;
+            self.array(ty, b, "CELLS", |_, v| {
+                let e = offsets.len() - 1;
+                if left == 0 {
+                    if e == a {
+                        return Err(format!("CELLS has more data than its {a} cells"));
+                    }
+                    left = as_index(v, 1 << 20)
+                        .filter(|&k| k > 0)
+                        .ok_or_else(|| format!("element {e} has an invalid vertex count {v}"))?;
+                } else {
+                    conn.push(ok_index(e, v)?);
+                    left -= 1;
+                    if left == 0 {
+                        offsets.push(conn.len());
+                    }
+                }
+                Ok(())
+            })?;
+            if offsets.len() != a + 1 || left != 0 {
+                return Err(self.c.err(format!(
+                    "CELLS {a} {b}: the {b} values describe {} complete cells, not {a}",
+                    offsets.len() - 1
+                )));
+            }
+            self.cells = Some((offsets, conn));
+        }
+        Ok(())
+    }
+
+    fn cell_types(&mut self, toks: &[&str]) -> Result<()> {
+        let Some((offsets, conn)) = self.cells.take() else {
+            return Err(self.c.err("CELL_TYPES before CELLS"));
+        };
+        let n = self.header_count(toks, 1)?;
+        let ncells = offsets.len() - 1;
+        if n != ncells {
+            return Err(self.c.err(format!(
+                "CELL_TYPES {n} does not match the {ncells} cells in CELLS"
+            )));
+        }
+        let ty = if self.binary {
+            Scalar::I32
+        } else {
+            Scalar::F64
+        };
+        let mut raw = std::mem::take(&mut self.raw);
+        self.array(ty, n, "CELL_TYPES", |e, v| {
+            let shape = vtk_shape(e, v as i64)?;
+            let vs = &conn[offsets[e]..offsets[e + 1]];
+            if vs.len() != shape.num_vertices() {
+                return Err(format!(
+                    "element {e} is a {} (VTK type {v}) but has {} vertices instead of {}",
+                    vtk_type_name(v as i64),
+                    vs.len(),
+                    shape.num_vertices()
+                ));
+            }
+            raw.push(shape, vs);
+            Ok(())
+        })?;
+        self.raw = raw;
+        self.cells = Some((offsets, Vec::new()));
+        self.has_types = true;
+        Ok(())
+    }
+
+    fn count_for(&self, attach: Attach, key: &str) -> Result<usize> {
+        match attach {
+            Attach::Points => Ok(self.npoints.unwrap_or(0)),
+            Attach::Cells => Ok(self.cells.as_ref().map_or(0, |c| c.0.len() - 1)),
+            Attach::None => Err(self.c.err(format!("{key} outside POINT_DATA or CELL_DATA"))),
+        }
+    }
+
+    fn mul(&self, a: usize, b: usize, key: &str) -> Result<usize> {
+        a.checked_mul(b)
+            .ok_or_else(|| self.c.err(format!("{key}: sizes too large")))
+    }
+
+    fn attribute(&mut self, key: &str, toks: &[&str], attach: Attach) -> Result<()> {
+        let name = toks.get(1).copied().unwrap_or(key);
+        match key {
+            "SCALARS" => {
+                let n = self.count_for(attach, key)?;
+                let ty = self.header_type(toks, 2)?;
+                let ncomp = if toks.len() > 3 {
+                    self.header_count(toks, 3)?
+                } else {
+                    1
+                };
+                if self.c.looking_at("LOOKUP_TABLE") {
+                    self.c.line_tokens();
+                }
+                let is_fixed = attach == Attach::Points && name == "fixed" && ncomp == 1;
+                self.data_array(ty, self.mul(n, ncomp, key)?, name, is_fixed)
+            }
+            "LOOKUP_TABLE" => {
+                let size = self.header_count(toks, 2)?;
+                let ty = if self.binary { Scalar::U8 } else { Scalar::F64 };
+                self.data_array(ty, self.mul(size, 4, key)?, "LOOKUP_TABLE", false)
+            }
+            "COLOR_SCALARS" => {
+                let n = self.count_for(attach, key)?;
+                let k = self.header_count(toks, 2)?;
+                let ty = if self.binary { Scalar::U8 } else { Scalar::F64 };
+                self.data_array(ty, self.mul(n, k, key)?, name, false)
+            }
+            "VECTORS" | "NORMALS" | "TENSORS" | "TENSORS6" | "GLOBAL_IDS" | "PEDIGREE_IDS" => {
+                let n = self.count_for(attach, key)?;
+                let ty = self.header_type(toks, 2)?;
+                let k = match key {
+                    "VECTORS" | "NORMALS" => 3,
+                    "TENSORS" => 9,
+                    "TENSORS6" => 6,
+                    _ => 1,
+                };
+                self.data_array(ty, self.mul(n, k, key)?, name, false)
+            }
+            "TEXTURE_COORDINATES" => {
+                let n = self.count_for(attach, key)?;
+                let k = self.header_count(toks, 2)?;
+                let ty = self.header_type(toks, 3)?;
+                self.data_array(ty, self.mul(n, k, key)?, name, false)
+            }
+            "FIELD" => {
+                let narrays = self.header_count(toks, 2)?;
+                for _ in 0..narrays {
+                    if self.c.looking_at("METADATA") {
+                        self.c.skip_to_blank_line();
+                    }
+                    let (_, t) = self
+                        .c
+                        .line_tokens()
+                        .ok_or_else(|| self.c.eof("FIELD arrays"))?;
+                    if t.len() < 4 {
+                        return Err(self.c.err(format!(
+                            "expected 'name components tuples type' in FIELD, found '{}'",
+                            t.join(" ")
+                        )));
+                    }
+                    let k = self.header_count(&t, 1)?;
+                    let tuples = self.header_count(&t, 2)?;
+                    let ty = self.header_type(&t, 3)?;
+                    let is_fixed = attach == Attach::Points
+                        && t[0] == "fixed"
+                        && k == 1
+                        && Some(tuples) == self.npoints;
+                    self.data_array(ty, self.mul(k, tuples, key)?, t[0], is_fixed)?;
+                }
+                Ok(())
+            }
+            _ => Err(self.c.err(format!("unknown keyword '{}'", toks[0]))),
+        }
+    }
+
+    /// Read (and mostly discard) a data array; a point array named `fixed`
+    /// sets the fixed flags.
+    fn data_array(&mut self, ty: Scalar, n: usize, name: &str, is_fixed: bool) -> Result<()> {
+        let what = format!("data array '{name}'");
+        let mut fixed = Vec::new();
+        self.array(ty, n, &what, |_, v| {
+            if is_fixed {
+                fixed.push(v != 0.0);
+            }
+            Ok(())
+        })?;
+        if is_fixed {
+            for (v, _) in fixed.iter().enumerate().filter(|(_, f)| **f) {
+                self.raw.fix(v);
+            }
+        }
+        Ok(())
+    }
+}
+
+fn vtk_name(name: &str) -> String {
+    // Legacy VTK names are single tokens.
+    let s: String = name
+        .chars()
+        .map(|c| if c.is_whitespace() { '_' } else { c })
+        .collect();
+    if s.is_empty() { "data".into() } else { s }
+}
+
+pub(crate) fn write(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    cell_data: &[CellData],
+    binary: bool,
+) -> WriteResult {
+    let n = mesh.num_points();
+    let ne = mesh.num_elements();
+    writeln!(w, "# vtk DataFile Version 3.0")?;
+    writeln!(w, "written by meshsmooth")?;
+    writeln!(w, "{}", if binary { "BINARY" } else { "ASCII" })?;
+    writeln!(w, "DATASET UNSTRUCTURED_GRID")?;
+    writeln!(w, "POINTS {n} double")?;
+    if binary {
+        let mut buf = Vec::with_capacity(24 * n);
+        for c in mesh.points.iter().flatten() {
+            buf.extend_from_slice(&c.to_be_bytes());
+        }
+        w.write_all(&buf)?;
+        writeln!(w)?;
+    } else {
+        for p in &mesh.points {
+            writeln!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
+        }
+    }
+    writeln!(w, "CELLS {ne} {}", ne + mesh.conn.len())?;
+    let mut buf = Vec::new();
+    for e in 0..ne {
+        let vs = mesh.element(e);
+        if binary {
+            buf.extend_from_slice(&(vs.len() as i32).to_be_bytes());
+            for &v in vs {
+                buf.extend_from_slice(&(v as i32).to_be_bytes());
+            }
+        } else {
+            write!(w, "{}", vs.len())?;
+            for v in vs {
+                write!(w, " {v}")?;
+            }
+            writeln!(w)?;
+        }
+    }
+    if binary {
+        w.write_all(&buf)?;
+        writeln!(w)?;
+    }
+    writeln!(w, "CELL_TYPES {ne}")?;
+    write_ints(w, binary, mesh.kinds.iter().map(|k| k.vtk_id() as i32))?;
+    if !mesh.fixed.is_empty() {
+        writeln!(w, "POINT_DATA {n}")?;
+        writeln!(w, "SCALARS fixed int 1")?;
+        writeln!(w, "LOOKUP_TABLE default")?;
+        write_ints(w, binary, mesh.fixed.iter().map(|&f| f as i32))?;
+    }
+    check_cell_data(mesh, cell_data)?;
+    if !cell_data.is_empty() {
+        writeln!(w, "CELL_DATA {ne}")?;
+        for cd in cell_data {
+            writeln!(w, "SCALARS {} double 1", vtk_name(cd.name))?;
+            writeln!(w, "LOOKUP_TABLE default")?;
+            if binary {
+                let buf: Vec<u8> = cd.values.iter().flat_map(|v| v.to_be_bytes()).collect();
+                w.write_all(&buf)?;
+                writeln!(w)?;
+            } else {
+                for &v in cd.values {
+                    writeln!(w, "{}", fmt_f64(v))?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn write_ints(w: &mut dyn Write, binary: bool, it: impl Iterator<Item = i32>) -> WriteResult {
+    if binary {
+        let buf: Vec<u8> = it.flat_map(|v| v.to_be_bytes()).collect();
+        w.write_all(&buf)?;
+        writeln!(w)?;
+    } else {
+        for v in it {
+            writeln!(w, "{v}")?;
+        }
+    }
+    Ok(())
+}
