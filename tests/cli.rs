@@ -5,11 +5,18 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn meshsmooth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshsmooth")).args(args).output().expect("runs")
+    Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
+        .args(args)
+        .output()
+        .expect("runs")
 }
 
 fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
 }
 
 fn s(p: &Path) -> &str {
@@ -21,7 +28,10 @@ fn demo_runs_without_arguments() {
     let o = meshsmooth(&["demo", "--cells", "6"]);
     assert!(o.status.success(), "{}", text(&o));
     let out = text(&o);
-    assert!(out.contains("initial mesh") && out.contains("optimised mesh"), "{out}");
+    assert!(
+        out.contains("initial mesh") && out.contains("optimised mesh"),
+        "{out}"
+    );
     assert!(out.contains("converged"), "{out}");
 }
 
@@ -31,29 +41,65 @@ fn generate_smooth_and_quality_work_together() {
     let input = dir.path().join("box.vtk");
     let output = dir.path().join("box-smooth.vtu");
     let history = dir.path().join("history.csv");
-    let o = meshsmooth(&["generate", "box", "--cells", "6", "5", "4", "--perturb", "random:0.3", "--seed", "3", "-o", s(&input)]);
+    let o = meshsmooth(&[
+        "generate",
+        "box",
+        "--cells",
+        "6",
+        "5",
+        "4",
+        "--perturb",
+        "random:0.3",
+        "--seed",
+        "3",
+        "-o",
+        s(&input),
+    ]);
     assert!(o.status.success(), "{}", text(&o));
     let original = std::fs::read(&input).unwrap();
 
-    let o = meshsmooth(&["smooth", s(&input), "-o", s(&output), "--history", s(&history), "--max-iter", "500"]);
+    let o = meshsmooth(&[
+        "smooth",
+        s(&input),
+        "-o",
+        s(&output),
+        "--history",
+        s(&history),
+        "--max-iter",
+        "500",
+    ]);
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(std::fs::read(&input).unwrap(), original, "input modified");
     let csv = std::fs::read_to_string(&history).unwrap();
-    let rows: Vec<Vec<f64>> =
-        csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
     assert!(rows.len() > 2);
-    assert_eq!(csv.lines().next().unwrap(), "iteration,seconds,objective,grad_norm");
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "iteration,seconds,objective,grad_norm"
+    );
     for w in rows.windows(2) {
         assert_eq!(w[1][0], w[0][0] + 1.0);
         assert!(w[1][2] <= w[0][2], "objective rose");
     }
-    assert!(rows.last().unwrap()[3] < 1e-6, "did not converge: {:?}", rows.last());
+    assert!(
+        rows.last().unwrap()[3] < 1e-6,
+        "did not converge: {:?}",
+        rows.last()
+    );
 
     let o = meshsmooth(&["quality", s(&output), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let f = json["objective"].as_f64().unwrap();
-    assert!((f - rows.last().unwrap()[2]).abs() < 1e-9 * f, "report {f} vs history {:?}", rows.last());
+    assert!(
+        (f - rows.last().unwrap()[2]).abs() < 1e-9 * f,
+        "report {f} vs history {:?}",
+        rows.last()
+    );
     assert_eq!(json["inverted"].as_u64(), Some(0));
     assert_eq!(json["elements"].as_u64(), Some(6 * 5 * 4 * 6));
 }
@@ -62,10 +108,33 @@ fn generate_smooth_and_quality_work_together() {
 fn laplace_and_colored_methods_run() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.msh");
-    assert!(meshsmooth(&["generate", "box", "--cells", "4", "4", "4", "--perturb", "random:0.3", "-o", s(&input)]).status.success());
+    assert!(
+        meshsmooth(&[
+            "generate",
+            "box",
+            "--cells",
+            "4",
+            "4",
+            "4",
+            "--perturb",
+            "random:0.3",
+            "-o",
+            s(&input)
+        ])
+        .status
+        .success()
+    );
     for method in ["laplace", "bcd-colored"] {
         let out = dir.path().join(format!("{method}.mesh"));
-        let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--method", method, "--quiet"]);
+        let o = meshsmooth(&[
+            "smooth",
+            s(&input),
+            "-o",
+            s(&out),
+            "--method",
+            method,
+            "--quiet",
+        ]);
         assert!(o.status.success(), "{method}: {}", text(&o));
         assert!(text(&o).contains(method));
         assert!(out.exists());
@@ -76,11 +145,30 @@ fn laplace_and_colored_methods_run() {
 fn refuses_to_overwrite_its_input() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.vtk");
-    assert!(meshsmooth(&["generate", "box", "--cells", "3", "3", "3", "--perturb", "random:0.2", "-o", s(&input)]).status.success());
+    assert!(
+        meshsmooth(&[
+            "generate",
+            "box",
+            "--cells",
+            "3",
+            "3",
+            "3",
+            "--perturb",
+            "random:0.2",
+            "-o",
+            s(&input)
+        ])
+        .status
+        .success()
+    );
     let original = std::fs::read(&input).unwrap();
     let o = meshsmooth(&["smooth", s(&input), "-o", s(&input)]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(text(&o).contains("never overwrites its input"), "{}", text(&o));
+    assert!(
+        text(&o).contains("never overwrites its input"),
+        "{}",
+        text(&o)
+    );
     assert_eq!(std::fs::read(&input).unwrap(), original);
 }
 
@@ -107,7 +195,18 @@ fn bad_inputs_fail_cleanly_and_write_nothing() {
     assert!(text(&o).contains("inverted"), "{}", text(&o));
     assert!(!out.exists());
 
-    let o = meshsmooth(&["generate", "box", "--cells", "2", "2", "2", "--perturb", "wobble:1", "-o", s(&out)]);
+    let o = meshsmooth(&[
+        "generate",
+        "box",
+        "--cells",
+        "2",
+        "2",
+        "2",
+        "--perturb",
+        "wobble:1",
+        "-o",
+        s(&out),
+    ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(!out.exists());
 
@@ -117,5 +216,8 @@ fn bad_inputs_fail_cleanly_and_write_nothing() {
 
     let o = meshsmooth(&["smooth", "--max-iter", "x"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(std::fs::read_dir(dir.path()).unwrap().count() == 1, "only the tangled input remains");
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().count() == 1,
+        "only the tangled input remains"
+    );
 }

@@ -80,7 +80,7 @@ fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
 }
 
 fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
-    if io::atomic::same_file(input, output) {
+    if io::same_file(input, output) {
         return Err(Error::InvalidArgument(format!(
             "output {} is the input file; meshsmooth never overwrites its input",
             output.display()
@@ -142,7 +142,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     let info = run_solver(&mut mesh, &a.solver, a.quiet)?;
     write_mesh(&a.output, &mesh, format)?;
     if let Some(h) = &a.history {
-        io::atomic::write_bytes(h, info.history.to_csv().as_bytes())?;
+        io::write_atomic(h, |w| Ok(w.write_all(info.history.to_csv().as_bytes())?))?;
     }
     if !a.quiet {
         println!("wrote {}", a.output.display());
