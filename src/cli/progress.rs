@@ -30,11 +30,9 @@ impl Progress {
         Progress { bar, log }
     }
 
-    /// Logs iterations 0-10, every 10th to 100, every 100th after; the last
-    /// one is printed by `finish`.
+    /// Logs the `logged` iterations; the last one is printed by `finish`.
     pub fn update(&mut self, r: &Record) -> bool {
-        let i = r.iteration;
-        if self.log && (i <= 10 || (i <= 100 && i % 10 == 0) || i % 100 == 0) {
+        if self.log && logged(r.iteration) {
             self.line(r);
         }
         if let Some(bar) = &self.bar {
@@ -54,8 +52,7 @@ impl Progress {
         if let Some(r) = last
             && self.log
         {
-            let i = r.iteration;
-            if !(i <= 10 || (i <= 100 && i % 10 == 0) || i % 100 == 0) {
+            if !logged(r.iteration) {
                 self.line(r);
             }
         }
@@ -71,4 +68,9 @@ impl Progress {
             None => println!("{msg}"),
         }
     }
+}
+
+/// Iterations 0-10, every 10th to 100, every 100th after.
+fn logged(i: usize) -> bool {
+    i <= 10 || (i <= 100 && i.is_multiple_of(10)) || i.is_multiple_of(100)
 }
