@@ -36,7 +36,7 @@ impl Progress {
             self.line(r);
         }
         if let Some(bar) = &self.bar {
-            bar.set_position(i as u64);
+            bar.set_position(r.iteration as u64);
             bar.set_message(format!(
                 "F = {:.8}  |grad F| = {:.3e}",
                 r.objective, r.grad_norm
