@@ -51,10 +51,9 @@ impl Progress {
         }
         if let Some(r) = last
             && self.log
+            && !logged(r.iteration)
         {
-            if !logged(r.iteration) {
-                self.line(r);
-            }
+            self.line(r);
         }
     }
 
