@@ -502,16 +502,16 @@ pub(crate) fn write22(
                 buf.extend_from_slice(&x.to_le_bytes());
             }
         }
-        for (_, dim, vs) in &cells[run] {
+        for (_, _, vs) in &cells[run] {
             tag += 1;
             if binary {
-                for x in [tag, 0, *dim as i32 + 1] {
+                for x in [tag, 0, 1] {
                     buf.extend_from_slice(&x.to_le_bytes());
                 }
                 vs.iter()
                     .for_each(|&v| buf.extend_from_slice(&(v as i32 + 1).to_le_bytes()));
             } else {
-                write!(w, "{tag} {t} 2 0 {}", dim + 1)?;
+                write!(w, "{tag} {t} 2 0 1")?;
                 for v in vs {
                     write!(w, " {}", v + 1)?;
                 }
