@@ -1,8 +1,18 @@
 //! Mesh files: VTK legacy and XML, Gmsh, Medit; atomic writes.
 //!
-//! Readers produce a [`RawMesh`] (every cell in file order, with its shape);
-//! [`RawMesh::into_mesh`] then splits top-dimensional elements from lower
+//! Readers produce a `RawMesh` (every cell in file order, with its shape);
+//! `RawMesh::into_mesh` then splits top-dimensional elements from lower
 //! cells the same way for every format, and [`read`] validates the result.
+//!
+//! Conventions:
+//! - vertices of lower cells are fixed; so are those flagged by VTK point data
+//!   `fixed`, Medit RequiredVertices, or Gmsh point elements. `Mesh::fixed` is
+//!   left empty when no vertex is fixed;
+//! - VTK/VTU files store elements only (no lower cells) and carry `fixed` as
+//!   point data; Gmsh stores fixed vertices not covered by lower cells as
+//!   point elements (type 15), which read back as lower `Vertex` cells; Medit
+//!   stores them as RequiredVertices and groups elements by kind;
+//! - `cell_data` is written to VTK/VTU only (other formats check its length).
 
 mod atomic;
 mod gmsh;

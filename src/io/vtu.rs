@@ -130,6 +130,9 @@ impl Ctx<'_> {
                 (all, body)
             }
         };
+        if header.len() < hsize {
+            return Err(bad("header too short"));
+        }
         let nbytes = self.header.get(self.endian, &header);
         if nbytes != payload.len() as f64 {
             return Err(self.err(
