@@ -207,3 +207,28 @@ fn all_corner_orderings_agree_for_tets() {
         }
     }
 }
+
+#[test]
+fn structured_hessian_blocks_equal_the_generic_hessian() {
+    let shape = TetShape::equilateral();
+    for x in random_tets(8, 300, 0.3) {
+        let (eta, g, h) = shape.hessian(&x).unwrap();
+        let (eta2, g2, blocks) = shape.hessian_blocks(&x).unwrap();
+        assert_eq!(eta, eta2);
+        assert_eq!(g, g2);
+        let scale = h.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+        for k in 0..4 {
+            for l in 0..4 {
+                for i in 0..3 {
+                    for q in 0..3 {
+                        let (a, b) = (blocks[k][l][i][q], h[3 * k + i][3 * l + q]);
+                        assert!(
+                            (a - b).abs() <= 1e-13 * scale,
+                            "block ({k},{l}) [{i}][{q}]: {a} vs {b}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

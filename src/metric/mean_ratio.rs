@@ -163,6 +163,63 @@ impl TetShape {
         Some((p.eta, g))
     }
 
+    /// Value, gradient and the Hessian as 4x4 blocks of 3x3, from the
+    /// structure of the S-Hessian rather than a generic contraction:
+    /// block (k,l) = (2h/3)(b_k.b_l) I - (4/9) d^(-5/3) (s_k c_l^T + c_k s_l^T)
+    ///             + (10/27) f d^(-8/3) c_k c_l^T - (2/9) f d^(-5/3) [S (b_k x b_l)]_x
+    /// with s_k = S b_k, c_k = C b_k and [w]_x[i][q] = sum_m eps_iqm w_m.
+    /// This is what the Newton assembly calls.
+    pub fn hessian_blocks(&self, x: &[Vec3; 4]) -> Option<(f64, [Vec3; 4], [[Mat3; 4]; 4])> {
+        let p = self.parts(x)?;
+        let g = self.b.map(|bk| mul_vec(&p.grad_s, &bk));
+        let sv = self.b.map(|bk| mul_vec(&p.s, &bk));
+        let cv = self.b.map(|bk| mul_vec(&p.cof, &bk));
+        let dm53 = p.h / p.d;
+        let dm83 = dm53 / p.d;
+        let diag = 2.0 * p.h / 3.0;
+        let cross = -(4.0 / 9.0) * dm53;
+        let cc = (10.0 / 27.0) * p.f * dm83;
+        let skew = -(2.0 / 9.0) * p.f * dm53;
+        let mut out = [[[[0.0; 3]; 3]; 4]; 4];
+        for k in 0..4 {
+            for l in k..4 {
+                let (bk, bl) = (&self.b[k], &self.b[l]);
+                let bkl = bk[0] * bl[0] + bk[1] * bl[1] + bk[2] * bl[2];
+                let mut blk = [[0.0; 3]; 3];
+                for i in 0..3 {
+                    for q in 0..3 {
+                        blk[i][q] = cross * (sv[k][i] * cv[l][q] + cv[k][i] * sv[l][q])
+                            + cc * cv[k][i] * cv[l][q];
+                    }
+                    blk[i][i] += diag * bkl;
+                }
+                if k != l {
+                    let bx = [
+                        bk[1] * bl[2] - bk[2] * bl[1],
+                        bk[2] * bl[0] - bk[0] * bl[2],
+                        bk[0] * bl[1] - bk[1] * bl[0],
+                    ];
+                    let w = mul_vec(&p.s, &bx).map(|c| c * skew);
+                    blk[0][1] += w[2];
+                    blk[1][0] -= w[2];
+                    blk[1][2] += w[0];
+                    blk[2][1] -= w[0];
+                    blk[2][0] += w[1];
+                    blk[0][2] -= w[1];
+                }
+                out[k][l] = blk;
+                if k != l {
+                    for i in 0..3 {
+                        for q in 0..3 {
+                            out[l][k][q][i] = blk[i][q];
+                        }
+                    }
+                }
+            }
+        }
+        Some((p.eta, g, out))
+    }
+
     /// Value, gradient and the 12x12 Hessian (index 3*vertex + coordinate).
     pub fn hessian(&self, x: &[Vec3; 4]) -> Option<(f64, [Vec3; 4], [[f64; 12]; 12])> {
         let p = self.parts(x)?;
