@@ -96,10 +96,15 @@ fn summary(info: &Info, f0: f64) -> String {
         0.0
     };
     format!(
-        "{} on cpu (f64): {} after {} sweeps in {:.3} s (setup {:.3} s); F {:.8} -> {:.8} ({:+.2}%), |grad F| = {:.3e}",
+        "{} on cpu (f64): {} after {} {} in {:.3} s (setup {:.3} s); F {:.8} -> {:.8} ({:+.2}%), |grad F| = {:.3e}",
         info.method,
         info.stop,
         info.iterations,
+        if info.method == Method::Newton {
+            "iterations"
+        } else {
+            "sweeps"
+        },
         info.seconds,
         info.setup_seconds,
         f0,

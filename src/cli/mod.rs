@@ -58,8 +58,8 @@ pub struct SmoothArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct SolverArgs {
-    /// bcd: block coordinate descent (per-vertex Newton); bcd-colored: the same, colour by colour in parallel; laplace: smart Laplacian smoothing.
-    #[arg(long, default_value = "bcd", value_parser = ["bcd", "bcd-colored", "laplace"])]
+    /// bcd: block coordinate descent (per-vertex Newton); bcd-colored: the same, colour by colour in parallel; newton: inexact Newton with block-Jacobi PCG; laplace: smart Laplacian smoothing.
+    #[arg(long, default_value = "bcd", value_parser = ["bcd", "bcd-colored", "newton", "laplace"])]
     pub method: String,
     /// Where to run; only the CPU backend exists so far.
     #[arg(long, default_value = "cpu", value_parser = ["cpu"])]

@@ -2,8 +2,11 @@
 //! history; metrics and objective evaluation come from `metric` and `objective`.
 
 pub mod bcd;
+pub mod bsr;
 pub mod history;
 pub mod laplace;
+pub mod newton;
+pub mod pcg;
 
 pub use history::{History, Record, StopReason};
 
@@ -24,6 +27,8 @@ pub enum Method {
     Bcd,
     /// Block coordinate descent colour by colour, the vertices of a colour in parallel.
     BcdColored,
+    /// Inexact Newton: block-Jacobi PCG on the global Hessian, Armijo on F.
+    Newton,
     /// Smart Laplacian smoothing (a baseline, not an optimiser).
     Laplace,
 }
@@ -34,9 +39,10 @@ impl FromStr for Method {
         match s {
             "bcd" => Ok(Method::Bcd),
             "bcd-colored" => Ok(Method::BcdColored),
+            "newton" => Ok(Method::Newton),
             "laplace" => Ok(Method::Laplace),
             _ => Err(Error::InvalidArgument(format!(
-                "unknown method '{s}' (expected bcd, bcd-colored or laplace)"
+                "unknown method '{s}' (expected bcd, bcd-colored, newton or laplace)"
             ))),
         }
     }
@@ -47,6 +53,7 @@ impl fmt::Display for Method {
         f.write_str(match self {
             Method::Bcd => "bcd",
             Method::BcdColored => "bcd-colored",
+            Method::Newton => "newton",
             Method::Laplace => "laplace",
         })
     }
@@ -63,6 +70,7 @@ pub struct Params {
     pub line_search: bcd::LineSearch,
     /// Laplace stops when no vertex moves farther than this fraction of the mean edge length.
     pub min_move: f64,
+    pub newton: newton::NewtonParams,
 }
 
 impl Default for Params {
@@ -73,6 +81,7 @@ impl Default for Params {
             time_limit: None,
             line_search: bcd::LineSearch::default(),
             min_move: 1e-9,
+            newton: newton::NewtonParams::default(),
         }
     }
 }
@@ -107,6 +116,9 @@ pub fn solve(
         )));
     }
     p.check_feasible(x)?;
+    let mut newton = (method == Method::Newton).then(|| newton::Newton::new(p, params.newton));
+    let setup_seconds =
+        p.setup_time.as_secs_f64() + newton.as_ref().map_or(0.0, |n| n.setup_time.as_secs_f64());
     let start = Instant::now();
     let deadline = params.time_limit.map(|t| start + t);
     let edge = p.mean_edge_length(x);
@@ -147,6 +159,10 @@ pub fn solve(
         let max_sq = match method {
             Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
             Method::BcdColored => bcd::sweep_colored(p, x, &params.line_search, deadline),
+            Method::Newton => newton
+                .as_mut()
+                .expect("built above")
+                .step(p, x, &params.line_search),
             Method::Laplace => laplace::sweep(p, x, deadline),
         };
         iterations += 1;
@@ -172,7 +188,7 @@ pub fn solve(
         objective: f,
         grad_norm: gnorm,
         seconds: start.elapsed().as_secs_f64(),
-        setup_seconds: p.setup_time.as_secs_f64(),
+        setup_seconds,
     })
 }
 
