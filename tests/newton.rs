@@ -1,0 +1,245 @@
+//! Inexact Newton: PCG against dense solves, negative curvature, the
+//! assembled Hessian against finite differences, agreement with BCD.
+
+use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::objective;
+use meshsmooth::problem::Problem;
+use meshsmooth::solve::bsr::{BlockCsr, HessianPattern};
+use meshsmooth::solve::pcg::{BlockJacobi, PcgParams, PcgStop, pcg};
+use meshsmooth::solve::{self, Method, Params, StopReason};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+type Vec3 = [f64; 3];
+
+/// A dense symmetric matrix stored as a full block matrix (every block present).
+fn dense_blocks(a: &[Vec<f64>]) -> BlockCsr {
+    let n = a.len() / 3;
+    let mut m = BlockCsr::default();
+    m.row_offsets.push(0);
+    for i in 0..n {
+        for j in 0..n {
+            let mut b = [[0.0; 3]; 3];
+            for r in 0..3 {
+                for c in 0..3 {
+                    b[r][c] = a[3 * i + r][3 * j + c];
+                }
+            }
+            m.cols.push(j as u32);
+            m.blocks.push(b);
+        }
+        m.diag.push((i * n + i) as u32);
+        m.row_offsets.push(((i + 1) * n) as u32);
+    }
+    m
+}
+
+fn random_symmetric(n: usize, rng: &mut ChaCha8Rng, shift: f64) -> Vec<Vec<f64>> {
+    let m = 3 * n;
+    let b: Vec<Vec<f64>> = (0..m)
+        .map(|_| (0..m).map(|_| rng.random_range(-1.0..1.0)).collect())
+        .collect();
+    (0..m)
+        .map(|i| {
+            (0..m)
+                .map(|j| {
+                    (0..m).map(|k| b[k][i] * b[k][j]).sum::<f64>()
+                        + if i == j { shift } else { 0.0 }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn dense_solve(a: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
+    let m = b.len();
+    let mut aug: Vec<Vec<f64>> = a
+        .iter()
+        .zip(b)
+        .map(|(r, &v)| r.iter().copied().chain([v]).collect())
+        .collect();
+    for c in 0..m {
+        let piv = (c..m)
+            .max_by(|&i, &j| aug[i][c].abs().total_cmp(&aug[j][c].abs()))
+            .unwrap();
+        aug.swap(c, piv);
+        for r in 0..m {
+            if r != c {
+                let f = aug[r][c] / aug[c][c];
+                for k in c..=m {
+                    aug[r][k] -= f * aug[c][k];
+                }
+            }
+        }
+    }
+    (0..m).map(|i| aug[i][m] / aug[i][i]).collect()
+}
+
+fn flat(v: &[Vec3]) -> Vec<f64> {
+    v.iter().flatten().copied().collect()
+}
+
+fn jacobi(m: &BlockCsr) -> BlockJacobi {
+    BlockJacobi::new(m.diag.par_iter().map(|&s| m.blocks[s as usize]))
+}
+
+#[test]
+fn pcg_solves_random_spd_block_systems_like_a_dense_solve() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    for n in [1, 4, 12] {
+        let a = random_symmetric(n, &mut rng, 0.5);
+        let m = dense_blocks(&a);
+        let b: Vec<Vec3> = (0..n)
+            .map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0)))
+            .collect();
+        let mut d = vec![[0.0; 3]; n];
+        let info = pcg(
+            &m,
+            &jacobi(&m),
+            &b,
+            &mut d,
+            &PcgParams {
+                max_iter: 500,
+                rtol: 1e-12,
+            },
+        );
+        assert_eq!(info.stop, PcgStop::Converged, "{info:?}");
+        let exact = dense_solve(&a, &flat(&b));
+        let scale = exact.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        for (x, e) in flat(&d).iter().zip(&exact) {
+            assert!((x - e).abs() <= 1e-8 * scale, "{x} vs {e}");
+        }
+    }
+}
+
+#[test]
+fn pcg_returns_a_descent_direction_of_negative_curvature_on_indefinite_systems() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let n = 6;
+    let mut a = random_symmetric(n, &mut rng, 0.1);
+    // make it indefinite while keeping the diagonal blocks positive definite
+    for i in 0..3 * n {
+        for j in 0..3 * n {
+            if i / 3 != j / 3 {
+                a[i][j] *= 6.0;
+            }
+        }
+    }
+    let m = dense_blocks(&a);
+    let b: Vec<Vec3> = (0..n)
+        .map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0)))
+        .collect();
+    let mut d = vec![[0.0; 3]; n];
+    let info = pcg(
+        &m,
+        &jacobi(&m),
+        &b,
+        &mut d,
+        &PcgParams {
+            max_iter: 100,
+            rtol: 1e-12,
+        },
+    );
+    assert_eq!(info.stop, PcgStop::NegativeCurvature, "{info:?}");
+    let mut ad = vec![[0.0; 3]; n];
+    m.mul(&d, &mut ad);
+    let curvature: f64 = flat(&d).iter().zip(flat(&ad)).map(|(x, y)| x * y).sum();
+    let downhill: f64 = flat(&d).iter().zip(flat(&b)).map(|(x, y)| x * y).sum();
+    assert!(curvature <= 0.0, "d^T A d = {curvature}");
+    assert!(downhill > 0.0, "d^T b = {downhill}");
+}
+
+fn perturbed_box(n: usize, seed: u64) -> meshsmooth::Mesh {
+    let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.3 },
+        fraction: 1.0,
+        seed,
+    };
+    generate::perturb(&mut m, &opts).unwrap();
+    m
+}
+
+#[test]
+fn assembled_gradient_and_hessian_match_finite_differences() {
+    let mesh = perturbed_box(4, 9);
+    let p = Problem::new(&mesh).unwrap();
+    let x = p.gather(&mesh.points);
+    let mut pat = HessianPattern::new(&p);
+    let nfree = pat.free_vertex.len();
+    let mut g = vec![[0.0; 3]; nfree];
+    let f = pat.assemble(&p, &x, &mut g).unwrap();
+    let (f2, g2) = objective::gradient(&p, &x).unwrap();
+    assert!((f - f2).abs() < 1e-14 * f);
+    for (i, &v) in pat.free_vertex.iter().enumerate() {
+        for c in 0..3 {
+            assert!((g[i][c] - g2[v as usize][c]).abs() < 1e-15 + 1e-12 * g[i][c].abs());
+        }
+    }
+    // H v against central differences of the gradient along a random v
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let dir: Vec<Vec3> = (0..nfree)
+        .map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0)))
+        .collect();
+    let mut hv = vec![[0.0; 3]; nfree];
+    pat.matrix.mul(&dir, &mut hv);
+    let eps = 1e-6;
+    let shifted = |s: f64| {
+        let mut y = x.clone();
+        for (d, &v) in dir.iter().zip(&pat.free_vertex) {
+            for c in 0..3 {
+                y[v as usize][c] += s * d[c];
+            }
+        }
+        objective::gradient(&p, &y).unwrap().1
+    };
+    let (gp, gm) = (shifted(eps), shifted(-eps));
+    let scale = hv.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+    for (i, &v) in pat.free_vertex.iter().enumerate() {
+        for c in 0..3 {
+            let fd = (gp[v as usize][c] - gm[v as usize][c]) / (2.0 * eps);
+            assert!(
+                (fd - hv[i][c]).abs() < 1e-6 * scale,
+                "row {i}.{c}: {fd} vs {}",
+                hv[i][c]
+            );
+        }
+    }
+}
+
+#[test]
+fn newton_and_bcd_reach_the_same_vertex_positions() {
+    let mesh = perturbed_box(8, 4);
+    let tight = Params {
+        tol: 1e-9,
+        ..Params::default()
+    };
+    let mut a = mesh.clone();
+    let na = solve::smooth_mesh(&mut a, Method::Newton, &tight, &mut |_| true).unwrap();
+    let mut b = mesh.clone();
+    let nb = solve::smooth_mesh(&mut b, Method::Bcd, &tight, &mut |_| true).unwrap();
+    assert_eq!(na.stop, StopReason::Converged);
+    assert_eq!(nb.stop, StopReason::Converged);
+    assert!(
+        na.iterations < nb.iterations / 4,
+        "Newton {} vs BCD {} iterations",
+        na.iterations,
+        nb.iterations
+    );
+    let p = Problem::new(&mesh).unwrap();
+    let edge = p.mean_edge_length(&p.gather(&mesh.points));
+    let worst = a
+        .points
+        .iter()
+        .zip(&b.points)
+        .map(|(u, v)| (0..3).map(|i| (u[i] - v[i]).powi(2)).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-4 * edge,
+        "largest difference {worst} vs mean edge {edge}"
+    );
+    for w in na.history.records.windows(2) {
+        assert!(w[1].objective <= w[0].objective);
+    }
+}
