@@ -5,7 +5,7 @@ use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::objective;
 use meshsmooth::problem::Problem;
 use meshsmooth::solve::bsr::{BlockCsr, HessianPattern};
-use meshsmooth::solve::pcg::{BlockJacobi, PcgParams, PcgStop, pcg};
+use meshsmooth::solve::pcg::{BlockJacobi, NegativeCurvature, PcgParams, PcgStop, pcg};
 use meshsmooth::solve::{self, Method, Params, StopReason};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -102,6 +102,7 @@ fn pcg_solves_random_spd_block_systems_like_a_dense_solve() {
             &PcgParams {
                 max_iter: 500,
                 rtol: 1e-12,
+                ..Default::default()
             },
         );
         assert_eq!(info.stop, PcgStop::Converged, "{info:?}");
@@ -113,41 +114,73 @@ fn pcg_solves_random_spd_block_systems_like_a_dense_solve() {
     }
 }
 
+/// Q diag(lambda) Q^T with a random orthogonal Q (Gram-Schmidt).
+fn with_spectrum(lambda: &[f64], rng: &mut ChaCha8Rng) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let m = lambda.len();
+    let mut q: Vec<Vec<f64>> = Vec::new();
+    while q.len() < m {
+        let mut v: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
+        for u in &q {
+            let d: f64 = v.iter().zip(u).map(|(a, b)| a * b).sum();
+            v.iter_mut().zip(u).for_each(|(a, b)| *a -= d * b);
+        }
+        let n = v.iter().map(|a| a * a).sum::<f64>().sqrt();
+        if n > 1e-3 {
+            q.push(v.iter().map(|a| a / n).collect());
+        }
+    }
+    let a = (0..m)
+        .map(|i| {
+            (0..m)
+                .map(|j| (0..m).map(|k| q[k][i] * lambda[k] * q[k][j]).sum())
+                .collect()
+        })
+        .collect();
+    (a, q)
+}
+
 #[test]
 fn pcg_returns_a_descent_direction_of_negative_curvature_on_indefinite_systems() {
     let mut rng = ChaCha8Rng::seed_from_u64(2);
-    let n = 6;
-    let mut a = random_symmetric(n, &mut rng, 0.1);
-    // make it indefinite while keeping the diagonal blocks positive definite
-    for i in 0..3 * n {
-        for j in 0..3 * n {
-            if i / 3 != j / 3 {
-                a[i][j] *= 6.0;
+    let n = 8;
+    // one small negative eigenvalue among positive ones; the right-hand side
+    // barely sees it, so CG meets the negative curvature after a few steps
+    let mut lambda: Vec<f64> = (0..3 * n).map(|i| 1.0 + i as f64).collect();
+    lambda[0] = -0.5;
+    let (a, q) = with_spectrum(&lambda, &mut rng);
+    let coef: Vec<f64> = (0..3 * n)
+        .map(|k| {
+            if k == 0 {
+                1e-3
+            } else {
+                rng.random_range(0.5..1.0)
             }
+        })
+        .collect();
+    let bf: Vec<f64> = (0..3 * n)
+        .map(|i| (0..3 * n).map(|k| q[k][i] * coef[k]).sum())
+        .collect();
+    let b: Vec<Vec3> = bf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let m = dense_blocks(&a);
+    for mode in [NegativeCurvature::Direction, NegativeCurvature::Iterate] {
+        let mut d = vec![[0.0; 3]; n];
+        let params = PcgParams {
+            max_iter: 200,
+            rtol: 1e-14,
+            negative_curvature: mode,
+        };
+        let info = pcg(&m, &jacobi(&m), &b, &mut d, &params);
+        assert_eq!(info.stop, PcgStop::NegativeCurvature, "{mode:?}: {info:?}");
+        assert!(info.iterations > 0, "{mode:?}: {info:?}");
+        let mut ad = vec![[0.0; 3]; n];
+        m.mul(&d, &mut ad);
+        let curvature: f64 = flat(&d).iter().zip(flat(&ad)).map(|(x, y)| x * y).sum();
+        let downhill: f64 = flat(&d).iter().zip(flat(&b)).map(|(x, y)| x * y).sum();
+        assert!(downhill > 0.0, "{mode:?}: d^T b = {downhill}");
+        if mode == NegativeCurvature::Direction {
+            assert!(curvature <= 0.0, "d^T A d = {curvature}");
         }
     }
-    let m = dense_blocks(&a);
-    let b: Vec<Vec3> = (0..n)
-        .map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0)))
-        .collect();
-    let mut d = vec![[0.0; 3]; n];
-    let info = pcg(
-        &m,
-        &jacobi(&m),
-        &b,
-        &mut d,
-        &PcgParams {
-            max_iter: 100,
-            rtol: 1e-12,
-        },
-    );
-    assert_eq!(info.stop, PcgStop::NegativeCurvature, "{info:?}");
-    let mut ad = vec![[0.0; 3]; n];
-    m.mul(&d, &mut ad);
-    let curvature: f64 = flat(&d).iter().zip(flat(&ad)).map(|(x, y)| x * y).sum();
-    let downhill: f64 = flat(&d).iter().zip(flat(&b)).map(|(x, y)| x * y).sum();
-    assert!(curvature <= 0.0, "d^T A d = {curvature}");
-    assert!(downhill > 0.0, "d^T b = {downhill}");
 }
 
 fn perturbed_box(n: usize, seed: u64) -> meshsmooth::Mesh {
@@ -169,9 +202,8 @@ fn assembled_gradient_and_hessian_match_finite_differences() {
     let mut pat = HessianPattern::new(&p);
     let nfree = pat.free_vertex.len();
     let mut g = vec![[0.0; 3]; nfree];
-    let f = pat.assemble(&p, &x, &mut g).unwrap();
-    let (f2, g2) = objective::gradient(&p, &x).unwrap();
-    assert!((f - f2).abs() < 1e-14 * f);
+    assert!(pat.assemble(&p, &x, &mut g));
+    let (_, g2) = objective::gradient(&p, &x).unwrap();
     for (i, &v) in pat.free_vertex.iter().enumerate() {
         for c in 0..3 {
             assert!((g[i][c] - g2[v as usize][c]).abs() < 1e-15 + 1e-12 * g[i][c].abs());

@@ -47,8 +47,9 @@ impl BlockCsr {
 }
 
 /// The Hessian's sparsity pattern for a problem, with the map from every
-/// element's 4x4 vertex blocks to matrix slots and an element colouring for
-/// conflict-free parallel assembly. Built once; its cost is reported apart.
+/// element's 4x4 vertex blocks to matrix slots, and the rows cut into
+/// contiguous ranges for parallel assembly. Built once; its cost is reported
+/// apart from the iterations.
 #[derive(Clone, Debug)]
 pub struct HessianPattern {
     /// Free index of each vertex (problem numbering), `u32::MAX` if fixed.
@@ -57,10 +58,25 @@ pub struct HessianPattern {
     pub free_vertex: Vec<u32>,
     /// Per element, 16 block slots for local pairs (a, b) as `4a + b`; `u32::MAX` if either vertex is fixed.
     pub slots: Vec<[u32; 16]>,
-    /// Element colour classes: no two elements of a class share a vertex.
-    pub element_colors: crate::mesh::topology::Csr,
+    /// Row ranges, each with the elements that touch it (in locality order).
+    pub ranges: Vec<RowRange>,
     pub matrix: BlockCsr,
 }
+
+/// Rows `start..end` and the elements with a vertex among them. Each range
+/// is assembled by one thread that writes only its own rows, so no two
+/// threads write one block; an element on a range border is evaluated once
+/// per range it touches. Ranges follow the problem size, not the thread
+/// count, so the sums repeat bit for bit on any machine.
+#[derive(Clone, Debug)]
+pub struct RowRange {
+    pub start: u32,
+    pub end: u32,
+    pub elements: Vec<u32>,
+}
+
+/// Rows per assembly range: large enough that border elements are few.
+const ROWS_PER_RANGE: usize = 2048;
 
 impl HessianPattern {
     pub fn new(p: &Problem) -> HessianPattern {
@@ -118,18 +134,38 @@ impl HessianPattern {
                 s
             })
             .collect();
-        let order: Vec<u32> = (0..p.num_elements() as u32).collect();
-        let element_colors = crate::mesh::color::greedy(&order, p.num_elements(), |e| {
-            p.tets[e]
-                .iter()
-                .flat_map(|&v| p.incidence.of(v as usize).iter().map(|&packed| packed >> 2))
-        });
+        let nranges = rows.div_ceil(ROWS_PER_RANGE).max(1);
+        let mut ranges: Vec<RowRange> = (0..nranges)
+            .map(|r| RowRange {
+                start: (r * rows / nranges) as u32,
+                end: ((r + 1) * rows / nranges) as u32,
+                elements: Vec::new(),
+            })
+            .collect();
+        let range_of = |i: u32| ranges.partition_point(|r| r.end <= i);
+        let mut touched: Vec<(usize, u32)> = Vec::new();
+        for (e, t) in p.tets.iter().enumerate() {
+            let mut seen = [usize::MAX; 4];
+            for (k, &v) in t.iter().enumerate() {
+                let i = free_index[v as usize];
+                if i != u32::MAX {
+                    let r = range_of(i);
+                    if !seen.contains(&r) {
+                        seen[k] = r;
+                        touched.push((r, e as u32));
+                    }
+                }
+            }
+        }
+        for (r, e) in touched {
+            ranges[r].elements.push(e);
+        }
         let nblocks = cols.len();
         HessianPattern {
             free_index,
             free_vertex,
             slots,
-            element_colors,
+            ranges,
             matrix: BlockCsr {
                 row_offsets,
                 cols,
@@ -139,74 +175,56 @@ impl HessianPattern {
         }
     }
 
-    /// Assembles value, free gradient and Hessian at `x` into `self.matrix` and
-    /// `grad` (indexed by free index). `None` if an element is infeasible.
-    pub fn assemble(&mut self, p: &Problem, x: &[Vec3], grad: &mut [Vec3]) -> Option<f64> {
+    /// Assembles the free gradient and the Hessian of F at `x` into `grad`
+    /// (indexed by free index) and `self.matrix`. `false` if an element is infeasible.
+    pub fn assemble(&mut self, p: &Problem, x: &[Vec3], grad: &mut [Vec3]) -> bool {
         let scale = 1.0 / p.num_elements() as f64;
-        self.matrix
-            .blocks
-            .par_iter_mut()
-            .for_each(|b| *b = [[0.0; 3]; 3]);
-        grad.par_iter_mut().for_each(|g| *g = [0.0; 3]);
-        let blocks = SharedMut(self.matrix.blocks.as_mut_ptr());
-        let grads = SharedMut(grad.as_mut_ptr());
-        let mut total = 0.0;
-        for c in 0..self.element_colors.len() {
-            let class = self.element_colors.of(c);
-            let etas: Option<Vec<f64>> = class
-                .par_iter()
-                .with_min_len(256)
-                .map(|&e| {
-                    let e = e as usize;
-                    let (eta, g, h) = p.shape.hessian_blocks(&p.tet_points(x, e))?;
-                    let t = &p.tets[e];
-                    let slots = &self.slots[e];
-                    for a in 0..4 {
-                        let i = self.free_index[t[a] as usize];
-                        if i == u32::MAX {
-                            continue;
-                        }
-                        // SAFETY: elements of one colour share no vertex, and every
-                        // slot written here lies in row i, owned by vertex t[a]; so
-                        // no two threads touch the same gradient entry or block.
-                        unsafe {
-                            let gi = &mut *grads.at(i as usize);
-                            for r in 0..3 {
-                                gi[r] += g[a][r] * scale;
-                            }
-                            for b in 0..4 {
-                                let s = slots[4 * a + b];
-                                if s != u32::MAX {
-                                    let blk = &mut *blocks.at(s as usize);
-                                    for r in 0..3 {
-                                        for q in 0..3 {
-                                            blk[r][q] += h[a][b][r][q] * scale;
-                                        }
-                                    }
+        let offsets = &self.matrix.row_offsets;
+        // hand each range its own rows of blocks and gradient
+        let mut parts = Vec::with_capacity(self.ranges.len());
+        let (mut blocks, mut grads) = (&mut self.matrix.blocks[..], &mut grad[..]);
+        for r in &self.ranges {
+            let nb = (offsets[r.end as usize] - offsets[r.start as usize]) as usize;
+            let (b, rest_b) = blocks.split_at_mut(nb);
+            let (g, rest_g) = grads.split_at_mut((r.end - r.start) as usize);
+            parts.push((r, b, g));
+            blocks = rest_b;
+            grads = rest_g;
+        }
+        let (free_index, slots) = (&self.free_index, &self.slots);
+        parts.into_par_iter().all(|(r, blocks, grads)| {
+            blocks.iter_mut().for_each(|b| *b = [[0.0; 3]; 3]);
+            grads.iter_mut().for_each(|g| *g = [0.0; 3]);
+            let base = offsets[r.start as usize];
+            for &e in &r.elements {
+                let e = e as usize;
+                let Some((_, g, h)) = p.shape.hessian_blocks(&p.tet_points(x, e)) else {
+                    return false;
+                };
+                let t = &p.tets[e];
+                for a in 0..4 {
+                    let i = free_index[t[a] as usize];
+                    if i < r.start || i >= r.end {
+                        continue;
+                    }
+                    let gi = &mut grads[(i - r.start) as usize];
+                    for c in 0..3 {
+                        gi[c] += g[a][c] * scale;
+                    }
+                    for b in 0..4 {
+                        let s = slots[e][4 * a + b];
+                        if s != u32::MAX {
+                            let blk = &mut blocks[(s - base) as usize];
+                            for c in 0..3 {
+                                for q in 0..3 {
+                                    blk[c][q] += h[a][b][c][q] * scale;
                                 }
                             }
                         }
                     }
-                    Some(eta)
-                })
-                .collect();
-            // summed in a fixed order so the value repeats bit for bit
-            total += etas?.iter().sum::<f64>();
-        }
-        Some(total * scale)
-    }
-}
-
-/// A raw pointer the assembly shares across threads; see the SAFETY note there.
-#[derive(Clone, Copy)]
-struct SharedMut<T>(*mut T);
-unsafe impl<T> Send for SharedMut<T> {}
-unsafe impl<T> Sync for SharedMut<T> {}
-
-impl<T> SharedMut<T> {
-    /// # Safety
-    /// `i` is in bounds and no other thread accesses element `i` meanwhile.
-    unsafe fn at(&self, i: usize) -> *mut T {
-        unsafe { self.0.add(i) }
+                }
+            }
+            true
+        })
     }
 }

@@ -5,7 +5,7 @@
 
 use super::bcd::LineSearch;
 use super::bsr::HessianPattern;
-use super::pcg::{BlockJacobi, PcgInfo, PcgParams, pcg};
+use super::pcg::{BlockJacobi, NegativeCurvature, PcgInfo, PcgParams, pcg};
 use crate::metric::mat3::Vec3;
 use crate::objective;
 use crate::problem::Problem;
@@ -20,6 +20,7 @@ pub struct NewtonParams {
     /// Forcing term: CG stops at |r| <= eta |g| with
     /// eta = min(forcing_max, sqrt(|g| / |g_0|)), which tightens as Newton converges.
     pub forcing_max: f64,
+    pub negative_curvature: NegativeCurvature,
 }
 
 impl Default for NewtonParams {
@@ -27,6 +28,7 @@ impl Default for NewtonParams {
         NewtonParams {
             cg_max_iter: 100,
             forcing_max: 0.5,
+            negative_curvature: NegativeCurvature::Direction,
         }
     }
 }
@@ -72,7 +74,7 @@ impl Newton {
         self.pattern.matrix.bytes()
             + 4 * (self.pattern.free_index.len() + self.pattern.free_vertex.len())
             + 64 * self.pattern.slots.len()
-            + 4 * (self.pattern.element_colors.offsets.len() + self.pattern.element_colors.items.len())
+            + 4 * self.pattern.ranges.iter().map(|r| r.elements.len() + 2).sum::<usize>()
             + 48 * m // preconditioner factors
             + 24 * (3 * m + 4 * m) // grad, rhs, dir; PCG's r, z, p, q
             + 24 * self.pattern.free_index.len() // trial positions
@@ -81,7 +83,10 @@ impl Newton {
     /// One Newton iteration; returns the largest squared vertex displacement
     /// (0 when the line search found no acceptable step).
     pub fn step(&mut self, p: &Problem, x: &mut [Vec3], ls: &LineSearch) -> f64 {
-        let Some(f) = self.pattern.assemble(p, x, &mut self.grad) else {
+        if !self.pattern.assemble(p, x, &mut self.grad) {
+            return 0.0;
+        }
+        let Some(f) = objective::value(p, x) else {
             return 0.0;
         };
         let gnorm = objective::norm(&self.grad);
@@ -101,6 +106,7 @@ impl Newton {
             &PcgParams {
                 max_iter: self.params.cg_max_iter,
                 rtol,
+                negative_curvature: self.params.negative_curvature,
             },
         );
         self.cg_iterations += info.iterations;

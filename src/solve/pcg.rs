@@ -89,6 +89,8 @@ pub struct PcgParams {
     pub max_iter: usize,
     /// Stop when |r| <= rtol |b|.
     pub rtol: f64,
+    /// What to return when p^T A p <= 0 after the first iteration.
+    pub negative_curvature: NegativeCurvature,
 }
 
 impl Default for PcgParams {
@@ -96,8 +98,21 @@ impl Default for PcgParams {
         PcgParams {
             max_iter: 100,
             rtol: 1e-2,
+            negative_curvature: NegativeCurvature::Direction,
         }
     }
+}
+
+/// The answer on negative curvature met after the first iteration (at the
+/// first, both are the preconditioned right-hand side).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NegativeCurvature {
+    /// The direction p of negative curvature, oriented so that p^T b > 0
+    /// (section 3.2 of the Newton paper).
+    Direction,
+    /// The CG iterate so far, a descent direction from the positive definite
+    /// part of the Krylov space (truncated Newton); often allows longer steps.
+    Iterate,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -173,7 +188,9 @@ pub fn pcg(
         a.apply(&p, &mut q);
         let curvature = dot(&p, &q);
         if !(curvature > 0.0) {
-            if k > 0 {
+            if k > 0 && params.negative_curvature == NegativeCurvature::Iterate {
+                // d already holds the iterate
+            } else if k > 0 {
                 let sign = if dot(&p, b) >= 0.0 { 1.0 } else { -1.0 };
                 d.par_iter_mut()
                     .zip(&p)
