@@ -9,10 +9,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 pub enum Error {
     /// The operating system refused a read or write.
     #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: PathBuf, source: std::io::Error },
 
     /// A file's content is malformed; `at` names the line (text) or byte offset (binary).
     #[error("{}{}: {msg}", path.display(), at.as_ref().map(|a| format!(": {a}")).unwrap_or_default())]
@@ -59,10 +56,7 @@ impl fmt::Display for Location {
 }
 
 fn fmt_ids(ids: &[usize]) -> String {
-    ids.iter()
-        .map(|i| i.to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
+    ids.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(", ")
 }
 
 impl Error {

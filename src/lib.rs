@@ -3,12 +3,14 @@
 //! Data flows `io -> Mesh -> Problem -> solve -> positions -> io`; see the
 //! README for the command-line tool and a library example.
 
+pub mod compare;
 pub mod error;
 pub mod generate;
 pub mod io;
 pub mod mesh;
 pub mod metric;
 pub mod objective;
+pub mod plot;
 pub mod problem;
 pub mod report;
 pub mod solve;

@@ -41,11 +41,7 @@ impl Problem {
     /// solvers exist.
     pub fn new(mesh: &Mesh) -> Result<Problem> {
         let start = Instant::now();
-        if let Some(e) = mesh
-            .kinds
-            .iter()
-            .position(|&k| k != ElementKind::Tetrahedron)
-        {
+        if let Some(e) = mesh.kinds.iter().position(|&k| k != ElementKind::Tetrahedron) {
             return Err(Error::Unsupported(format!(
                 "element {e} is a {}: the optimiser handles tetrahedral meshes only so far",
                 mesh.kinds[e]
@@ -104,10 +100,7 @@ impl Problem {
         let free: Vec<bool> = order.iter().map(|&o| !fixed_old[o as usize]).collect();
         let free_vertices: Vec<u32> = (0..n as u32).filter(|&v| free[v as usize]).collect();
         let colors = color::greedy(&free_vertices, n, |v| {
-            incidence
-                .of(v)
-                .iter()
-                .flat_map(|&packed| tets[(packed >> 2) as usize])
+            incidence.of(v).iter().flat_map(|&packed| tets[(packed >> 2) as usize])
         });
         Ok(Problem {
             order,
@@ -121,6 +114,17 @@ impl Problem {
             shape: TetShape::equilateral(),
             setup_time: start.elapsed(),
         })
+    }
+
+    /// Bytes held by the problem's arrays.
+    pub fn bytes(&self) -> usize {
+        let csr = |c: &Csr| 4 * (c.offsets.len() + c.items.len());
+        4 * (self.order.len() + self.elem_order.len() + self.free_vertices.len())
+            + 16 * self.tets.len()
+            + self.free.len()
+            + csr(&self.incidence)
+            + csr(&self.neighbours)
+            + csr(&self.colors)
     }
 
     pub fn num_vertices(&self) -> usize {
@@ -148,12 +152,7 @@ impl Problem {
     #[inline]
     pub fn tet_points(&self, x: &[Vec3], e: usize) -> [Vec3; 4] {
         let t = &self.tets[e];
-        [
-            x[t[0] as usize],
-            x[t[1] as usize],
-            x[t[2] as usize],
-            x[t[3] as usize],
-        ]
+        [x[t[0] as usize], x[t[1] as usize], x[t[2] as usize], x[t[3] as usize]]
     }
 
     /// Mean edge length, the length scale for displacement comparisons.

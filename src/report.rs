@@ -114,11 +114,7 @@ const INVERTED_IDS: usize = 10;
 /// # Panics
 /// If `points` does not have one entry per mesh vertex.
 pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
-    assert_eq!(
-        points.len(),
-        mesh.num_points(),
-        "one position per mesh vertex"
-    );
+    assert_eq!(points.len(), mesh.num_points(), "one position per mesh vertex");
     let ne = mesh.num_elements();
     // (eta, volume); eta None when any corner determinant is not positive
     let per_element: Vec<(Option<f64>, f64)> = (0..ne)
@@ -133,8 +129,7 @@ pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
     let etas: Vec<f64> = per_element.iter().filter_map(|p| p.0).collect();
     let volumes: Vec<f64> = per_element.iter().map(|p| p.1).collect();
     let inverted_all: Vec<usize> = (0..ne).filter(|&e| per_element[e].0.is_none()).collect();
-    let objective =
-        (inverted_all.is_empty() && ne > 0).then(|| etas.iter().sum::<f64>() / ne as f64);
+    let objective = (inverted_all.is_empty() && ne > 0).then(|| etas.iter().sum::<f64>() / ne as f64);
 
     let mut histogram: Vec<Bin> = ETA_BIN_EDGES
         .iter()
@@ -146,10 +141,7 @@ pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
         })
         .collect();
     for &eta in &etas {
-        let bin = ETA_BIN_EDGES[1..]
-            .iter()
-            .take_while(|&&edge| eta >= edge)
-            .count();
+        let bin = ETA_BIN_EDGES[1..].iter().take_while(|&&edge| eta >= edge).count();
         histogram[bin].count += 1;
     }
 
@@ -177,25 +169,15 @@ pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
 }
 
 fn gather(mesh: &Mesh, points: &[[f64; 3]], e: usize) -> Vec<[f64; 3]> {
-    mesh.element(e)
-        .iter()
-        .map(|&v| points[v as usize])
-        .collect()
+    mesh.element(e).iter().map(|&v| points[v as usize]).collect()
 }
 
-fn worst_elements(
-    mesh: &Mesh,
-    points: &[[f64; 3]],
-    per_element: &[(Option<f64>, f64)],
-) -> Vec<Worst> {
+fn worst_elements(mesh: &Mesh, points: &[[f64; 3]], per_element: &[(Option<f64>, f64)]) -> Vec<Worst> {
     let badness = |e: usize| per_element[e].0.unwrap_or(f64::INFINITY);
     // a bounded insertion list: one pass, no sort of all elements
     let mut ids: Vec<usize> = Vec::with_capacity(WORST + 1);
     for e in 0..per_element.len() {
-        let pos = ids
-            .iter()
-            .position(|&w| badness(e) > badness(w))
-            .unwrap_or(ids.len());
+        let pos = ids.iter().position(|&w| badness(e) > badness(w)).unwrap_or(ids.len());
         if pos < WORST {
             ids.insert(pos, e);
             ids.truncate(WORST);
@@ -204,8 +186,7 @@ fn worst_elements(
     ids.into_iter()
         .map(|id| {
             let x = gather(mesh, points, id);
-            let centroid =
-                std::array::from_fn(|i| x.iter().map(|p| p[i]).sum::<f64>() / x.len() as f64);
+            let centroid = std::array::from_fn(|i| x.iter().map(|p| p[i]).sum::<f64>() / x.len() as f64);
             Worst {
                 id,
                 kind: mesh.kinds[id].name().to_string(),
@@ -226,9 +207,7 @@ pub fn element_volume(kind: ElementKind, x: &[[f64; 3]]) -> f64 {
     let d = |a: usize, b: usize| -> [f64; 3] { std::array::from_fn(|i| x[b][i] - x[a][i]) };
     match kind {
         ElementKind::Triangle => 0.5 * cross2(&d(0, 1), &d(0, 2)),
-        ElementKind::Quadrilateral => {
-            0.5 * (0..4).map(|i| cross2(&x[i], &x[(i + 1) % 4])).sum::<f64>()
-        }
+        ElementKind::Quadrilateral => 0.5 * (0..4).map(|i| cross2(&x[i], &x[(i + 1) % 4])).sum::<f64>(),
         ElementKind::Tetrahedron => det3(&d(0, 1), &d(0, 2), &d(0, 3)) / 6.0,
         ElementKind::Hexahedron => hex_volume(x),
         ElementKind::Prism => prism_volume(x),
@@ -240,8 +219,7 @@ fn cross2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 }
 
 fn det3(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> f64 {
-    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-        + a[2] * (b[0] * c[1] - b[1] * c[0])
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
 }
 
 /// Gauss points of the 2-point rule on [0, 1].
@@ -288,11 +266,7 @@ fn hex_volume(x: &[[f64; 3]]) -> f64 {
                     * jacobian_det(x, |i| {
                         let r = REF[i];
                         let v: [f64; 3] = std::array::from_fn(|k| f(r[k], s[k]));
-                        [
-                            df(r[0]) * v[1] * v[2],
-                            v[0] * df(r[1]) * v[2],
-                            v[0] * v[1] * df(r[2]),
-                        ]
+                        [df(r[0]) * v[1] * v[2], v[0] * df(r[1]) * v[2], v[0] * v[1] * df(r[2])]
                     });
             }
         }
@@ -408,13 +382,7 @@ impl fmt::Display for QualityReport {
             )?,
         }
         writeln!(f, "eta histogram:")?;
-        let top = self
-            .histogram
-            .iter()
-            .map(|b| b.count)
-            .max()
-            .unwrap_or(0)
-            .max(1);
+        let top = self.histogram.iter().map(|b| b.count).max().unwrap_or(0).max(1);
         for b in &self.histogram {
             let range = match b.hi {
                 Some(hi) => format!("[{:.2}, {:.2})", b.lo, hi),

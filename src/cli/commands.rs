@@ -1,7 +1,7 @@
 //! The subcommands.
 
 use super::progress::Progress;
-use super::{BoxArgs, DemoArgs, QualityArgs, SmoothArgs, SolverArgs};
+use super::{BoxArgs, CompareArgs, DemoArgs, QualityArgs, SmoothArgs, SolverArgs};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::report::quality_report;
@@ -16,28 +16,31 @@ impl SolverArgs {
     }
 
     fn params(&self) -> Result<Params> {
-        if !(self.tol.is_finite() && self.tol >= 0.0) {
+        params(self.tol, self.max_iter, self.time_limit)
+    }
+}
+
+fn params(tol: f64, max_iter: usize, time_limit: Option<f64>) -> Result<Params> {
+    if !(tol.is_finite() && tol >= 0.0) {
+        return Err(Error::InvalidArgument(format!(
+            "--tol must be a non-negative number, got {tol}"
+        )));
+    }
+    let time_limit = match time_limit {
+        None => None,
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
+        Some(t) => {
             return Err(Error::InvalidArgument(format!(
-                "--tol must be a non-negative number, got {}",
-                self.tol
+                "--time-limit must be a positive number of seconds, got {t}"
             )));
         }
-        let time_limit = match self.time_limit {
-            None => None,
-            Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
-            Some(t) => {
-                return Err(Error::InvalidArgument(format!(
-                    "--time-limit must be a positive number of seconds, got {t}"
-                )));
-            }
-        };
-        Ok(Params {
-            tol: self.tol,
-            max_iter: self.max_iter,
-            time_limit,
-            ..Params::default()
-        })
-    }
+    };
+    Ok(Params {
+        tol,
+        max_iter,
+        time_limit,
+        ..Params::default()
+    })
 }
 
 fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
@@ -127,10 +130,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool) -> Result<Info>
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
     let info = result?;
     if !quiet {
-        println!(
-            "\n== optimised mesh ==\n{}",
-            quality_report(mesh, &mesh.points)
-        );
+        println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
     println!("{}", summary(&info, f0));
@@ -159,10 +159,7 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
     let mesh = io::read(&a.input)?;
     let report = quality_report(&mesh, &mesh.points);
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).expect("report serialises")
-        );
+        println!("{}", serde_json::to_string_pretty(&report).expect("report serialises"));
     } else {
         println!("{}\n{report}", a.input.display());
     }
@@ -173,9 +170,7 @@ pub fn generate_box(a: &BoxArgs) -> Result<()> {
     let format = output_format(&a.output, a.format.as_deref())?;
     let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
     if nx == 0 || ny == 0 || nz == 0 {
-        return Err(Error::InvalidArgument(
-            "--cells needs three positive counts".into(),
-        ));
+        return Err(Error::InvalidArgument("--cells needs three positive counts".into()));
     }
     let mut mesh = generate::tet_box(nx, ny, nz, [nx as f64, ny as f64, nz as f64]);
     if let Some(spec) = &a.perturb {
@@ -226,6 +221,89 @@ pub fn demo(a: &DemoArgs) -> Result<()> {
     if let Some(out) = &a.output {
         write_mesh(out, &mesh, Format::from_path(out)?)?;
         println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+fn opt_secs(t: Option<f64>) -> String {
+    t.map_or("-".into(), |t| format!("{t:.3}"))
+}
+
+fn mib(bytes: usize) -> String {
+    format!("{:.2} MiB", bytes as f64 / (1024.0 * 1024.0))
+}
+
+pub fn compare(a: &CompareArgs) -> Result<()> {
+    let methods: Vec<Method> = a.methods.iter().map(|m| m.trim().parse()).collect::<Result<_>>()?;
+    if methods.is_empty() {
+        return Err(Error::InvalidArgument("--methods needs at least one method".into()));
+    }
+    for out in [&a.csv, &a.plot].into_iter().flatten() {
+        refuse_overwrite(&a.input, out)?;
+    }
+    let params = params(a.tol, a.max_iter, a.time_limit)?;
+    let mesh = io::read(&a.input)?;
+    let (cmp, infos) = meshsmooth::compare::compare(&mesh, &methods, &params)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&cmp).expect("comparison serialises"));
+    } else {
+        println!(
+            "{}: {} vertices, {} elements; F0 = {:.8}, best F = {:.8}; cpu (f64), {} threads",
+            a.input.display(),
+            cmp.vertices,
+            cmp.elements,
+            cmp.initial_objective,
+            cmp.best_objective,
+            rayon::current_num_threads()
+        );
+        println!(
+            "{:<12} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>14} {:>10} {:>11} {:>13}",
+            "method",
+            "iters",
+            "T50 s",
+            "T90 s",
+            "T100 s",
+            "total s",
+            "setup s",
+            "F",
+            "|grad F|",
+            "memory",
+            "paper est."
+        );
+        for r in &cmp.runs {
+            println!(
+                "{:<12} {:>6} {:>9} {:>9} {:>9} {:>9.3} {:>9.3} {:>14.10} {:>10.3e} {:>11} {:>13}",
+                r.method,
+                r.iterations,
+                opt_secs(r.t50),
+                opt_secs(r.t90),
+                opt_secs(r.t100),
+                r.seconds,
+                r.setup_seconds,
+                r.objective,
+                r.grad_norm,
+                mib(r.memory_bytes),
+                r.paper_memory_bytes.map_or("-".into(), mib)
+            );
+        }
+        for c in &cmp.crossovers {
+            println!(
+                "{} passes {} at {:.3} s, {:.1}% of the way to the best objective",
+                c.second, c.first, c.seconds, c.optimality_percent
+            );
+        }
+    }
+    if let Some(csv) = &a.csv {
+        io::write_atomic(csv, |w| {
+            Ok(w.write_all(meshsmooth::compare::histories_csv(&infos).as_bytes())?)
+        })?;
+    }
+    if let Some(plot) = &a.plot {
+        let series: Vec<(String, &meshsmooth::solve::History)> =
+            infos.iter().map(|i| (i.method.to_string(), &i.history)).collect();
+        io::write_atomic(plot, |w| {
+            Ok(w.write_all(meshsmooth::plot::histories_svg(&series).as_bytes())?)
+        })?;
     }
     Ok(())
 }

@@ -29,6 +29,9 @@ pub enum Command {
     Smooth(SmoothArgs),
     /// Print the quality report of a mesh.
     Quality(QualityArgs),
+    /// Run several methods from the same start and compare their histories
+    /// (iterations, T50/T90/T100, setup time, memory, crossover points).
+    Compare(CompareArgs),
     /// Generate a test mesh.
     #[command(subcommand)]
     Generate(GenerateCommand),
@@ -73,6 +76,33 @@ pub struct SolverArgs {
     /// Stop after this many seconds (the mesh so far is kept; it is always valid).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
+}
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    pub input: PathBuf,
+    /// Comma-separated methods to run.
+    #[arg(long, default_value = "bcd,newton", value_delimiter = ',')]
+    pub methods: Vec<String>,
+    /// Where to run; only the CPU backend exists so far.
+    #[arg(long, default_value = "cpu", value_parser = ["cpu"])]
+    pub device: String,
+    #[arg(long, default_value_t = 1e-6)]
+    pub tol: f64,
+    #[arg(long, default_value_t = 1000)]
+    pub max_iter: usize,
+    /// Per method, in seconds.
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
+    /// Write the merged histories as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    pub csv: Option<PathBuf>,
+    /// Draw objective and gradient norm against time as SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Print the comparison as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -147,6 +177,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Demo(a)) => commands::demo(&a),
         Some(Command::Smooth(a)) => commands::smooth(&a),
         Some(Command::Quality(a)) => commands::quality(&a),
+        Some(Command::Compare(a)) => commands::compare(&a),
         Some(Command::Generate(GenerateCommand::Box(a))) => commands::generate_box(&a),
     };
     match result {

@@ -14,10 +14,8 @@ impl Progress {
         let bar = std::io::stderr().is_terminal().then(|| {
             let bar = ProgressBar::new(max_iter as u64);
             bar.set_style(
-                ProgressStyle::with_template(
-                    "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} sweeps  {msg}",
-                )
-                .expect("valid template"),
+                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} sweeps  {msg}")
+                    .expect("valid template"),
             );
             bar
         });
@@ -37,10 +35,7 @@ impl Progress {
         }
         if let Some(bar) = &self.bar {
             bar.set_position(r.iteration as u64);
-            bar.set_message(format!(
-                "F = {:.8}  |grad F| = {:.3e}",
-                r.objective, r.grad_norm
-            ));
+            bar.set_message(format!("F = {:.8}  |grad F| = {:.3e}", r.objective, r.grad_norm));
         }
         true
     }

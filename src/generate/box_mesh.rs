@@ -23,10 +23,7 @@ const KUHN: [([usize; 3], bool); 6] = [
 /// # Panics
 /// If a cell count is zero or a length is not positive and finite.
 pub fn tet_box(nx: usize, ny: usize, nz: usize, lengths: [f64; 3]) -> Mesh {
-    assert!(
-        nx > 0 && ny > 0 && nz > 0,
-        "tet_box needs at least one cell per axis"
-    );
+    assert!(nx > 0 && ny > 0 && nz > 0, "tet_box needs at least one cell per axis");
     assert!(
         lengths.iter().all(|l| l.is_finite() && *l > 0.0),
         "tet_box needs positive finite lengths, got {lengths:?}"
@@ -40,9 +37,7 @@ pub fn tet_box(nx: usize, ny: usize, nz: usize, lengths: [f64; 3]) -> Mesh {
         for j in 0..=ny {
             for i in 0..=nx {
                 let c = [i, j, k];
-                points.push(std::array::from_fn(|a| {
-                    lengths[a] * c[a] as f64 / n[a] as f64
-                }));
+                points.push(std::array::from_fn(|a| lengths[a] * c[a] as f64 / n[a] as f64));
             }
         }
     }

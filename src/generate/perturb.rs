@@ -56,11 +56,10 @@ impl fmt::Display for Perturbation {
 const SYNTAX: &str = "expected random:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA";
 
 fn parse_number(text: &str, what: &str, whole: &str) -> Result<f64> {
-    let v: f64 = text.trim().parse().map_err(|_| {
-        Error::InvalidArgument(format!(
-            "perturbation '{whole}': {what} '{text}' is not a number"
-        ))
-    })?;
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| Error::InvalidArgument(format!("perturbation '{whole}': {what} '{text}' is not a number")))?;
     if !v.is_finite() || v < 0.0 {
         return Err(Error::InvalidArgument(format!(
             "perturbation '{whole}': {what} must be finite and >= 0, got {text}"
@@ -104,9 +103,7 @@ impl FromStr for Perturbation {
                     omega: parse_number(parts[2], "omega", s)?,
                 })
             }
-            _ => Err(Error::InvalidArgument(format!(
-                "unknown perturbation '{s}'; {SYNTAX}"
-            ))),
+            _ => Err(Error::InvalidArgument(format!("unknown perturbation '{s}'; {SYNTAX}"))),
         }
     }
 }
@@ -167,9 +164,7 @@ pub fn perturb(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
         _ => true,
     };
     if !(p.alpha().is_finite() && p.alpha() >= 0.0 && omega_ok) {
-        return Err(Error::InvalidArgument(format!(
-            "perturbation {p} has a bad parameter"
-        )));
+        return Err(Error::InvalidArgument(format!("perturbation {p} has a bad parameter")));
     }
     mesh.validate()?;
     let inverted = inverted_elements(mesh, &mesh.points);
@@ -236,18 +231,9 @@ fn shuffle(items: &mut [usize], rng: &mut ChaCha8Rng) {
     }
 }
 
-fn displacement(
-    p: &Perturbation,
-    x: [f64; 3],
-    h: f64,
-    lo: &[f64; 3],
-    hi: &[f64; 3],
-    rng: &mut ChaCha8Rng,
-) -> [f64; 3] {
+fn displacement(p: &Perturbation, x: [f64; 3], h: f64, lo: &[f64; 3], hi: &[f64; 3], rng: &mut ChaCha8Rng) -> [f64; 3] {
     match *p {
-        Perturbation::Random { alpha } => {
-            std::array::from_fn(|_| alpha * h * rng.random_range(-1.0..=1.0))
-        }
+        Perturbation::Random { alpha } => std::array::from_fn(|_| alpha * h * rng.random_range(-1.0..=1.0)),
         Perturbation::ShiftR { alpha } => [alpha * h, 0.0, 0.0],
         Perturbation::ShiftNe { alpha } => {
             let s = alpha * h * std::f64::consts::FRAC_1_SQRT_2;

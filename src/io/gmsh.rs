@@ -98,9 +98,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         "0" => false,
         "1" => true,
         f => {
-            return Err(c.err(format!(
-                "file-type must be 0 (ASCII) or 1 (binary), found '{f}'"
-            )));
+            return Err(c.err(format!("file-type must be 0 (ASCII) or 1 (binary), found '{f}'")));
         }
     };
     let dsize = match t[2] {
@@ -143,9 +141,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                 }
             }
             s => {
-                return Err(r
-                    .c
-                    .err(format!("expected a section such as $Nodes, found '{s}'")));
+                return Err(r.c.err(format!("expected a section such as $Nodes, found '{s}'")));
             }
         }
     }
@@ -177,9 +173,7 @@ impl Reader<'_> {
     fn end(&mut self, what: &str) -> Result<()> {
         match self.c.line_tokens() {
             Some((_, t)) if t.first() == Some(&what) => Ok(()),
-            Some((_, t)) => Err(self
-                .c
-                .err(format!("expected {what}, found '{}'", t.join(" ")))),
+            Some((_, t)) => Err(self.c.err(format!("expected {what}, found '{}'", t.join(" ")))),
             None => Err(self.c.eof(what)),
         }
     }
@@ -229,9 +223,7 @@ impl Reader<'_> {
         Error::parse(
             self.c.path,
             None,
-            format!(
-                "unexpected end of file while reading {what}: expected {want} entries, found {got}"
-            ),
+            format!("unexpected end of file while reading {what}: expected {want} entries, found {got}"),
         )
     }
 
@@ -242,9 +234,7 @@ impl Reader<'_> {
             *x = self.coord(what)?;
         }
         if p.iter().any(|x| !x.is_finite()) {
-            return Err(self.err(format!(
-                "point {i} (node {tag}) has a non-finite coordinate {p:?}"
-            )));
+            return Err(self.err(format!("point {i} (node {tag}) has a non-finite coordinate {p:?}")));
         }
         let id = self.raw.points.len() as u32;
         if self.tags.insert(tag, id).is_some() {
@@ -308,9 +298,9 @@ impl Reader<'_> {
                 read += k;
             }
             if read != n {
-                return Err(self.c.err(format!(
-                    "$Nodes header announces {n} nodes but the blocks hold {read}"
-                )));
+                return Err(self
+                    .c
+                    .err(format!("$Nodes header announces {n} nodes but the blocks hold {read}")));
             }
         }
         self.end("$EndNodes")
@@ -372,9 +362,9 @@ impl Reader<'_> {
                 }
             }
             if read != m {
-                return Err(self.c.err_byte(format!(
-                    "$Elements announces {m} elements but the blocks hold {read}"
-                )));
+                return Err(self
+                    .c
+                    .err_byte(format!("$Elements announces {m} elements but the blocks hold {read}")));
             }
         } else {
             let blocks = self.count(true, "numEntityBlocks")?;
@@ -413,13 +403,7 @@ impl Reader<'_> {
 /// vertices that no lower cell covers. Consecutive cells of one type form a run.
 fn output_cells(mesh: &Mesh) -> Vec<(u32, usize, Vec<u32>)> {
     let mut cells: Vec<(u32, usize, Vec<u32>)> = (0..mesh.num_elements())
-        .map(|e| {
-            (
-                mesh.kinds[e].gmsh_id(),
-                mesh.kinds[e].dim(),
-                mesh.element(e).to_vec(),
-            )
-        })
+        .map(|e| (mesh.kinds[e].gmsh_id(), mesh.kinds[e].dim(), mesh.element(e).to_vec()))
         .collect();
     let mut covered = vec![false; mesh.num_points()];
     for (k, vs) in &mesh.lower {
@@ -434,12 +418,7 @@ fn output_cells(mesh: &Mesh) -> Vec<(u32, usize, Vec<u32>)> {
         }
         cells.push((t, d, vs.clone()));
     }
-    for (v, _) in mesh
-        .fixed
-        .iter()
-        .enumerate()
-        .filter(|&(v, &f)| f && !covered[v])
-    {
+    for (v, _) in mesh.fixed.iter().enumerate().filter(|&(v, &f)| f && !covered[v]) {
         cells.push((15, 0, vec![v as u32]));
     }
     cells
@@ -457,12 +436,7 @@ fn runs(cells: &[(u32, usize, Vec<u32>)]) -> Vec<std::ops::Range<usize>> {
     out
 }
 
-pub(crate) fn write22(
-    w: &mut dyn Write,
-    mesh: &Mesh,
-    cell_data: &[CellData],
-    binary: bool,
-) -> WriteResult {
+pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
     let n = mesh.num_points();
     writeln!(w, "$MeshFormat\n2.2 {} 8", binary as u8)?;
     if binary {
@@ -474,17 +448,9 @@ pub(crate) fn write22(
     for (i, p) in mesh.points.iter().enumerate() {
         if binary {
             buf.extend_from_slice(&(i as i32 + 1).to_le_bytes());
-            p.iter()
-                .for_each(|c| buf.extend_from_slice(&c.to_le_bytes()));
+            p.iter().for_each(|c| buf.extend_from_slice(&c.to_le_bytes()));
         } else {
-            writeln!(
-                w,
-                "{} {} {} {}",
-                i + 1,
-                fmt_f64(p[0]),
-                fmt_f64(p[1]),
-                fmt_f64(p[2])
-            )?;
+            writeln!(w, "{} {} {} {}", i + 1, fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
         }
     }
     if binary {
@@ -528,26 +494,14 @@ pub(crate) fn write22(
     Ok(())
 }
 
-pub(crate) fn write41(
-    w: &mut dyn Write,
-    mesh: &Mesh,
-    cell_data: &[CellData],
-    binary: bool,
-) -> WriteResult {
+pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
     let n = mesh.num_points();
     let mut buf: Vec<u8> = Vec::new();
     // Header numbers go to `buf` in binary (as i32 or u64), else as text.
-    let nums = |w: &mut dyn Write,
-                buf: &mut Vec<u8>,
-                ints: &[i32],
-                sizes: &[u64]|
-     -> std::io::Result<()> {
+    let nums = |w: &mut dyn Write, buf: &mut Vec<u8>, ints: &[i32], sizes: &[u64]| -> std::io::Result<()> {
         if binary {
-            ints.iter()
-                .for_each(|x| buf.extend_from_slice(&x.to_le_bytes()));
-            sizes
-                .iter()
-                .for_each(|x| buf.extend_from_slice(&x.to_le_bytes()));
+            ints.iter().for_each(|x| buf.extend_from_slice(&x.to_le_bytes()));
+            sizes.iter().for_each(|x| buf.extend_from_slice(&x.to_le_bytes()));
             Ok(())
         } else {
             let all: Vec<String> = ints
@@ -565,12 +519,7 @@ pub(crate) fn write41(
     }
     writeln!(w, "$EndMeshFormat\n$Nodes")?;
     let nblocks = u64::from(n > 0);
-    nums(
-        w,
-        &mut buf,
-        &[],
-        &[nblocks, n as u64, 1.min(n as u64), n as u64],
-    )?;
+    nums(w, &mut buf, &[], &[nblocks, n as u64, 1.min(n as u64), n as u64])?;
     if n > 0 {
         nums(w, &mut buf, &[mesh.dim() as i32, 1, 0], &[n as u64])?;
         for i in 1..=n as u64 {
@@ -578,8 +527,7 @@ pub(crate) fn write41(
         }
         for p in &mesh.points {
             if binary {
-                p.iter()
-                    .for_each(|c| buf.extend_from_slice(&c.to_le_bytes()));
+                p.iter().for_each(|c| buf.extend_from_slice(&c.to_le_bytes()));
             } else {
                 writeln!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
             }
@@ -598,12 +546,7 @@ pub(crate) fn write41(
     let mut tag = 0u64;
     for run in runs {
         let (t, dim, _) = &cells[run.start];
-        nums(
-            w,
-            &mut buf,
-            &[*dim as i32, 1, *t as i32],
-            &[run.len() as u64],
-        )?;
+        nums(w, &mut buf, &[*dim as i32, 1, *t as i32], &[run.len() as u64])?;
         for (_, _, vs) in &cells[run] {
             tag += 1;
             let mut row = vec![tag];

@@ -72,11 +72,7 @@ impl<'a> Cursor<'a> {
     }
 
     pub fn eof(&self, what: &str) -> Error {
-        Error::parse(
-            self.path,
-            None,
-            format!("unexpected end of file while reading {what}"),
-        )
+        Error::parse(self.path, None, format!("unexpected end of file while reading {what}"))
     }
 
     fn bump(&mut self) {
@@ -142,11 +138,8 @@ impl<'a> Cursor<'a> {
     /// Parse a count: a non-negative integer.
     pub fn count(&mut self, what: &str) -> crate::Result<usize> {
         let t = self.expect_token(what)?;
-        t.parse().map_err(|_| {
-            self.err(format!(
-                "expected a non-negative integer ({what}), found '{t}'"
-            ))
-        })
+        t.parse()
+            .map_err(|_| self.err(format!("expected a non-negative integer ({what}), found '{t}'")))
     }
 
     /// `n` numbers, with a truncation error that says how many were found.
@@ -158,16 +151,13 @@ impl<'a> Cursor<'a> {
                     return Err(Error::parse(
                         self.path,
                         None,
-                        format!(
-                            "unexpected end of file while reading {what}: expected {n} values, found {i}"
-                        ),
+                        format!("unexpected end of file while reading {what}: expected {n} values, found {i}"),
                     ));
                 }
-                Some(t) => {
-                    out.push(t.parse().map_err(|_| {
-                        self.err(format!("expected a number ({what}), found '{t}'"))
-                    })?)
-                }
+                Some(t) => out.push(
+                    t.parse()
+                        .map_err(|_| self.err(format!("expected a number ({what}), found '{t}'")))?,
+                ),
             }
         }
         Ok(out)

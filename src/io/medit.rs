@@ -52,9 +52,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                 }
                 has_vertices = true;
                 let n = c.count("the number of Vertices")?;
-                let total = n
-                    .checked_mul(d + 1)
-                    .ok_or_else(|| c.err("Vertices count too large"))?;
+                let total = n.checked_mul(d + 1).ok_or_else(|| c.err("Vertices count too large"))?;
                 let vals: Vec<f64> = c.numbers(total, "Vertices")?;
                 raw.points.reserve(n);
                 for (i, v) in vals.chunks_exact(d + 1).enumerate() {
@@ -63,10 +61,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                         return Err(Error::parse(
                             path,
                             None,
-                            format!(
-                                "point {i} (vertex {}) has a non-finite coordinate {p:?}",
-                                i + 1
-                            ),
+                            format!("point {i} (vertex {}) has a non-finite coordinate {p:?}", i + 1),
                         ));
                     }
                     raw.points.push(p);
@@ -86,9 +81,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
             _ => {
                 if let Some(shape) = section_shape(&kw) {
                     if !has_vertices {
-                        return Err(
-                            c.err(format!("{tok} before Vertices: missing Vertices section"))
-                        );
+                        return Err(c.err(format!("{tok} before Vertices: missing Vertices section")));
                     }
                     cells(&mut c, &mut raw, shape, tok)?;
                 } else if tok.starts_with(|ch: char| ch.is_ascii_alphabetic()) {
@@ -110,16 +103,13 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
     }
     let n = raw.points.len();
     for v in required {
-        let i = usize::try_from(v - 1)
-            .ok()
-            .filter(|&i| i < n)
-            .ok_or_else(|| {
-                Error::parse(
-                    path,
-                    None,
-                    format!("RequiredVertices refers to vertex {v}, but the file has {n} vertices"),
-                )
-            })?;
+        let i = usize::try_from(v - 1).ok().filter(|&i| i < n).ok_or_else(|| {
+            Error::parse(
+                path,
+                None,
+                format!("RequiredVertices refers to vertex {v}, but the file has {n} vertices"),
+            )
+        })?;
         raw.fix(i);
     }
     Ok(raw)
@@ -166,11 +156,7 @@ fn keyword(k: ElementKind) -> &'static str {
     }
 }
 
-fn section<'m>(
-    w: &mut dyn Write,
-    name: &str,
-    cells: impl Iterator<Item = &'m [u32]> + Clone,
-) -> WriteResult {
+fn section<'m>(w: &mut dyn Write, name: &str, cells: impl Iterator<Item = &'m [u32]> + Clone) -> WriteResult {
     writeln!(w, "{name}\n{}", cells.clone().count())?;
     for vs in cells {
         for v in vs {
@@ -221,11 +207,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData]) -> W
             LowerKind::Triangle => "Triangles",
             LowerKind::Quadrilateral => "Quadrilaterals",
         };
-        let cells = mesh
-            .lower
-            .iter()
-            .filter(move |(lk, _)| *lk == k)
-            .map(|(_, vs)| &vs[..]);
+        let cells = mesh.lower.iter().filter(move |(lk, _)| *lk == k).map(|(_, vs)| &vs[..]);
         if k == LowerKind::Vertex {
             // Corners carry no reference number.
             writeln!(w, "Corners\n{}", cells.clone().count())?;
@@ -236,9 +218,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData]) -> W
             section(w, name, cells)?;
         }
     }
-    let fixed: Vec<usize> = (0..mesh.num_points())
-        .filter(|&v| mesh.is_fixed(v))
-        .collect();
+    let fixed: Vec<usize> = (0..mesh.num_points()).filter(|&v| mesh.is_fixed(v)).collect();
     if !fixed.is_empty() {
         writeln!(w, "RequiredVertices\n{}", fixed.len())?;
         for v in fixed {

@@ -208,17 +208,13 @@ fn check_structure(mesh: &Mesh) -> Result<()> {
         && mesh.offsets.last() == Some(&mesh.conn.len())
         && mesh.offsets.windows(2).all(|w| w[0] <= w[1])
         && mesh.conn.iter().all(|&v| (v as usize) < n)
-        && mesh
-            .lower
-            .iter()
-            .all(|(_, vs)| vs.iter().all(|&v| (v as usize) < n))
+        && mesh.lower.iter().all(|(_, vs)| vs.iter().all(|&v| (v as usize) < n))
         && (mesh.fixed.is_empty() || mesh.fixed.len() == n);
     if ok {
         Ok(())
     } else {
         Err(Error::InvalidMesh(
-            "cannot write: element offsets, connectivity, vertex ids or fixed flags are inconsistent"
-                .into(),
+            "cannot write: element offsets, connectivity, vertex ids or fixed flags are inconsistent".into(),
         ))
     }
 }
@@ -315,10 +311,7 @@ impl RawMesh {
         if self.points.is_empty() {
             return Err(Error::parse(path, None, "the file has no points"));
         }
-        let has3d = self
-            .shapes
-            .iter()
-            .any(|s| matches!(s, Shape::Elem(k) if k.dim() == 3));
+        let has3d = self.shapes.iter().any(|s| matches!(s, Shape::Elem(k) if k.dim() == 3));
         let mut mesh = Mesh::new(self.points);
         let n = mesh.points.len();
         let mut fixed = self.fixed;

@@ -105,22 +105,15 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
     let mut c = Cursor::new(path, data);
     let (_, head) = c.line_tokens().ok_or_else(|| c.eof("the header"))?;
     if head.first() != Some(&"#") || !head.get(1).is_some_and(|t| t.eq_ignore_ascii_case("vtk")) {
-        return Err(
-            c.err("not a legacy VTK file: the first line must be '# vtk DataFile Version x.y'")
-        );
+        return Err(c.err("not a legacy VTK file: the first line must be '# vtk DataFile Version x.y'"));
     }
     c.end_line(); // title, free text
-    let (_, fmt) = c
-        .line_tokens()
-        .ok_or_else(|| c.eof("the ASCII/BINARY line"))?;
+    let (_, fmt) = c.line_tokens().ok_or_else(|| c.eof("the ASCII/BINARY line"))?;
     let binary = match fmt.first().map(|t| t.to_ascii_uppercase()).as_deref() {
         Some("ASCII") => false,
         Some("BINARY") => true,
         _ => {
-            return Err(c.err(format!(
-                "expected ASCII or BINARY on line 3, found '{}'",
-                fmt.join(" ")
-            )));
+            return Err(c.err(format!("expected ASCII or BINARY on line 3, found '{}'", fmt.join(" "))));
         }
     };
     let mut r = Reader {
@@ -183,9 +176,9 @@ impl Reader<'_> {
                     if let Some(want) = want
                         && want != n
                     {
-                        return Err(self.c.err(format!(
-                            "{key} {n} does not match the {want} {what} of the mesh"
-                        )));
+                        return Err(self
+                            .c
+                            .err(format!("{key} {n} does not match the {want} {what} of the mesh")));
                     }
                 }
                 "METADATA" => self.c.skip_to_blank_line(),
@@ -235,8 +228,7 @@ impl Reader<'_> {
             let start = self.c.pos();
             let bytes = self.c.bytes(n * size, what)?;
             for (i, chunk) in bytes.chunks_exact(size).enumerate() {
-                f(i, ty.get(Endian::Big, chunk))
-                    .map_err(|m| self.c.err_at_byte(start + i * size, m))?;
+                f(i, ty.get(Endian::Big, chunk)).map_err(|m| self.c.err_at_byte(start + i * size, m))?;
             }
         } else {
             for i in 0..n {
@@ -244,15 +236,12 @@ impl Reader<'_> {
                     return Err(Error::parse(
                         self.c.path,
                         None,
-                        format!(
-                            "unexpected end of file while reading {what}: expected {n} values, found {i}"
-                        ),
+                        format!("unexpected end of file while reading {what}: expected {n} values, found {i}"),
                     ));
                 };
-                let v: f64 = t.parse().map_err(|_| {
-                    self.c
-                        .err(format!("expected a number in {what}, found '{t}'"))
-                })?;
+                let v: f64 = t
+                    .parse()
+                    .map_err(|_| self.c.err(format!("expected a number in {what}, found '{t}'")))?;
                 f(i, v).map_err(|m| self.c.err(m))?;
             }
         }
@@ -265,9 +254,7 @@ impl Reader<'_> {
         }
         let n = self.header_count(toks, 1)?;
         let ty = self.header_type(toks, 2)?;
-        let total = n
-            .checked_mul(3)
-            .ok_or_else(|| self.c.err("POINTS count too large"))?;
+        let total = n.checked_mul(3).ok_or_else(|| self.c.err("POINTS count too large"))?;
         let mut pts = Vec::with_capacity(self.c.cap(n, 3 * ty.size().min(2)));
         let mut p = [0.0; 3];
         self.array(ty, total, "POINTS", |i, v| {
@@ -295,9 +282,9 @@ impl Reader<'_> {
         let a = self.header_count(toks, 1)?;
         let b = self.header_count(toks, 2)?;
         let ok_index = |e: usize, v: f64| {
-            as_index(v, np).map(|v| v as u32).ok_or_else(|| {
-                format!("element {e} refers to vertex {v}, but the file has {np} points")
-            })
+            as_index(v, np)
+                .map(|v| v as u32)
+                .ok_or_else(|| format!("element {e} refers to vertex {v}, but the file has {np} points"))
         };
         if self.c.looking_at("OFFSETS") {
             // VTK 5.1: `a` offsets (cells + 1), `b` connectivity entries.
@@ -317,9 +304,9 @@ impl Reader<'_> {
                 }
             })?;
             if offsets.last().copied().unwrap_or(0) != b || offsets.is_empty() {
-                return Err(self.c.err(format!(
-                    "the last offset must equal the connectivity size {b}"
-                )));
+                return Err(self
+                    .c
+                    .err(format!("the last offset must equal the connectivity size {b}")));
             }
             if !self.c.looking_at("CONNECTIVITY") {
                 return Err(self.c.err("expected CONNECTIVITY after OFFSETS"));
@@ -338,11 +325,7 @@ impl Reader<'_> {
             self.cells = Some((offsets, conn));
         } else {
             // Classic: per cell a vertex count, then the vertex ids.
-            let ty = if self.binary {
-                Scalar::I32
-            } else {
-                Scalar::F64
-            };
+            let ty = if self.binary { Scalar::I32 } else { Scalar::F64 };
             let mut offsets = Vec::with_capacity(self.c.cap(a + 1, 2));
             offsets.push(0);
             let mut conn = Vec::with_capacity(self.c.cap(b, 2));
@@ -383,15 +366,11 @@ impl Reader<'_> {
         let n = self.header_count(toks, 1)?;
         let ncells = offsets.len() - 1;
         if n != ncells {
-            return Err(self.c.err(format!(
-                "CELL_TYPES {n} does not match the {ncells} cells in CELLS"
-            )));
+            return Err(self
+                .c
+                .err(format!("CELL_TYPES {n} does not match the {ncells} cells in CELLS")));
         }
-        let ty = if self.binary {
-            Scalar::I32
-        } else {
-            Scalar::F64
-        };
+        let ty = if self.binary { Scalar::I32 } else { Scalar::F64 };
         let mut raw = std::mem::take(&mut self.raw);
         self.array(ty, n, "CELL_TYPES", |e, v| {
             let shape = vtk_shape(e, v as i64)?;
@@ -432,11 +411,7 @@ impl Reader<'_> {
             "SCALARS" => {
                 let n = self.count_for(attach, key)?;
                 let ty = self.header_type(toks, 2)?;
-                let ncomp = if toks.len() > 3 {
-                    self.header_count(toks, 3)?
-                } else {
-                    1
-                };
+                let ncomp = if toks.len() > 3 { self.header_count(toks, 3)? } else { 1 };
                 if self.c.looking_at("LOOKUP_TABLE") {
                     self.c.line_tokens();
                 }
@@ -477,10 +452,7 @@ impl Reader<'_> {
                     if self.c.looking_at("METADATA") {
                         self.c.skip_to_blank_line();
                     }
-                    let (_, t) = self
-                        .c
-                        .line_tokens()
-                        .ok_or_else(|| self.c.eof("FIELD arrays"))?;
+                    let (_, t) = self.c.line_tokens().ok_or_else(|| self.c.eof("FIELD arrays"))?;
                     if t.len() < 4 {
                         return Err(self.c.err(format!(
                             "expected 'name components tuples type' in FIELD, found '{}'",
@@ -490,10 +462,8 @@ impl Reader<'_> {
                     let k = self.header_count(&t, 1)?;
                     let tuples = self.header_count(&t, 2)?;
                     let ty = self.header_type(&t, 3)?;
-                    let is_fixed = attach == Attach::Points
-                        && t[0] == "fixed"
-                        && k == 1
-                        && Some(tuples) == self.npoints;
+                    let is_fixed =
+                        attach == Attach::Points && t[0] == "fixed" && k == 1 && Some(tuples) == self.npoints;
                     self.data_array(ty, self.mul(k, tuples, key)?, t[0], is_fixed)?;
                 }
                 Ok(())
@@ -524,19 +494,11 @@ impl Reader<'_> {
 
 fn vtk_name(name: &str) -> String {
     // Legacy VTK names are single tokens.
-    let s: String = name
-        .chars()
-        .map(|c| if c.is_whitespace() { '_' } else { c })
-        .collect();
+    let s: String = name.chars().map(|c| if c.is_whitespace() { '_' } else { c }).collect();
     if s.is_empty() { "data".into() } else { s }
 }
 
-pub(crate) fn write(
-    w: &mut dyn Write,
-    mesh: &Mesh,
-    cell_data: &[CellData],
-    binary: bool,
-) -> WriteResult {
+pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
     let n = mesh.num_points();
     let ne = mesh.num_elements();
     writeln!(w, "# vtk DataFile Version 3.0")?;

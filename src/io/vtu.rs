@@ -73,10 +73,7 @@ struct Ctx<'a> {
 impl Ctx<'_> {
     fn line_of(&self, pos: u64) -> usize {
         let pos = (pos as usize).min(self.text.len());
-        1 + self.text.as_bytes()[..pos]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
+        1 + self.text.as_bytes()[..pos].iter().filter(|&&b| b == b'\n').count()
     }
 
     fn err(&self, line: usize, msg: impl Into<String>) -> Error {
@@ -89,26 +86,15 @@ impl Ctx<'_> {
             c.set_line(p.line);
             let mut out = Vec::new();
             while let Some(t) = c.token() {
-                out.push(t.parse().map_err(|_| {
-                    c.err(format!(
-                        "expected a number in DataArray '{}', found '{t}'",
-                        p.name
-                    ))
-                })?);
+                out.push(
+                    t.parse()
+                        .map_err(|_| c.err(format!("expected a number in DataArray '{}', found '{t}'", p.name)))?,
+                );
             }
             return Ok(out);
         }
-        let b64: Vec<u8> = p
-            .text
-            .bytes()
-            .filter(|b| !b.is_ascii_whitespace())
-            .collect();
-        let bad = |what: &str| {
-            self.err(
-                p.line,
-                format!("DataArray '{}': invalid base64 data ({what})", p.name),
-            )
-        };
+        let b64: Vec<u8> = p.text.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
+        let bad = |what: &str| self.err(p.line, format!("DataArray '{}': invalid base64 data ({what})", p.name));
         let hsize = self.header.size();
         // VTK encodes the byte-count header and the data as two base64 runs;
         // some writers encode them as one. A padded header run tells them apart.
@@ -116,9 +102,7 @@ impl Ctx<'_> {
         let (header, payload) = match b64.get(..hchars) {
             Some(h) if h.ends_with(b"=") => {
                 let head = B64.decode(h).map_err(|e| bad(&e.to_string()))?;
-                let body = B64
-                    .decode(&b64[hchars..])
-                    .map_err(|e| bad(&e.to_string()))?;
+                let body = B64.decode(&b64[hchars..]).map_err(|e| bad(&e.to_string()))?;
                 (head, body)
             }
             _ => {
@@ -148,10 +132,7 @@ impl Ctx<'_> {
         if payload.len() % size != 0 {
             return Err(bad("byte count is not a multiple of the value size"));
         }
-        Ok(payload
-            .chunks_exact(size)
-            .map(|c| p.ty.get(self.endian, c))
-            .collect())
+        Ok(payload.chunks_exact(size).map(|c| p.ty.get(self.endian, c)).collect())
     }
 }
 
@@ -187,12 +168,9 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
     let mut counts: Option<(usize, usize)> = None;
     loop {
         let tag_pos = reader.buffer_position();
-        let ev = reader.read_event().map_err(|e| {
-            ctx.err(
-                ctx.line_of(reader.error_position()),
-                format!("malformed XML: {e}"),
-            )
-        })?;
+        let ev = reader
+            .read_event()
+            .map_err(|e| ctx.err(ctx.line_of(reader.error_position()), format!("malformed XML: {e}")))?;
         let line = ctx.line_of(tag_pos);
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
@@ -204,9 +182,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                         {
                             return Err(ctx.err(
                                 line,
-                                format!(
-                                    "VTKFile type '{t}' is not supported; only UnstructuredGrid is"
-                                ),
+                                format!("VTKFile type '{t}' is not supported; only UnstructuredGrid is"),
                             ));
                         }
                         if attr(e, "compressor").is_some_and(|c| !c.is_empty()) {
@@ -223,27 +199,22 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                                 "UInt32" => Scalar::U32,
                                 "UInt64" => Scalar::U64,
                                 _ => {
-                                    return Err(ctx.err(
-                                        line,
-                                        format!(
-                                            "header_type '{h}' is not supported (UInt32 or UInt64)"
-                                        ),
-                                    ));
+                                    return Err(
+                                        ctx.err(line, format!("header_type '{h}' is not supported (UInt32 or UInt64)"))
+                                    );
                                 }
                             };
                         }
                     }
                     "Piece" => {
                         if counts.is_some() {
-                            return Err(
-                                ctx.err(line, "files with several Pieces are not supported")
-                            );
+                            return Err(ctx.err(line, "files with several Pieces are not supported"));
                         }
                         let num = |k: &str| {
                             let v = attr(e, k).unwrap_or_default();
-                            v.trim().parse::<usize>().map_err(|_| {
-                                ctx.err(line, format!("Piece: {k} must be a count, found '{v}'"))
-                            })
+                            v.trim()
+                                .parse::<usize>()
+                                .map_err(|_| ctx.err(line, format!("Piece: {k} must be a count, found '{v}'")))
                         };
                         counts = Some((num("NumberOfPoints")?, num("NumberOfCells")?));
                     }
@@ -275,10 +246,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                                 ));
                             }
                             f => {
-                                return Err(ctx.err(
-                                    line,
-                                    format!("DataArray '{aname}': unknown format '{f}'"),
-                                ));
+                                return Err(ctx.err(line, format!("DataArray '{aname}': unknown format '{f}'")));
                             }
                         };
                         let tyname = attr(e, "type").unwrap_or_default();
@@ -286,10 +254,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                             Some(t) => t,
                             None if role == Role::Ignored => Scalar::U8,
                             None => {
-                                return Err(ctx.err(
-                                    line,
-                                    format!("DataArray '{aname}': unsupported type '{tyname}'"),
-                                ));
+                                return Err(ctx.err(line, format!("DataArray '{aname}': unsupported type '{tyname}'")));
                             }
                         };
                         if role == Role::Points {
@@ -297,9 +262,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                             if nc.trim() != "3" {
                                 return Err(ctx.err(
                                     line,
-                                    format!(
-                                        "Points must have NumberOfComponents=\"3\", found \"{nc}\""
-                                    ),
+                                    format!("Points must have NumberOfComponents=\"3\", found \"{nc}\""),
                                 ));
                             }
                         }
@@ -376,15 +339,10 @@ fn finish(ctx: &Ctx, p: Pending, arrays: &mut Arrays) -> Result<()> {
 
 fn assemble(ctx: &Ctx, counts: Option<(usize, usize)>, a: Arrays) -> Result<RawMesh> {
     let missing = |what: &str| Error::parse(ctx.path, None, format!("missing {what}"));
-    let (np, nc) =
-        counts.ok_or_else(|| missing("<Piece> element (is this an UnstructuredGrid?)"))?;
+    let (np, nc) = counts.ok_or_else(|| missing("<Piece> element (is this an UnstructuredGrid?)"))?;
     let (pts, pline) = a.points.ok_or_else(|| missing("<Points> DataArray"))?;
-    let (conn, cline) = a
-        .conn
-        .ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
-    let (offs, oline) = a
-        .offsets
-        .ok_or_else(|| missing("Cells DataArray 'offsets'"))?;
+    let (conn, cline) = a.conn.ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
+    let (offs, oline) = a.offsets.ok_or_else(|| missing("Cells DataArray 'offsets'"))?;
     let (types, tline) = a.types.ok_or_else(|| missing("Cells DataArray 'types'"))?;
     let count_err = |line: usize, what: &str, want: usize, got: usize| {
         ctx.err(line, format!("{what}: expected {want} values, found {got}"))
@@ -401,10 +359,7 @@ fn assemble(ctx: &Ctx, counts: Option<(usize, usize)>, a: Arrays) -> Result<RawM
     let mut raw = RawMesh::default();
     for (i, p) in pts.chunks_exact(3).enumerate() {
         if p.iter().any(|c| !c.is_finite()) {
-            return Err(ctx.err(
-                pline,
-                format!("point {i} has a non-finite coordinate {p:?}"),
-            ));
+            return Err(ctx.err(pline, format!("point {i} has a non-finite coordinate {p:?}")));
         }
         raw.points.push([p[0], p[1], p[2]]);
     }
@@ -504,12 +459,7 @@ impl Out<'_> {
     }
 }
 
-pub(crate) fn write(
-    w: &mut dyn Write,
-    mesh: &Mesh,
-    cell_data: &[CellData],
-    binary: bool,
-) -> WriteResult {
+pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
     let n = mesh.num_points();
     let ne = mesh.num_elements();
     writeln!(w, "<?xml version=\"1.0\"?>")?;
@@ -518,10 +468,7 @@ pub(crate) fn write(
         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
     )?;
     writeln!(w, "  <UnstructuredGrid>")?;
-    writeln!(
-        w,
-        "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{ne}\">"
-    )?;
+    writeln!(w, "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{ne}\">")?;
     let mut o = Out { w, binary };
     if !mesh.fixed.is_empty() {
         writeln!(o.w, "      <PointData Scalars=\"fixed\">")?;
@@ -529,12 +476,7 @@ pub(crate) fn write(
             "Int32",
             "fixed",
             1,
-            || {
-                mesh.fixed
-                    .iter()
-                    .flat_map(|&f| (f as i32).to_le_bytes())
-                    .collect()
-            },
+            || mesh.fixed.iter().flat_map(|&f| (f as i32).to_le_bytes()).collect(),
             |w| {
                 for &f in &mesh.fixed {
                     writeln!(w, "{}", f as i32)?;
@@ -549,13 +491,7 @@ pub(crate) fn write(
         "Float64",
         "Points",
         3,
-        || {
-            mesh.points
-                .iter()
-                .flatten()
-                .flat_map(|c| c.to_le_bytes())
-                .collect()
-        },
+        || mesh.points.iter().flatten().flat_map(|c| c.to_le_bytes()).collect(),
         |w| {
             for p in &mesh.points {
                 writeln!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
@@ -569,12 +505,7 @@ pub(crate) fn write(
         "Int64",
         "connectivity",
         1,
-        || {
-            mesh.conn
-                .iter()
-                .flat_map(|&v| (v as i64).to_le_bytes())
-                .collect()
-        },
+        || mesh.conn.iter().flat_map(|&v| (v as i64).to_le_bytes()).collect(),
         |w| {
             for e in 0..ne {
                 let vs: Vec<String> = mesh.element(e).iter().map(|v| v.to_string()).collect();

@@ -7,11 +7,7 @@ use super::topology::Csr;
 /// Greedy colouring in the given vertex order. `elements_of(v)` lists the
 /// vertices sharing an element with `v` (duplicates allowed). Returns the
 /// colour classes, each in the order the vertices were visited.
-pub fn greedy<'a, I>(
-    order: &[u32],
-    num_vertices: usize,
-    mut elements_of: impl FnMut(usize) -> I,
-) -> Csr
+pub fn greedy<'a, I>(order: &[u32], num_vertices: usize, mut elements_of: impl FnMut(usize) -> I) -> Csr
 where
     I: Iterator<Item = u32> + 'a,
 {
@@ -29,9 +25,7 @@ where
                 used[c as usize] = stamp;
             }
         }
-        let c = (0..)
-            .find(|&c| used.get(c).is_none_or(|&s| s != stamp))
-            .unwrap();
+        let c = (0..).find(|&c| used.get(c).is_none_or(|&s| s != stamp)).unwrap();
         color[v as usize] = c as u32;
         if classes.len() <= c {
             classes.resize_with(c + 1, Vec::new);

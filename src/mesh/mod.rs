@@ -82,11 +82,7 @@ impl Mesh {
 
     /// Metric dimension: 3 if any element is a volume element, else 2.
     pub fn dim(&self) -> usize {
-        if self.kinds.iter().any(|k| k.dim() == 3) {
-            3
-        } else {
-            2
-        }
+        if self.kinds.iter().any(|k| k.dim() == 3) { 3 } else { 2 }
     }
 
     pub fn is_fixed(&self, v: usize) -> bool {
@@ -108,12 +104,8 @@ impl Mesh {
         if self.kinds.is_empty() {
             return Err(Error::InvalidMesh("mesh has no elements".into()));
         }
-        if self.offsets.len() != self.kinds.len() + 1
-            || *self.offsets.last().unwrap() != self.conn.len()
-        {
-            return Err(Error::InvalidMesh(
-                "element offsets do not match connectivity".into(),
-            ));
+        if self.offsets.len() != self.kinds.len() + 1 || *self.offsets.last().unwrap() != self.conn.len() {
+            return Err(Error::InvalidMesh("element offsets do not match connectivity".into()));
         }
         let dim = self.dim();
         if let Some(e) = self.kinds.iter().position(|k| k.dim() != dim) {
@@ -130,11 +122,7 @@ impl Mesh {
                 self.points.len()
             )));
         }
-        if let Some(v) = self
-            .points
-            .iter()
-            .position(|p| p.iter().any(|c| !c.is_finite()))
-        {
+        if let Some(v) = self.points.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
             return Err(Error::InvalidMesh(format!(
                 "vertex {v} has a non-finite coordinate {:?}",
                 self.points[v]
@@ -160,9 +148,7 @@ impl Mesh {
                     )));
                 }
                 if vs[..i].contains(&v) {
-                    return Err(Error::InvalidMesh(format!(
-                        "element {e} uses vertex {v} twice: {vs:?}"
-                    )));
+                    return Err(Error::InvalidMesh(format!("element {e} uses vertex {v} twice: {vs:?}")));
                 }
                 used[v as usize] = true;
             }
@@ -188,10 +174,7 @@ impl Mesh {
             .windows(2)
             // Coincident fixed vertices never move (real meshes have them on
             // seams, e.g. Mesquite's tire.vtk), so only a free duplicate is an error.
-            .find(|w| {
-                self.points[w[0]] == self.points[w[1]]
-                    && !(self.is_fixed(w[0]) && self.is_fixed(w[1]))
-            })
+            .find(|w| self.points[w[0]] == self.points[w[1]] && !(self.is_fixed(w[0]) && self.is_fixed(w[1])))
         {
             let (a, b) = (w[0].min(w[1]), w[0].max(w[1]));
             return Err(Error::InvalidMesh(format!(

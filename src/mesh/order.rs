@@ -58,16 +58,7 @@ mod tests {
     #[test]
     fn reverse_bfs_visits_every_vertex_once_and_ends_at_the_farthest_boundary_vertex() {
         // a path 0-1-2-3 plus an isolated component 4-5
-        let pairs = [
-            (0, 1),
-            (1, 0),
-            (1, 2),
-            (2, 1),
-            (2, 3),
-            (3, 2),
-            (4, 5),
-            (5, 4),
-        ];
+        let pairs = [(0, 1), (1, 0), (1, 2), (2, 1), (2, 3), (3, 2), (4, 5), (5, 4)];
         let nb = Csr::from_pairs(6, pairs.iter().copied());
         let pts: Vec<[f64; 3]> = (0..6).map(|i| [i as f64, 0.0, 0.0]).collect();
         let boundary = [true, false, false, true, true, true];

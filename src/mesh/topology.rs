@@ -45,8 +45,7 @@ impl Csr {
 
 /// Elements incident to each vertex, in increasing element order.
 pub fn vertex_elements(mesh: &Mesh) -> Csr {
-    let pairs =
-        (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
+    let pairs = (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
     Csr::from_pairs(mesh.num_points(), pairs)
 }
 
@@ -136,9 +135,7 @@ mod tests {
     #[test]
     fn quad_patch_skin_leaves_centre_free() {
         // 3x3 vertices, 2x2 quads: only the centre is interior
-        let pts = (0..9)
-            .map(|i| [(i % 3) as f64, (i / 3) as f64, 0.0])
-            .collect();
+        let pts = (0..9).map(|i| [(i % 3) as f64, (i / 3) as f64, 0.0]).collect();
         let mut m = Mesh::new(pts);
         for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
             let v = a + 3 * b;

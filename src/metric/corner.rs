@@ -10,9 +10,7 @@ pub fn ideal_corner(kind: ElementKind) -> Mat3 {
     let h = 3f64.sqrt() / 2.0;
     match kind {
         ElementKind::Triangle => [[1.0, 0.5, 0.0], [0.0, h, 0.0], [0.0, 0.0, 1.0]],
-        ElementKind::Quadrilateral | ElementKind::Hexahedron => {
-            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-        }
+        ElementKind::Quadrilateral | ElementKind::Hexahedron => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
         ElementKind::Tetrahedron => [
             [1.0, 0.5, 0.5],
             [0.0, h, 3f64.sqrt() / 6.0],
@@ -83,12 +81,7 @@ mod tests {
     fn ideal_elements_have_eta_one() {
         let h = 3f64.sqrt() / 2.0;
         let tri = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, h, 0.0]];
-        let quad = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
+        let quad = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
         let mut hex = [[0.0; 3]; 8];
         for (i, p) in hex.iter_mut().enumerate() {
             *p = [quad[i % 4][0], quad[i % 4][1], (i / 4) as f64];
@@ -110,12 +103,7 @@ mod tests {
 
     #[test]
     fn tet_value_matches_qr_form() {
-        let x = [
-            [0.1, 0.0, 0.2],
-            [1.0, 0.1, 0.0],
-            [0.3, 0.9, 0.1],
-            [0.2, 0.3, 0.7],
-        ];
+        let x = [[0.1, 0.0, 0.2], [1.0, 0.1, 0.0], [0.3, 0.9, 0.1], [0.2, 0.3, 0.7]];
         let a = element_eta(ElementKind::Tetrahedron, &x).unwrap();
         let b = TetShape::equilateral().value(&x).unwrap();
         assert!((a - b).abs() < 1e-13 * b);

@@ -188,8 +188,7 @@ impl TetShape {
                 let mut blk = [[0.0; 3]; 3];
                 for i in 0..3 {
                     for q in 0..3 {
-                        blk[i][q] = cross * (sv[k][i] * cv[l][q] + cv[k][i] * sv[l][q])
-                            + cc * cv[k][i] * cv[l][q];
+                        blk[i][q] = cross * (sv[k][i] * cv[l][q] + cv[k][i] * sv[l][q]) + cc * cv[k][i] * cv[l][q];
                     }
                     blk[i][i] += diag * bkl;
                 }
@@ -304,9 +303,8 @@ fn hess_s(p: &SParts) -> Hess9 {
                 for l in 0..3 {
                     let a = 3 * i + j;
                     let b = 3 * k + l;
-                    let mut v =
-                        -(4.0 / 9.0) * dm53 * (p.s[i][j] * p.cof[k][l] + p.cof[i][j] * p.s[k][l])
-                            + (10.0 / 27.0) * p.f * dm83 * p.cof[i][j] * p.cof[k][l];
+                    let mut v = -(4.0 / 9.0) * dm53 * (p.s[i][j] * p.cof[k][l] + p.cof[i][j] * p.s[k][l])
+                        + (10.0 / 27.0) * p.f * dm83 * p.cof[i][j] * p.cof[k][l];
                     if a == b {
                         v += 2.0 * h / 3.0;
                     }

@@ -64,9 +64,7 @@ impl Patch {
         let mut g = [0.0; 3];
         let mut h = [[0.0; 3]; 3];
         for (rest, k) in &self.rest {
-            let (eta, ge, he) = p
-                .shape
-                .vertex_gradient_hessian_of_s(p.shape.s_with(rest, *k, at), *k)?;
+            let (eta, ge, he) = p.shape.vertex_gradient_hessian_of_s(p.shape.s_with(rest, *k, at), *k)?;
             f += eta;
             for i in 0..3 {
                 g[i] += ge[i];
@@ -82,13 +80,7 @@ impl Patch {
 /// One safeguarded Newton step for vertex `v`: the accepted new position, or
 /// `None` when no trial point decreased the patch objective enough.
 #[inline]
-pub fn newton_step(
-    p: &Problem,
-    x: &[Vec3],
-    v: usize,
-    ls: &LineSearch,
-    patch: &mut Patch,
-) -> Option<Vec3> {
+pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &mut Patch) -> Option<Vec3> {
     patch.load(p, x, v);
     let (f0, g, h) = patch.gradient_hessian(p, &x[v])?;
     let neg_g = [-g[0], -g[1], -g[2]];
@@ -105,11 +97,7 @@ pub fn newton_step(
     }
     let mut alpha = 1.0;
     for _ in 0..=ls.max_backtracks {
-        let trial = [
-            x[v][0] + alpha * d[0],
-            x[v][1] + alpha * d[1],
-            x[v][2] + alpha * d[2],
-        ];
+        let trial = [x[v][0] + alpha * d[0], x[v][1] + alpha * d[1], x[v][2] + alpha * d[2]];
         if let Some(f) = patch.value(p, &trial)
             && f <= f0 + ls.sigma * alpha * slope
         {
@@ -145,12 +133,7 @@ pub fn sweep(p: &Problem, x: &mut [Vec3], ls: &LineSearch, deadline: Option<Inst
 /// One sweep colour by colour: the vertices of a colour share no element, so
 /// their steps are independent and run in parallel (the CPU twin of the GPU
 /// sweep). Returns the largest squared displacement.
-pub fn sweep_colored(
-    p: &Problem,
-    x: &mut [Vec3],
-    ls: &LineSearch,
-    deadline: Option<Instant>,
-) -> f64 {
+pub fn sweep_colored(p: &Problem, x: &mut [Vec3], ls: &LineSearch, deadline: Option<Instant>) -> f64 {
     let mut max_sq: f64 = 0.0;
     for c in 0..p.colors.len() {
         if deadline.is_some_and(|d| Instant::now() >= d) {

@@ -24,19 +24,16 @@ impl BlockCsr {
 
     /// y = A x
     pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
-        y.par_iter_mut()
-            .with_min_len(512)
-            .enumerate()
-            .for_each(|(i, yi)| {
-                let mut acc = [0.0; 3];
-                for s in self.row_offsets[i] as usize..self.row_offsets[i + 1] as usize {
-                    let (b, xj) = (&self.blocks[s], &x[self.cols[s] as usize]);
-                    for r in 0..3 {
-                        acc[r] += b[r][0] * xj[0] + b[r][1] * xj[1] + b[r][2] * xj[2];
-                    }
+        y.par_iter_mut().with_min_len(512).enumerate().for_each(|(i, yi)| {
+            let mut acc = [0.0; 3];
+            for s in self.row_offsets[i] as usize..self.row_offsets[i + 1] as usize {
+                let (b, xj) = (&self.blocks[s], &x[self.cols[s] as usize]);
+                for r in 0..3 {
+                    acc[r] += b[r][0] * xj[0] + b[r][1] * xj[1] + b[r][2] * xj[2];
                 }
-                *yi = acc;
-            });
+            }
+            *yi = acc;
+        });
     }
 
     /// Bytes held (structure and values).
@@ -109,14 +106,8 @@ impl HessianPattern {
             row_offsets.push(cols.len() as u32);
         }
         let slot = |i: u32, j: u32| -> u32 {
-            let (a, b) = (
-                row_offsets[i as usize] as usize,
-                row_offsets[i as usize + 1] as usize,
-            );
-            a as u32
-                + cols[a..b]
-                    .binary_search(&j)
-                    .expect("pattern holds every element pair") as u32
+            let (a, b) = (row_offsets[i as usize] as usize, row_offsets[i as usize + 1] as usize);
+            a as u32 + cols[a..b].binary_search(&j).expect("pattern holds every element pair") as u32
         };
         let slots: Vec<[u32; 16]> = p
             .tets

@@ -37,18 +37,12 @@ impl History {
     pub fn time_to_fraction(&self, fraction: f64) -> Option<f64> {
         let (f0, f1) = (self.first()?.objective, self.last()?.objective);
         let target = f0 - fraction * (f0 - f1);
-        self.records
-            .iter()
-            .find(|r| r.objective <= target)
-            .map(|r| r.seconds)
+        self.records.iter().find(|r| r.objective <= target).map(|r| r.seconds)
     }
 
     /// Time at which the objective first reached `value` or better.
     pub fn time_to_value(&self, value: f64) -> Option<f64> {
-        self.records
-            .iter()
-            .find(|r| r.objective <= value)
-            .map(|r| r.seconds)
+        self.records.iter().find(|r| r.objective <= value).map(|r| r.seconds)
     }
 
     /// CSV with header `iteration,seconds,objective,grad_norm`.

@@ -98,6 +98,8 @@ pub struct Info {
     /// Wall time of the iterations (problem setup excluded).
     pub seconds: f64,
     pub setup_seconds: f64,
+    /// Bytes the solver held: the problem, the positions and the method's own data.
+    pub memory_bytes: usize,
 }
 
 /// Runs `method` from positions `x` (problem numbering), updating them in place.
@@ -117,16 +119,14 @@ pub fn solve(
     }
     p.check_feasible(x)?;
     let mut newton = (method == Method::Newton).then(|| newton::Newton::new(p, params.newton));
-    let setup_seconds =
-        p.setup_time.as_secs_f64() + newton.as_ref().map_or(0.0, |n| n.setup_time.as_secs_f64());
+    let setup_seconds = p.setup_time.as_secs_f64() + newton.as_ref().map_or(0.0, |n| n.setup_time.as_secs_f64());
     let start = Instant::now();
     let deadline = params.time_limit.map(|t| start + t);
     let edge = p.mean_edge_length(x);
     let mut history = History::default();
     let evaluate = |x: &[Vec3]| -> Result<(f64, f64)> {
-        let (f, g) = objective::gradient(p, x).ok_or_else(|| {
-            Error::InvalidMesh("an accepted step inverted an element (solver bug)".into())
-        })?;
+        let (f, g) = objective::gradient(p, x)
+            .ok_or_else(|| Error::InvalidMesh("an accepted step inverted an element (solver bug)".into()))?;
         Ok((f, objective::norm(&g)))
     };
     let (mut f, mut gnorm) = evaluate(x)?;
@@ -159,10 +159,7 @@ pub fn solve(
         let max_sq = match method {
             Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
             Method::BcdColored => bcd::sweep_colored(p, x, &params.line_search, deadline),
-            Method::Newton => newton
-                .as_mut()
-                .expect("built above")
-                .step(p, x, &params.line_search),
+            Method::Newton => newton.as_mut().expect("built above").step(p, x, &params.line_search),
             Method::Laplace => laplace::sweep(p, x, deadline),
         };
         iterations += 1;
@@ -189,6 +186,7 @@ pub fn solve(
         grad_norm: gnorm,
         seconds: start.elapsed().as_secs_f64(),
         setup_seconds,
+        memory_bytes: p.bytes() + std::mem::size_of_val(x) + newton.as_ref().map_or(0, |n| n.bytes()),
     })
 }
 

@@ -146,27 +146,18 @@ fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
 }
 
 fn axpy(alpha: f64, x: &[Vec3], y: &mut [Vec3]) {
-    y.par_iter_mut()
-        .with_min_len(4096)
-        .zip(x)
-        .for_each(|(yi, xi)| {
-            for r in 0..3 {
-                yi[r] += alpha * xi[r];
-            }
-        });
+    y.par_iter_mut().with_min_len(4096).zip(x).for_each(|(yi, xi)| {
+        for r in 0..3 {
+            yi[r] += alpha * xi[r];
+        }
+    });
 }
 
 /// Solves A d = b approximately from d = 0. On negative curvature at the
 /// first iteration the result is the preconditioned right-hand side M^-1 b
 /// (for b = -g: preconditioned steepest descent); later, the direction of
 /// negative curvature itself, with its sign chosen so that d^T b > 0.
-pub fn pcg(
-    a: &dyn LinOp,
-    m: &dyn Precond,
-    b: &[Vec3],
-    d: &mut [Vec3],
-    params: &PcgParams,
-) -> PcgInfo {
+pub fn pcg(a: &dyn LinOp, m: &dyn Precond, b: &[Vec3], d: &mut [Vec3], params: &PcgParams) -> PcgInfo {
     let n = b.len();
     d.iter_mut().for_each(|v| *v = [0.0; 3]);
     let mut r = b.to_vec();
@@ -192,9 +183,7 @@ pub fn pcg(
                 // d already holds the iterate
             } else if k > 0 {
                 let sign = if dot(&p, b) >= 0.0 { 1.0 } else { -1.0 };
-                d.par_iter_mut()
-                    .zip(&p)
-                    .for_each(|(di, pi)| *di = pi.map(|c| sign * c));
+                d.par_iter_mut().zip(&p).for_each(|(di, pi)| *di = pi.map(|c| sign * c));
             } else {
                 d.copy_from_slice(&p);
             }
@@ -219,14 +208,11 @@ pub fn pcg(
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
-        p.par_iter_mut()
-            .with_min_len(4096)
-            .zip(&z)
-            .for_each(|(pi, zi)| {
-                for c in 0..3 {
-                    pi[c] = zi[c] + beta * pi[c];
-                }
-            });
+        p.par_iter_mut().with_min_len(4096).zip(&z).for_each(|(pi, zi)| {
+            for c in 0..3 {
+                pi[c] = zi[c] + beta * pi[c];
+            }
+        });
     }
     PcgInfo {
         iterations: params.max_iter,
