@@ -49,15 +49,17 @@ pub enum Kernel {
     VertexGradient,
     Reduce,
     Bcd,
+    CbrtEval,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 5] = [
+    pub const ALL: [Kernel; 6] = [
         Kernel::MeanRatioEval,
         Kernel::Objective,
         Kernel::VertexGradient,
         Kernel::Reduce,
         Kernel::Bcd,
+        Kernel::CbrtEval,
     ];
 
     pub fn name(self) -> &'static str {
@@ -67,6 +69,7 @@ impl Kernel {
             Kernel::VertexGradient => "vertex_gradient",
             Kernel::Reduce => "reduce",
             Kernel::Bcd => "bcd",
+            Kernel::CbrtEval => "cbrt_eval",
         }
     }
 
@@ -77,6 +80,7 @@ impl Kernel {
             Kernel::VertexGradient => include_str!("../../../shaders/vertex_gradient.wgsl"),
             Kernel::Reduce => include_str!("../../../shaders/reduce.wgsl"),
             Kernel::Bcd => include_str!("../../../shaders/bcd.wgsl"),
+            Kernel::CbrtEval => include_str!("../../../shaders/cbrt_eval.wgsl"),
         }
     }
 
