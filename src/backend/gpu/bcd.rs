@@ -185,6 +185,11 @@ impl<'c> GpuBcd<'c> {
         ctx.check()
     }
 
+    /// Waits until submitted sweeps have run (for timing).
+    pub fn wait(&self) -> Result<()> {
+        self.ctx.wait()
+    }
+
     /// F, |grad F| and the sweep's largest move, read back as a few scalars.
     pub fn evaluate(&mut self) -> Result<Scalars> {
         let ctx = self.ctx;
