@@ -285,3 +285,29 @@ fn full_solve_matches_cpu_f32() {
     // f32 cannot resolve |grad F| = 1e-6 at F ~ 1.3
     full_solve(Precision::F32, 1e-4, 1e-5);
 }
+
+#[test]
+fn unknown_adapter_name_is_an_error_listing_what_was_found() {
+    let e = GpuContext::new(&GpuOptions {
+        adapter: Some("no-such-adapter-xyz".into()),
+        precision: Precision::Auto,
+    })
+    .err()
+    .expect("no adapter is called that");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("no-such-adapter-xyz") && msg.contains("adapters:"),
+        "{msg}"
+    );
+    let Some(ctx) = context(Precision::Auto) else {
+        return;
+    };
+    let listed = gpu::list_adapters();
+    assert!(
+        listed
+            .iter()
+            .any(|a| ctx.adapter_name().starts_with(&a.name)),
+        "{listed:?}"
+    );
+    eprintln!("{listed:#?}");
+}
