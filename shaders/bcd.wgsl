@@ -23,6 +23,11 @@ struct Color {
 // squared displacement of each vertex in this sweep (0 when it stayed)
 @group(0) @binding(7) var<storage, read_write> disp: array<real>;
 
+// The vertex's S-without-its-term per element, as the CPU's `Patch` keeps
+// them; vertices with more elements than this recompute them per trial.
+const CACHE: u32 = 32u;
+var<private> rest_cache: array<mat3x3<real>, CACHE>;
+
 fn point(v: u32) -> vec3<real> {
     return vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]);
 }
@@ -39,10 +44,18 @@ fn rest_of(e: u32, k: u32, b: array<vec3<real>, 4>) -> mat3x3<real> {
 // `Patch::value`: the sum of eta over the vertex's elements with it at `at`.
 fn patch_value(v: u32, at: vec3<real>, b: array<vec3<real>, 4>) -> Eta {
     var sum = real(0.0);
-    for (var it = inc_offsets[v]; it < inc_offsets[v + 1u]; it++) {
+    let first = inc_offsets[v];
+    let cached = inc_offsets[v + 1u] - first <= CACHE;
+    for (var it = first; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items[it];
         let k = packed & 3u;
-        let r = value_of_s(s_with(rest_of(packed >> 2u, k, b), b[k], at));
+        var rest: mat3x3<real>;
+        if cached {
+            rest = rest_cache[it - first];
+        } else {
+            rest = rest_of(packed >> 2u, k, b);
+        }
+        let r = value_of_s(s_with(rest, b[k], at));
         if !r.ok {
             return Eta(real(0.0), false);
         }
@@ -70,10 +83,15 @@ fn main(
     var f0 = real(0.0);
     var g = vec3<real>(real(0.0));
     var h = mat3x3<real>();
-    for (var it = inc_offsets[v]; it < inc_offsets[v + 1u]; it++) {
+    let first = inc_offsets[v];
+    for (var it = first; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items[it];
         let k = packed & 3u;
-        let r = vertex_gradient_hessian_of_s(s_with(rest_of(packed >> 2u, k, b), b[k], xv), b[k]);
+        let rest = rest_of(packed >> 2u, k, b);
+        if it - first < CACHE {
+            rest_cache[it - first] = rest;
+        }
+        let r = vertex_gradient_hessian_of_s(s_with(rest, b[k], xv), b[k]);
         if !r.ok {
             return;
         }
