@@ -34,6 +34,10 @@ pub enum Error {
     #[error("unsupported: {0}")]
     Unsupported(String),
 
+    /// The GPU backend failed: no usable adapter, a device limit, a lost device.
+    #[error("GPU: {0}")]
+    Gpu(String),
+
     /// A caller passed an unusable option.
     #[error("invalid argument: {0}")]
     InvalidArgument(String),

@@ -3,6 +3,7 @@
 //! Data flows `io -> Mesh -> Problem -> solve -> positions -> io`; see the
 //! README for the command-line tool and a library example.
 
+pub mod backend;
 pub mod compare;
 pub mod error;
 pub mod generate;

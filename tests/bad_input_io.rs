@@ -120,10 +120,7 @@ fn vertex_index_out_of_range() {
     expect_err(
         "range.vtk",
         &vtk(PTS, cells, "CELL_TYPES 1\n10\n"),
-        &[
-            "line 11",
-            "element 0 refers to vertex 812, but the file has 4 points",
-        ],
+        &["line 11", "element 0 refers to vertex 812, but the file has 4 points"],
     );
 }
 
@@ -179,17 +176,9 @@ fn truncated_msh41() {
     io::write(&p, &small_tets(), Format::Msh41Ascii, &[]).unwrap();
     let text = std::fs::read_to_string(&p).unwrap();
     let cut = text.find("$EndNodes").unwrap() - 20;
-    expect_err(
-        "trunc41.msh",
-        &text.as_bytes()[..cut],
-        &["unexpected end of file"],
-    );
+    expect_err("trunc41.msh", &text.as_bytes()[..cut], &["unexpected end of file"]);
     let cut = text.find("$EndElements").unwrap() - 3;
-    expect_err(
-        "trunc41e.msh",
-        &text.as_bytes()[..cut],
-        &["unexpected end of file"],
-    );
+    expect_err("trunc41e.msh", &text.as_bytes()[..cut], &["unexpected end of file"]);
 }
 
 #[test]
@@ -207,13 +196,10 @@ fn msh_binary_bad_endianness_marker() {
 
 #[test]
 fn msh_unknown_and_pyramid_elements() {
-    let head = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n5 0.5 0.5 1\n$EndNodes\n";
+    let head =
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n5 0.5 0.5 1\n$EndNodes\n";
     let pyr = format!("{head}$Elements\n1\n17 7 2 0 1 1 2 3 4 5\n$EndElements\n");
-    expect_err(
-        "pyr.msh",
-        pyr.as_bytes(),
-        &["element 17 is a pyramid", "line 14"],
-    );
+    expect_err("pyr.msh", pyr.as_bytes(), &["element 17 is a pyramid", "line 14"]);
     let tet10 = format!("{head}$Elements\n1\n9 11 2 0 1 1 2 3 4 5 1 2 3 4 5\n$EndElements\n");
     expect_err(
         "tet10.msh",
@@ -239,11 +225,7 @@ fn msh41_sparse_node_tags_are_renumbered() {
 #[test]
 fn medit_missing_vertices() {
     let text = "MeshVersionFormatted 2\nDimension 3\nTetrahedra\n1\n1 2 3 4 0\nEnd\n";
-    expect_err(
-        "novert.mesh",
-        text.as_bytes(),
-        &["missing Vertices", "line 3"],
-    );
+    expect_err("novert.mesh", text.as_bytes(), &["missing Vertices", "line 3"]);
     let text = "MeshVersionFormatted 2\nDimension 3\nEnd\n";
     expect_err("novert2.mesh", text.as_bytes(), &["missing Vertices"]);
 }
@@ -273,7 +255,8 @@ fn elements_but_zero_points() {
         &vtk("POINTS 0 double\n", TET, "CELL_TYPES 1\n10\n"),
         &["0 points"],
     );
-    let msh = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n0\n$EndNodes\n$Elements\n1\n1 4 2 0 1 1 2 3 4\n$EndElements\n";
+    let msh =
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n0\n$EndNodes\n$Elements\n1\n1 4 2 0 1 1 2 3 4\n$EndElements\n";
     expect_err("nopts.msh", msh.as_bytes(), &["refers to node 1"]);
 }
 
@@ -291,11 +274,7 @@ fn vtu_errors() {
     let bad = text.replace("0.0 0.0 1.0", "0.0 zz 1.0");
     expect_err("zz.vtu", bad.as_bytes(), &["'zz'", "line"]);
     let range = text.replacen("1 2 3 4", "1 2 3 44", 1);
-    expect_err(
-        "r.vtu",
-        range.as_bytes(),
-        &["refers to vertex 44", "6 points"],
-    );
+    expect_err("r.vtu", range.as_bytes(), &["refers to vertex 44", "6 points"]);
     let cut = &text[..text.len() / 2];
     expect_err("cut.vtu", cut.as_bytes(), &["cut.vtu"]);
     let app = text.replacen("format=\"ascii\"", "format=\"appended\" offset=\"0\"", 1);
@@ -421,9 +400,7 @@ fn no_panics_on_truncated_or_corrupted_files() {
 
 #[test]
 fn vtk_binary_51_layout_reads() {
-    let mut b =
-        b"# vtk DataFile Version 5.1\nt\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
-            .to_vec();
+    let mut b = b"# vtk DataFile Version 5.1\nt\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n".to_vec();
     for x in [0f32, 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1.] {
         b.extend_from_slice(&x.to_be_bytes());
     }
@@ -437,9 +414,7 @@ fn vtk_binary_51_layout_reads() {
     }
     b.extend_from_slice(b"\nCELL_TYPES 1\n");
     b.extend_from_slice(&10i32.to_be_bytes());
-    b.extend_from_slice(
-        b"\nPOINT_DATA 4\nSCALARS fixed unsigned_char\nLOOKUP_TABLE default\n\x01\x00\x00\x01\n",
-    );
+    b.extend_from_slice(b"\nPOINT_DATA 4\nSCALARS fixed unsigned_char\nLOOKUP_TABLE default\n\x01\x00\x00\x01\n");
     let dir = tempfile::tempdir().unwrap();
     let p = write_file(dir.path(), "b51.vtk", &b);
     let m = io::read(&p).unwrap();

@@ -28,10 +28,7 @@ fn demo_runs_without_arguments() {
     let o = meshsmooth(&["demo", "--cells", "6"]);
     assert!(o.status.success(), "{}", text(&o));
     let out = text(&o);
-    assert!(
-        out.contains("initial mesh") && out.contains("optimised mesh"),
-        "{out}"
-    );
+    assert!(out.contains("initial mesh") && out.contains("optimised mesh"), "{out}");
     assert!(out.contains("converged"), "{out}");
 }
 
@@ -77,19 +74,12 @@ fn generate_smooth_and_quality_work_together() {
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
     assert!(rows.len() > 2);
-    assert_eq!(
-        csv.lines().next().unwrap(),
-        "iteration,seconds,objective,grad_norm"
-    );
+    assert_eq!(csv.lines().next().unwrap(), "iteration,seconds,objective,grad_norm");
     for w in rows.windows(2) {
         assert_eq!(w[1][0], w[0][0] + 1.0);
         assert!(w[1][2] <= w[0][2], "objective rose");
     }
-    assert!(
-        rows.last().unwrap()[3] < 1e-6,
-        "did not converge: {:?}",
-        rows.last()
-    );
+    assert!(rows.last().unwrap()[3] < 1e-6, "did not converge: {:?}", rows.last());
 
     let o = meshsmooth(&["quality", s(&output), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
@@ -126,15 +116,7 @@ fn laplace_and_colored_methods_run() {
     );
     for method in ["laplace", "bcd-colored"] {
         let out = dir.path().join(format!("{method}.mesh"));
-        let o = meshsmooth(&[
-            "smooth",
-            s(&input),
-            "-o",
-            s(&out),
-            "--method",
-            method,
-            "--quiet",
-        ]);
+        let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--method", method, "--quiet"]);
         assert!(o.status.success(), "{method}: {}", text(&o));
         assert!(text(&o).contains(method));
         assert!(out.exists());
@@ -164,11 +146,7 @@ fn refuses_to_overwrite_its_input() {
     let original = std::fs::read(&input).unwrap();
     let o = meshsmooth(&["smooth", s(&input), "-o", s(&input)]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(
-        text(&o).contains("never overwrites its input"),
-        "{}",
-        text(&o)
-    );
+    assert!(text(&o).contains("never overwrites its input"), "{}", text(&o));
     assert_eq!(std::fs::read(&input).unwrap(), original);
 }
 

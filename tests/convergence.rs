@@ -35,12 +35,7 @@ fn bcd_converges_on_perturbed_20_box_to_the_known_optimum() {
     let fixed = topology::fixed_vertices(&mesh);
     let info = smooth(&mut mesh, Method::Bcd, &Params::default());
 
-    assert_eq!(
-        info.stop,
-        StopReason::Converged,
-        "{:?}",
-        info.history.last()
-    );
+    assert_eq!(info.stop, StopReason::Converged, "{:?}", info.history.last());
     assert!(info.grad_norm < 1e-6);
     let h = &info.history.records;
     assert!(
@@ -56,11 +51,7 @@ fn bcd_converges_on_perturbed_20_box_to_the_known_optimum() {
             w[1]
         );
     }
-    assert!(
-        (info.objective - BOX_OPTIMUM).abs() < 1e-5,
-        "F = {}",
-        info.objective
-    );
+    assert!((info.objective - BOX_OPTIMUM).abs() < 1e-5, "F = {}", info.objective);
     for v in 0..mesh.num_points() {
         if fixed[v] {
             assert_eq!(mesh.points[v], start[v], "fixed vertex {v} moved");
@@ -201,16 +192,11 @@ fn limits_stop_the_solver_with_a_valid_mesh() {
 #[test]
 fn an_inverted_start_is_refused_with_element_ids() {
     let mut mesh = generate::tet_box(3, 3, 3, [3.0; 3]);
-    let centre = mesh
-        .points
-        .iter()
-        .position(|p| *p == [1.0, 1.0, 1.0])
-        .unwrap();
+    let centre = mesh.points.iter().position(|p| *p == [1.0, 1.0, 1.0]).unwrap();
     mesh.points[centre] = [2.6, 2.6, 2.6];
     let bad = metric::inverted_elements(&mesh, &mesh.points);
     assert!(!bad.is_empty());
-    let err =
-        solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap_err();
+    let err = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap_err();
     let msg = err.to_string();
     assert!(msg.contains(&format!("{} inverted", bad.len())), "{msg}");
     assert!(msg.contains(&bad[0].to_string()), "{msg}");

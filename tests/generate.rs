@@ -92,10 +92,7 @@ fn perturbations_leave_boundary_and_never_invert() {
             let stats = perturb(&mut m, &opts(p, 1.0, 7)).unwrap();
             assert!(inverted_elements(&m, &m.points).is_empty(), "{p}");
             for (v, _) in fixed.iter().enumerate().filter(|(_, f)| **f) {
-                assert_eq!(
-                    m.points[v], base.points[v],
-                    "{p}: boundary vertex {v} moved"
-                );
+                assert_eq!(m.points[v], base.points[v], "{p}: boundary vertex {v} moved");
             }
             assert_eq!(stats.selected, 9 * 9 * 9, "{p}");
             assert_eq!(stats.moved + stats.untouched, stats.selected, "{p}");
@@ -129,11 +126,7 @@ fn perturbation_is_deterministic_per_seed() {
     let base = tet_box(8, 8, 8, [1.0; 3]);
     let run = |seed| {
         let mut m = base.clone();
-        perturb(
-            &mut m,
-            &opts(Perturbation::Random { alpha: 0.3 }, 0.5, seed),
-        )
-        .unwrap();
+        perturb(&mut m, &opts(Perturbation::Random { alpha: 0.3 }, 0.5, seed)).unwrap();
         m.points
     };
     let (a, b, c) = (run(42), run(42), run(43));
@@ -150,22 +143,10 @@ fn fraction_moves_that_share_of_free_vertices() {
     let base = tet_box(10, 10, 10, [1.0; 3]);
     for fraction in [0.01, 0.1, 0.25] {
         let mut m = base.clone();
-        let stats = perturb(
-            &mut m,
-            &opts(Perturbation::Random { alpha: 0.2 }, fraction, 5),
-        )
-        .unwrap();
-        let changed = m
-            .points
-            .iter()
-            .zip(&base.points)
-            .filter(|(p, q)| p != q)
-            .count();
+        let stats = perturb(&mut m, &opts(Perturbation::Random { alpha: 0.2 }, fraction, 5)).unwrap();
+        let changed = m.points.iter().zip(&base.points).filter(|(p, q)| p != q).count();
         let expected = fraction * 729.0;
-        assert!(
-            (stats.selected as f64 - expected).abs() <= 1.0,
-            "{fraction}: {stats:?}"
-        );
+        assert!((stats.selected as f64 - expected).abs() <= 1.0, "{fraction}: {stats:?}");
         assert!(
             (changed as f64 - expected).abs() <= 0.05 * expected + 1.0,
             "{fraction}: {changed}"
@@ -177,17 +158,12 @@ fn fraction_moves_that_share_of_free_vertices() {
 fn planar_meshes_move_in_plane() {
     // 5x5 quads at z = 2
     let n = 6;
-    let pts = (0..n * n)
-        .map(|i| [(i % n) as f64, (i / n) as f64, 2.0])
-        .collect();
+    let pts = (0..n * n).map(|i| [(i % n) as f64, (i / n) as f64, 2.0]).collect();
     let mut m = Mesh::new(pts);
     for j in 0..n - 1 {
         for i in 0..n - 1 {
             let v = (i + n * j) as u32;
-            m.push_element(
-                ElementKind::Quadrilateral,
-                &[v, v + 1, v + 1 + n as u32, v + n as u32],
-            );
+            m.push_element(ElementKind::Quadrilateral, &[v, v + 1, v + 1 + n as u32, v + n as u32]);
         }
     }
     let base = m.clone();
@@ -205,22 +181,10 @@ fn perturb_refuses_bad_options_and_inverted_meshes() {
     let base = tet_box(3, 3, 3, [1.0; 3]);
     for fraction in [0.0, -0.1, 1.5, f64::NAN] {
         let mut m = base.clone();
-        assert!(
-            perturb(
-                &mut m,
-                &opts(Perturbation::Random { alpha: 0.1 }, fraction, 0)
-            )
-            .is_err()
-        );
+        assert!(perturb(&mut m, &opts(Perturbation::Random { alpha: 0.1 }, fraction, 0)).is_err());
     }
     let mut m = base.clone();
-    assert!(
-        perturb(
-            &mut m,
-            &opts(Perturbation::Random { alpha: f64::NAN }, 1.0, 0)
-        )
-        .is_err()
-    );
+    assert!(perturb(&mut m, &opts(Perturbation::Random { alpha: f64::NAN }, 1.0, 0)).is_err());
     let mut m = base.clone();
     m.points[0][0] = 0.9; // folds the corner cell
     assert!(perturb(&mut m, &opts(Perturbation::Random { alpha: 0.1 }, 1.0, 0)).is_err());
@@ -235,10 +199,7 @@ fn perturbation_text_round_trips() {
     }
     assert_eq!(
         "osc:0.1:3.5".parse::<Perturbation>().unwrap(),
-        Perturbation::Oscillatory {
-            alpha: 0.1,
-            omega: 3.5
-        }
+        Perturbation::Oscillatory { alpha: 0.1, omega: 3.5 }
     );
     let p = Perturbation::Random { alpha: 0.1 + 0.2 };
     assert_eq!(p.to_string().parse::<Perturbation>().unwrap(), p);

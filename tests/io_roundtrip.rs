@@ -140,11 +140,7 @@ fn test_meshes() -> Vec<(&'static str, Mesh)> {
     );
     let tri_z5 = mesh2d(4, 5.0, |_| Triangle);
     let quad = mesh2d(4, 0.0, |_| Quadrilateral);
-    let mixed2d = mesh2d(
-        4,
-        0.0,
-        |c| if c % 2 == 0 { Quadrilateral } else { Triangle },
-    );
+    let mixed2d = mesh2d(4, 0.0, |c| if c % 2 == 0 { Quadrilateral } else { Triangle });
     let mut grouped2d = mesh2d(4, 0.0, |c| if c < 8 { Quadrilateral } else { Triangle });
     grouped2d.fixed = (0..grouped2d.num_points()).map(|v| v < 5).collect();
     let meshes = vec![
@@ -215,19 +211,14 @@ fn every_format_round_trips_every_mesh() {
             assert_eq!(fixed(&got), fixed(&m), "{ctx}: fixed");
             match f {
                 Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary => {
-                    assert!(
-                        got.lower.is_empty(),
-                        "{ctx}: VTK must not carry lower cells"
-                    )
+                    assert!(got.lower.is_empty(), "{ctx}: VTK must not carry lower cells")
                 }
                 Format::Medit => assert_eq!(got.lower, m.lower, "{ctx}: lower"),
                 _ => {
                     // Gmsh keeps lower cells and adds point cells for other fixed vertices.
                     assert_eq!(got.lower[..m.lower.len()], m.lower[..], "{ctx}: lower");
                     assert!(
-                        got.lower[m.lower.len()..]
-                            .iter()
-                            .all(|(k, _)| *k == LowerKind::Vertex),
+                        got.lower[m.lower.len()..].iter().all(|(k, _)| *k == LowerKind::Vertex),
                         "{ctx}: extra lower cells"
                     );
                 }
@@ -249,11 +240,7 @@ fn medit_writes_2d_only_for_planar_z0_meshes() {
         ("tri-z5", "Dimension 3"),
         ("tet", "Dimension 3"),
     ] {
-        let m = test_meshes()
-            .into_iter()
-            .find(|(n, _)| *n == name)
-            .unwrap()
-            .1;
+        let m = test_meshes().into_iter().find(|(n, _)| *n == name).unwrap().1;
         let p = dir.path().join(format!("{name}.mesh"));
         io::write(&p, &m, Format::Medit, &[]).unwrap();
         let text = std::fs::read_to_string(&p).unwrap();
@@ -265,19 +252,12 @@ fn medit_writes_2d_only_for_planar_z0_meshes() {
 fn cell_data_is_written_to_vtk_and_vtu() {
     let dir = tempfile::tempdir().unwrap();
     let m = mesh3d(2, 1.0, |_| ElementKind::Hexahedron);
-    let q: Vec<f64> = (0..m.num_elements())
-        .map(|e| 1.0 + e as f64 / 3.0)
-        .collect();
+    let q: Vec<f64> = (0..m.num_elements()).map(|e| 1.0 + e as f64 / 3.0).collect();
     let cd = [CellData {
         name: "quality",
         values: &q,
     }];
-    for f in [
-        Format::VtkAscii,
-        Format::VtkBinary,
-        Format::VtuAscii,
-        Format::VtuBinary,
-    ] {
+    for f in [Format::VtkAscii, Format::VtkBinary, Format::VtuAscii, Format::VtuBinary] {
         let p = dir.path().join(format!("cd-{f}.{}", ext(f)));
         io::write(&p, &m, f, &cd).unwrap();
         let bytes = std::fs::read(&p).unwrap();
@@ -297,29 +277,12 @@ fn format_names_and_extensions() {
         assert_eq!(Format::from_name(f.name()), Some(f));
     }
     assert_eq!(Format::from_name("stl"), None);
-    assert_eq!(
-        Format::from_path(Path::new("a/b.VTK")).unwrap(),
-        Format::VtkAscii
-    );
-    assert_eq!(
-        Format::from_path(Path::new("b.vtu")).unwrap(),
-        Format::VtuAscii
-    );
-    assert_eq!(
-        Format::from_path(Path::new("b.msh")).unwrap(),
-        Format::Msh41Ascii
-    );
-    assert_eq!(
-        Format::from_path(Path::new("b.mesh")).unwrap(),
-        Format::Medit
-    );
-    let e = Format::from_path(Path::new("b.stl"))
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("b.stl") && e.contains(".vtk") && e.contains(".mesh"),
-        "{e}"
-    );
+    assert_eq!(Format::from_path(Path::new("a/b.VTK")).unwrap(), Format::VtkAscii);
+    assert_eq!(Format::from_path(Path::new("b.vtu")).unwrap(), Format::VtuAscii);
+    assert_eq!(Format::from_path(Path::new("b.msh")).unwrap(), Format::Msh41Ascii);
+    assert_eq!(Format::from_path(Path::new("b.mesh")).unwrap(), Format::Medit);
+    let e = Format::from_path(Path::new("b.stl")).unwrap_err().to_string();
+    assert!(e.contains("b.stl") && e.contains(".vtk") && e.contains(".mesh"), "{e}");
 }
 
 #[test]
@@ -353,12 +316,7 @@ fn readme_rows(readme: &str) -> Vec<(String, usize, usize, Option<usize>)> {
             }
             let (v, e) = cols.get(2)?.split_once('/')?;
             let fixed = cols.get(4)?.parse().ok();
-            Some((
-                file.to_string(),
-                v.trim().parse().ok()?,
-                e.trim().parse().ok()?,
-                fixed,
-            ))
+            Some((file.to_string(), v.trim().parse().ok()?, e.trim().parse().ok()?, fixed))
         })
         .collect()
 }
@@ -367,10 +325,7 @@ fn readme_rows(readme: &str) -> Vec<(String, usize, usize, Option<usize>)> {
 fn real_meshes_read_with_documented_counts() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
     let Ok(readme) = std::fs::read_to_string(dir.join("README.md")) else {
-        println!(
-            "note: {} not found; skipping the real-mesh test",
-            dir.display()
-        );
+        println!("note: {} not found; skipping the real-mesh test", dir.display());
         return;
     };
     let rows = readme_rows(&readme);
@@ -386,11 +341,7 @@ fn real_meshes_read_with_documented_counts() {
         let m = io::read(&path).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!((m.num_points(), m.num_elements()), (nv, ne), "{file}");
         if let Some(nf) = nfixed {
-            assert_eq!(
-                fixed(&m).iter().filter(|&&f| f).count(),
-                nf,
-                "{file}: fixed"
-            );
+            assert_eq!(fixed(&m).iter().filter(|&&f| f).count(), nf, "{file}: fixed");
         }
         // And they survive a binary round trip.
         let out = tmp.path().join("rt.vtu");

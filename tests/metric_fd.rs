@@ -71,8 +71,7 @@ fn check_derivatives(shape: &TetShape, tets: &[Tet]) {
                     p
                 };
                 let fd4 = |f: &dyn Fn(&Tet) -> f64| {
-                    (-f(&at(2.0)) + 8.0 * f(&at(1.0)) - 8.0 * f(&at(-1.0)) + f(&at(-2.0)))
-                        / (12.0 * step)
+                    (-f(&at(2.0)) + 8.0 * f(&at(1.0)) - 8.0 * f(&at(-1.0)) + f(&at(-2.0))) / (12.0 * step)
                 };
                 let fd = fd4(&|t| shape.value(t).unwrap());
                 let e = rel_err(fd, g[k][i], gscale);
@@ -173,11 +172,7 @@ fn mean_ratio_is_invariant_under_translation_rotation_and_scaling() {
         let moved = t.map(|p| [p[0] + 12.5, p[1] - 3.0, p[2] + 1e3]);
         let rotated = t.map(rot);
         let scaled = t.map(|p| p.map(|v| v * 37.0));
-        for (name, other) in [
-            ("translated", moved),
-            ("rotated", rotated),
-            ("scaled", scaled),
-        ] {
+        for (name, other) in [("translated", moved), ("rotated", rotated), ("scaled", scaled)] {
             let e = shape.value(&other).unwrap();
             assert!((e - eta).abs() < 1e-10 * eta, "{name}: {e} vs {eta}");
         }
@@ -222,10 +217,7 @@ fn structured_hessian_blocks_equal_the_generic_hessian() {
                 for i in 0..3 {
                     for q in 0..3 {
                         let (a, b) = (blocks[k][l][i][q], h[3 * k + i][3 * l + q]);
-                        assert!(
-                            (a - b).abs() <= 1e-13 * scale,
-                            "block ({k},{l}) [{i}][{q}]: {a} vs {b}"
-                        );
+                        assert!((a - b).abs() <= 1e-13 * scale, "block ({k},{l}) [{i}][{q}]: {a} vs {b}");
                     }
                 }
             }

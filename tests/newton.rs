@@ -43,10 +43,7 @@ fn random_symmetric(n: usize, rng: &mut ChaCha8Rng, shift: f64) -> Vec<Vec<f64>>
     (0..m)
         .map(|i| {
             (0..m)
-                .map(|j| {
-                    (0..m).map(|k| b[k][i] * b[k][j]).sum::<f64>()
-                        + if i == j { shift } else { 0.0 }
-                })
+                .map(|j| (0..m).map(|k| b[k][i] * b[k][j]).sum::<f64>() + if i == j { shift } else { 0.0 })
                 .collect()
         })
         .collect()
@@ -90,9 +87,7 @@ fn pcg_solves_random_spd_block_systems_like_a_dense_solve() {
     for n in [1, 4, 12] {
         let a = random_symmetric(n, &mut rng, 0.5);
         let m = dense_blocks(&a);
-        let b: Vec<Vec3> = (0..n)
-            .map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0)))
-            .collect();
+        let b: Vec<Vec3> = (0..n).map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0))).collect();
         let mut d = vec![[0.0; 3]; n];
         let info = pcg(
             &m,
@@ -149,13 +144,7 @@ fn pcg_returns_a_descent_direction_of_negative_curvature_on_indefinite_systems()
     lambda[0] = -0.5;
     let (a, q) = with_spectrum(&lambda, &mut rng);
     let coef: Vec<f64> = (0..3 * n)
-        .map(|k| {
-            if k == 0 {
-                1e-3
-            } else {
-                rng.random_range(0.5..1.0)
-            }
-        })
+        .map(|k| if k == 0 { 1e-3 } else { rng.random_range(0.5..1.0) })
         .collect();
     let bf: Vec<f64> = (0..3 * n)
         .map(|i| (0..3 * n).map(|k| q[k][i] * coef[k]).sum())
@@ -267,10 +256,7 @@ fn newton_and_bcd_reach_the_same_vertex_positions() {
         .zip(&b.points)
         .map(|(u, v)| (0..3).map(|i| (u[i] - v[i]).powi(2)).sum::<f64>().sqrt())
         .fold(0.0, f64::max);
-    assert!(
-        worst < 1e-4 * edge,
-        "largest difference {worst} vs mean edge {edge}"
-    );
+    assert!(worst < 1e-4 * edge, "largest difference {worst} vs mean edge {edge}");
     for w in na.history.records.windows(2) {
         assert!(w[1].objective <= w[0].objective);
     }

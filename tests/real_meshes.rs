@@ -36,15 +36,10 @@ fn bcd_matches_mesquite_on_every_tetrahedral_mesh() {
         let mut mesh = io::read(&path).unwrap_or_else(|e| panic!("{e}"));
         let fixed = topology::fixed_vertices(&mesh);
         let start = mesh.points.clone();
-        let info =
-            solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap();
+        let info = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap();
         eprintln!(
             "{name}: F {:.6} -> {:.6} (Mesquite {mesquite_f}) in {} sweeps, {:.2} s, {:?}",
-            info.history.records[0].objective,
-            info.objective,
-            info.iterations,
-            info.seconds,
-            info.stop
+            info.history.records[0].objective, info.objective, info.iterations, info.seconds, info.stop
         );
         assert_eq!(info.stop, StopReason::Converged, "{name}");
         assert!(
@@ -52,10 +47,7 @@ fn bcd_matches_mesquite_on_every_tetrahedral_mesh() {
             "{name}: F = {} vs Mesquite {mesquite_f}",
             info.objective
         );
-        assert!(
-            metric::inverted_elements(&mesh, &mesh.points).is_empty(),
-            "{name}"
-        );
+        assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty(), "{name}");
         for v in 0..mesh.num_points() {
             if fixed[v] {
                 assert_eq!(mesh.points[v], start[v], "{name}: fixed vertex {v} moved");
@@ -67,9 +59,7 @@ fn bcd_matches_mesquite_on_every_tetrahedral_mesh() {
 #[test]
 fn meshes_the_optimiser_cannot_take_are_refused_clearly() {
     let Some(dir) = meshes_dir() else { return };
-    let err = io::read(&dir.join("mixed-hex-pyr-tet.vtk"))
-        .unwrap_err()
-        .to_string();
+    let err = io::read(&dir.join("mixed-hex-pyr-tet.vtk")).unwrap_err().to_string();
     assert!(
         err.contains("mixed-hex-pyr-tet.vtk") && err.contains("pyramid"),
         "{err}"
@@ -79,8 +69,5 @@ fn meshes_the_optimiser_cannot_take_are_refused_clearly() {
     let err = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true)
         .unwrap_err()
         .to_string();
-    assert!(
-        err.contains("quadrilateral") || err.contains("inverted"),
-        "{err}"
-    );
+    assert!(err.contains("quadrilateral") || err.contains("inverted"), "{err}");
 }

@@ -96,10 +96,7 @@ fn report_serialises_to_json() {
         "worst",
         "centroid",
     ] {
-        assert!(
-            json.contains(&format!("\"{key}\"")),
-            "missing {key}: {json}"
-        );
+        assert!(json.contains(&format!("\"{key}\"")), "missing {key}: {json}");
     }
     let value: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert_eq!(value["elements"], 48);
@@ -109,28 +106,14 @@ fn report_serialises_to_json() {
 fn volumes_of_known_elements() {
     let tri = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     assert_relative_eq!(element_volume(ElementKind::Triangle, &tri), 1.0);
-    let quad = [
-        [0.0, 0.0, 0.0],
-        [2.0, 0.0, 0.0],
-        [2.0, 3.0, 0.0],
-        [0.0, 3.0, 0.0],
-    ];
+    let quad = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 3.0, 0.0], [0.0, 3.0, 0.0]];
     assert_relative_eq!(element_volume(ElementKind::Quadrilateral, &quad), 6.0);
-    let tet = [
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, 0.0, 1.0],
-    ];
+    let tet = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     assert_relative_eq!(element_volume(ElementKind::Tetrahedron, &tet), 1.0 / 6.0);
     let mut hex: Vec<[f64; 3]> = (0..8)
         .map(|i| [quad[i % 4][0], quad[i % 4][1], (i / 4) as f64 * 0.5])
         .collect();
-    assert_relative_eq!(
-        element_volume(ElementKind::Hexahedron, &hex),
-        3.0,
-        max_relative = 1e-14
-    );
+    assert_relative_eq!(element_volume(ElementKind::Hexahedron, &hex), 3.0, max_relative = 1e-14);
     // lift corner 6: the trilinear volume grows by (2 * 3) * t / 4
     hex[6][2] += 0.4;
     assert_relative_eq!(
@@ -138,14 +121,8 @@ fn volumes_of_known_elements() {
         3.0 + 6.0 * 0.4 / 4.0,
         max_relative = 1e-14
     );
-    let mut prism: Vec<[f64; 3]> = (0..6)
-        .map(|i| [tri[i % 3][0], tri[i % 3][1], (i / 3) as f64])
-        .collect();
-    assert_relative_eq!(
-        element_volume(ElementKind::Prism, &prism),
-        1.0,
-        max_relative = 1e-14
-    );
+    let mut prism: Vec<[f64; 3]> = (0..6).map(|i| [tri[i % 3][0], tri[i % 3][1], (i / 3) as f64]).collect();
+    assert_relative_eq!(element_volume(ElementKind::Prism, &prism), 1.0, max_relative = 1e-14);
     // lift top corner 4 by t: the extra volume is a tet-like wedge 1 * t / 3
     prism[4][2] += 0.6;
     assert_relative_eq!(
@@ -170,17 +147,12 @@ fn box_volumes_add_up() {
 #[test]
 fn quad_mesh_report_is_planar() {
     let n = 4;
-    let pts = (0..n * n)
-        .map(|i| [(i % n) as f64, (i / n) as f64, 0.0])
-        .collect();
+    let pts = (0..n * n).map(|i| [(i % n) as f64, (i / n) as f64, 0.0]).collect();
     let mut m = Mesh::new(pts);
     for j in 0..n - 1 {
         for i in 0..n - 1 {
             let v = (i + n * j) as u32;
-            m.push_element(
-                ElementKind::Quadrilateral,
-                &[v, v + 1, v + 1 + n as u32, v + n as u32],
-            );
+            m.push_element(ElementKind::Quadrilateral, &[v, v + 1, v + 1 + n as u32, v + n as u32]);
         }
     }
     let r = quality_report(&m, &m.points);

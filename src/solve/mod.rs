@@ -123,13 +123,60 @@ pub fn solve(
     let start = Instant::now();
     let deadline = params.time_limit.map(|t| start + t);
     let edge = p.mean_edge_length(x);
-    let mut history = History::default();
     let evaluate = |x: &[Vec3]| -> Result<(f64, f64)> {
-        let (f, g) = objective::gradient(p, x)
-            .ok_or_else(|| Error::InvalidMesh("an accepted step inverted an element (solver bug)".into()))?;
+        let (f, g) = objective::gradient(p, x).ok_or_else(accepted_step_inverted)?;
         Ok((f, objective::norm(&g)))
     };
-    let (mut f, mut gnorm) = evaluate(x)?;
+    let first = evaluate(x)?;
+    let mut info = {
+        let mut step = || -> Result<Sweep> {
+            let max_move_sq = match method {
+                Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
+                Method::BcdColored => bcd::sweep_colored(p, x, &params.line_search, deadline),
+                Method::Newton => newton.as_mut().expect("built above").step(p, x, &params.line_search),
+                Method::Laplace => laplace::sweep(p, x, deadline),
+            };
+            let (objective, grad_norm) = evaluate(x)?;
+            Ok(Sweep {
+                objective,
+                grad_norm,
+                max_move_sq,
+            })
+        };
+        iterate(method, params, start, edge, setup_seconds, first, &mut step, progress)?
+    };
+    info.memory_bytes = p.bytes() + std::mem::size_of_val(x) + newton.as_ref().map_or(0, |n| n.bytes());
+    Ok(info)
+}
+
+pub(crate) fn accepted_step_inverted() -> Error {
+    Error::InvalidMesh("an accepted step inverted an element (solver bug)".into())
+}
+
+/// What one sweep of any backend reports to the shared loop.
+pub(crate) struct Sweep {
+    pub objective: f64,
+    pub grad_norm: f64,
+    /// Largest squared vertex displacement of the sweep.
+    pub max_move_sq: f64,
+}
+
+/// The iteration loop shared by every backend: history, progress and the
+/// stop rules. `first` is (F, |grad F|) at the start; `step` runs one sweep.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn iterate(
+    method: Method,
+    params: &Params,
+    start: Instant,
+    edge: f64,
+    setup_seconds: f64,
+    first: (f64, f64),
+    step: &mut dyn FnMut() -> Result<Sweep>,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let deadline = params.time_limit.map(|t| start + t);
+    let mut history = History::default();
+    let (mut f, mut gnorm) = first;
     let mut record = Record {
         iteration: 0,
         seconds: 0.0,
@@ -156,14 +203,9 @@ pub fn solve(
             stop = Some(StopReason::TimeLimit);
             break;
         }
-        let max_sq = match method {
-            Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
-            Method::BcdColored => bcd::sweep_colored(p, x, &params.line_search, deadline),
-            Method::Newton => newton.as_mut().expect("built above").step(p, x, &params.line_search),
-            Method::Laplace => laplace::sweep(p, x, deadline),
-        };
+        let sweep = step()?;
         iterations += 1;
-        (f, gnorm) = evaluate(x)?;
+        (f, gnorm) = (sweep.objective, sweep.grad_norm);
         record = Record {
             iteration: iterations,
             seconds: start.elapsed().as_secs_f64(),
@@ -173,7 +215,7 @@ pub fn solve(
         history.push(record);
         if !progress(&record) {
             stop = Some(StopReason::Cancelled);
-        } else if max_sq.sqrt() <= params.min_move * edge && gnorm >= params.tol {
+        } else if sweep.max_move_sq.sqrt() <= params.min_move * edge && gnorm >= params.tol {
             stop = Some(StopReason::Stalled);
         }
     }
@@ -186,7 +228,7 @@ pub fn solve(
         grad_norm: gnorm,
         seconds: start.elapsed().as_secs_f64(),
         setup_seconds,
-        memory_bytes: p.bytes() + std::mem::size_of_val(x) + newton.as_ref().map_or(0, |n| n.bytes()),
+        memory_bytes: 0,
     })
 }
 

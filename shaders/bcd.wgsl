@@ -1,0 +1,142 @@
+// One colour of a block coordinate descent sweep, one thread per vertex: a
+// safeguarded Newton step on the vertex's 3x3 block with Armijo backtracking.
+// The vertices of a colour share no element, so they move independently.
+// CPU twin: `solve::bcd::newton_step` (same arithmetic, same order).
+
+#import layout
+#import mean_ratio
+
+struct Color {
+    offset: u32,
+    count: u32,
+    max_backtracks: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> shape: Shape;
+@group(0) @binding(1) var<uniform> color: Color;
+@group(0) @binding(2) var<storage, read_write> x: array<real>;
+@group(0) @binding(3) var<storage, read> tets: array<u32>;
+@group(0) @binding(4) var<storage, read> inc_offsets: array<u32>;
+@group(0) @binding(5) var<storage, read> inc_items: array<u32>;
+@group(0) @binding(6) var<storage, read> colors: array<u32>;
+// squared displacement of each vertex in this sweep (0 when it stayed)
+@group(0) @binding(7) var<storage, read_write> disp: array<real>;
+
+// The vertex's S-without-its-term per element, as the CPU's `Patch` keeps
+// them; vertices with more elements than this recompute them per trial.
+const CACHE: u32 = 32u;
+var<private> rest_cache: array<mat3x3<real>, CACHE>;
+
+fn point(v: u32) -> vec3<real> {
+    return vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]);
+}
+
+// S of element `e` without its corner `k`'s term (`TetShape::s_rest`).
+fn rest_of(e: u32, k: u32, b: array<vec3<real>, 4>) -> mat3x3<real> {
+    var pts: array<vec3<real>, 4>;
+    for (var j = 0u; j < 4u; j++) {
+        pts[j] = point(tets[4u * e + j]);
+    }
+    return s_rest(pts, b, k);
+}
+
+// `Patch::value`: the sum of eta over the vertex's elements with it at `at`.
+fn patch_value(v: u32, at: vec3<real>, b: array<vec3<real>, 4>) -> Eta {
+    var sum = real(0.0);
+    let first = inc_offsets[v];
+    let cached = inc_offsets[v + 1u] - first <= CACHE;
+    for (var it = first; it < inc_offsets[v + 1u]; it++) {
+        let packed = inc_items[it];
+        let k = packed & 3u;
+        var rest: mat3x3<real>;
+        if cached {
+            rest = rest_cache[it - first];
+        } else {
+            rest = rest_of(packed >> 2u, k, b);
+        }
+        let r = value_of_s(s_with(rest, b[k], at));
+        if !r.ok {
+            return Eta(real(0.0), false);
+        }
+        sum += r.eta;
+    }
+    return Eta(sum, true);
+}
+
+@compute @workgroup_size(64)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let t = linear_group(wid, nwg) * 64u + lid;
+    if t >= color.count {
+        return;
+    }
+    let v = colors[color.offset + t];
+    disp[v] = real(0.0);
+    let b = shape_b(shape);
+    let xv = point(v);
+
+    // `Patch::gradient_hessian`
+    var f0 = real(0.0);
+    var g = vec3<real>(real(0.0));
+    var h = mat3x3<real>();
+    let first = inc_offsets[v];
+    for (var it = first; it < inc_offsets[v + 1u]; it++) {
+        let packed = inc_items[it];
+        let k = packed & 3u;
+        let rest = rest_of(packed >> 2u, k, b);
+        if it - first < CACHE {
+            rest_cache[it - first] = rest;
+        }
+        let r = vertex_gradient_hessian_of_s(s_with(rest, b[k], xv), b[k]);
+        if !r.ok {
+            return;
+        }
+        f0 += r.eta;
+        for (var i = 0; i < 3; i++) {
+            g[i] += r.grad[i];
+            for (var j = 0; j < 3; j++) {
+                h[i][j] += r.hess[i][j];
+            }
+        }
+    }
+    let neg_g = vec3<real>(-g[0], -g[1], -g[2]);
+    // the block is positive definite for the mean ratio; fall back to a scaled
+    // steepest descent step should rounding say otherwise
+    let chol = cholesky_solve(h, neg_g);
+    var d = chol.x;
+    if !chol.ok {
+        let tr = h[0][0] + h[1][1] + h[2][2];
+        var s = real(1.0);
+        if tr > real(0.0) {
+            s = real(3.0) / tr;
+        }
+        d = vec3<real>(neg_g[0] * s, neg_g[1] * s, neg_g[2] * s);
+    }
+    let slope = dot3(g, d);
+    if !(slope < real(0.0)) {
+        return;
+    }
+    let beta = shape.ls.x;
+    let sigma = shape.ls.y;
+    var alpha = real(1.0);
+    for (var n = 0u; n <= color.max_backtracks; n++) {
+        let trial = vec3<real>(xv[0] + alpha * d[0], xv[1] + alpha * d[1], xv[2] + alpha * d[2]);
+        let f = patch_value(v, trial, b);
+        if f.ok && f.eta <= f0 + sigma * alpha * slope {
+            x[3u * v] = trial[0];
+            x[3u * v + 1u] = trial[1];
+            x[3u * v + 2u] = trial[2];
+            var sq = real(0.0);
+            for (var i = 0; i < 3; i++) {
+                sq += (xv[i] - trial[i]) * (xv[i] - trial[i]);
+            }
+            disp[v] = sq;
+            return;
+        }
+        alpha *= beta;
+    }
+}

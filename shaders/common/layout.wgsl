@@ -1,0 +1,26 @@
+// Buffer layouts shared by the kernels; the Rust mirrors are in
+// src/backend/gpu/layout.rs.
+
+// B of the reference shape (row k = how vertex k enters S) and the line search.
+struct Shape {
+    // b[k].xyz, w unused
+    b: array<vec4<real>, 4>,
+    // x = beta, y = sigma, z = 1 / number of elements, w unused
+    ls: vec4<real>,
+}
+
+struct Sizes {
+    n_elements: u32,
+    n_free: u32,
+    n_obj_partials: u32,
+    n_vert_partials: u32,
+}
+
+// Workgroups are dispatched in 2D (at most 65,535 per dimension).
+fn linear_group(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    return wid.x + wid.y * nwg.x;
+}
+
+fn shape_b(s: Shape) -> array<vec3<real>, 4> {
+    return array<vec3<real>, 4>(s.b[0].xyz, s.b[1].xyz, s.b[2].xyz, s.b[3].xyz);
+}

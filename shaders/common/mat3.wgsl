@@ -1,0 +1,88 @@
+// 3x3 helpers, CPU twin src/metric/mat3.rs. A mat3x3 holds m[i][j] = row i,
+// column j (the CPU's indexing); built-in matrix products are avoided so that
+// every sum runs in the CPU's order.
+
+fn det3(m: mat3x3<real>) -> real {
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+fn cofactor3(m: mat3x3<real>) -> mat3x3<real> {
+    return mat3x3<real>(
+        vec3<real>(
+            m[1][1] * m[2][2] - m[1][2] * m[2][1],
+            m[1][2] * m[2][0] - m[1][0] * m[2][2],
+            m[1][0] * m[2][1] - m[1][1] * m[2][0],
+        ),
+        vec3<real>(
+            m[0][2] * m[2][1] - m[0][1] * m[2][2],
+            m[0][0] * m[2][2] - m[0][2] * m[2][0],
+            m[0][1] * m[2][0] - m[0][0] * m[2][1],
+        ),
+        vec3<real>(
+            m[0][1] * m[1][2] - m[0][2] * m[1][1],
+            m[0][2] * m[1][0] - m[0][0] * m[1][2],
+            m[0][0] * m[1][1] - m[0][1] * m[1][0],
+        ),
+    );
+}
+
+fn frobenius_sq(m: mat3x3<real>) -> real {
+    var f = real(0.0);
+    for (var i = 0; i < 3; i++) {
+        for (var j = 0; j < 3; j++) {
+            f += m[i][j] * m[i][j];
+        }
+    }
+    return f;
+}
+
+fn mul_vec(m: mat3x3<real>, v: vec3<real>) -> vec3<real> {
+    return vec3<real>(
+        m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
+        m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
+        m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2],
+    );
+}
+
+fn dot3(a: vec3<real>, b: vec3<real>) -> real {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+// `h d = rhs` by Cholesky; ok = false when h is not (numerically) positive definite.
+struct CholeskySolve {
+    x: vec3<real>,
+    ok: bool,
+}
+
+fn cholesky_solve(h: mat3x3<real>, rhs: vec3<real>) -> CholeskySolve {
+    var out = CholeskySolve(vec3<real>(real(0.0)), false);
+    let a00 = h[0][0];
+    if !(a00 > real(0.0)) {
+        return out;
+    }
+    let l00 = sqrt(a00);
+    let l10 = h[1][0] / l00;
+    let l20 = h[2][0] / l00;
+    let d11 = h[1][1] - l10 * l10;
+    if !(d11 > real(0.0)) {
+        return out;
+    }
+    let l11 = sqrt(d11);
+    let l21 = (h[2][1] - l20 * l10) / l11;
+    let d22 = h[2][2] - l20 * l20 - l21 * l21;
+    if !(d22 > real(0.0)) {
+        return out;
+    }
+    let l22 = sqrt(d22);
+    let y0 = rhs[0] / l00;
+    let y1 = (rhs[1] - l10 * y0) / l11;
+    let y2 = (rhs[2] - l20 * y0 - l21 * y1) / l22;
+    let x2 = y2 / l22;
+    let x1 = (y1 - l21 * x2) / l11;
+    let x0 = (y0 - l10 * x1 - l20 * x2) / l00;
+    out.x = vec3<real>(x0, x1, x2);
+    out.ok = true;
+    return out;
+}

@@ -1,0 +1,256 @@
+//! Adapter choice, device creation and the long-lived context that owns the
+//! device, queue and compiled pipelines.
+
+use super::shader::{Kernel, Real};
+use crate::error::{Error, Result};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// Device arithmetic wanted by the caller.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Precision {
+    F32,
+    F64,
+    /// f64 where the adapter has `SHADER_F64`, else f32.
+    #[default]
+    Auto,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// Substring of the adapter name (case-insensitive); the environment
+    /// variable `MESHSMOOTH_ADAPTER` is used when this is `None`.
+    pub adapter: Option<String>,
+    pub precision: Precision,
+}
+
+/// One adapter as `meshsmooth devices` lists it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AdapterSummary {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    pub f64: bool,
+    /// Can it run compute shaders at all?
+    pub compute: bool,
+}
+
+fn instance() -> wgpu::Instance {
+    // all native backends that work headless; browsers are out of scope
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12 | wgpu::Backends::GL;
+    wgpu::Instance::new(desc)
+}
+
+fn summary(a: &wgpu::Adapter) -> AdapterSummary {
+    let info = a.get_info();
+    AdapterSummary {
+        name: info.name,
+        backend: format!("{:?}", info.backend),
+        device_type: format!("{:?}", info.device_type),
+        driver: info.driver,
+        driver_info: info.driver_info,
+        f64: a.features().contains(wgpu::Features::SHADER_F64),
+        compute: can_compute(a),
+    }
+}
+
+fn can_compute(a: &wgpu::Adapter) -> bool {
+    a.get_downlevel_capabilities()
+        .flags
+        .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+        && a.limits().max_compute_workgroup_size_x >= 64
+        && a.limits().max_compute_invocations_per_workgroup >= 64
+}
+
+/// Every adapter wgpu finds, best first.
+pub fn list_adapters() -> Vec<AdapterSummary> {
+    ranked(&instance()).iter().map(summary).collect()
+}
+
+/// Discrete, integrated, then virtual and CPU adapters; Vulkan before the
+/// other backends (GL on llvmpipe has no f64).
+fn ranked(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
+    let mut all = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+    all.sort_by_key(|a| {
+        let info = a.get_info();
+        let kind = match info.device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        let backend = match info.backend {
+            wgpu::Backend::Vulkan | wgpu::Backend::Metal | wgpu::Backend::Dx12 => 0,
+            _ => 1,
+        };
+        (kind, backend)
+    });
+    all
+}
+
+/// Device, queue and pipelines for one precision; built once and reused.
+pub struct GpuContext {
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
+    pub(crate) real: Real,
+    pub(crate) limits: wgpu::Limits,
+    info: wgpu::AdapterInfo,
+    pipelines: HashMap<Kernel, wgpu::ComputePipeline>,
+    /// Errors reported by wgpu outside any call's reach (validation, OOM, loss).
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+impl GpuContext {
+    pub fn new(opts: &GpuOptions) -> Result<GpuContext> {
+        let instance = instance();
+        let adapters = ranked(&instance);
+        let wanted = opts
+            .adapter
+            .clone()
+            .or_else(|| std::env::var("MESHSMOOTH_ADAPTER").ok())
+            .filter(|s| !s.is_empty());
+        let found = || {
+            if adapters.is_empty() {
+                "none found".to_string()
+            } else {
+                adapters
+                    .iter()
+                    .map(|a| {
+                        let s = summary(a);
+                        format!(
+                            "'{}' ({}, {}{}{})",
+                            s.name,
+                            s.backend,
+                            s.device_type,
+                            if s.f64 { ", f64" } else { "" },
+                            if s.compute { "" } else { ", no compute" }
+                        )
+                    })
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            }
+        };
+        let candidates: Vec<&wgpu::Adapter> = adapters
+            .iter()
+            .filter(|a| can_compute(a))
+            .filter(|a| {
+                wanted
+                    .as_ref()
+                    .is_none_or(|w| a.get_info().name.to_lowercase().contains(&w.to_lowercase()))
+            })
+            .collect();
+        let has_f64 = |a: &wgpu::Adapter| a.features().contains(wgpu::Features::SHADER_F64);
+        let adapter = match opts.precision {
+            // an f64 request passes over adapters without it
+            Precision::F64 => candidates.iter().find(|a| has_f64(a)).ok_or_else(|| {
+                Error::Gpu(format!(
+                    "no adapter{} supports f64 shaders (SHADER_F64); adapters: {}",
+                    wanted.as_ref().map(|w| format!(" matching '{w}'")).unwrap_or_default(),
+                    found()
+                ))
+            })?,
+            _ => candidates.first().ok_or_else(|| {
+                Error::Gpu(format!(
+                    "no usable compute adapter{}; adapters: {}",
+                    wanted.as_ref().map(|w| format!(" matching '{w}'")).unwrap_or_default(),
+                    found()
+                ))
+            })?,
+        };
+        let f64_ok = has_f64(adapter);
+        let real = match opts.precision {
+            Precision::F32 => Real::F32,
+            Precision::F64 => Real::F64,
+            Precision::Auto if f64_ok => Real::F64,
+            Precision::Auto => Real::F32,
+        };
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("meshsmooth"),
+            required_features: if f64_ok {
+                wgpu::Features::SHADER_F64
+            } else {
+                wgpu::Features::empty()
+            },
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| Error::Gpu(format!("requesting a device: {e}")))?;
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            sink.lock().unwrap().push(e.to_string());
+        }));
+        let sink = errors.clone();
+        device.set_device_lost_callback(move |reason, msg| {
+            sink.lock().unwrap().push(format!("device lost ({reason:?}): {msg}"));
+        });
+        let mut ctx = GpuContext {
+            device,
+            queue,
+            real,
+            limits,
+            info: adapter.get_info(),
+            pipelines: HashMap::new(),
+            errors,
+        };
+        for k in Kernel::ALL {
+            let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(k.name()),
+                source: wgpu::ShaderSource::Wgsl(k.compose(real).into()),
+            });
+            let pipeline = ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(k.name()),
+                layout: None,
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            ctx.pipelines.insert(k, pipeline);
+        }
+        ctx.check()?;
+        Ok(ctx)
+    }
+
+    /// The adapter's name, backend and type, for reports.
+    pub fn adapter_name(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
+    }
+
+    /// Whether the device computes in f64.
+    pub fn is_f64(&self) -> bool {
+        self.real == Real::F64
+    }
+
+    pub(crate) fn pipeline(&self, k: Kernel) -> &wgpu::ComputePipeline {
+        &self.pipelines[&k]
+    }
+
+    /// Turns any error wgpu reported since the last check into `Err`.
+    pub(crate) fn check(&self) -> Result<()> {
+        let mut errors = self.errors.lock().unwrap();
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            let msg = errors.join("; ");
+            errors.clear();
+            Err(Error::Gpu(msg))
+        }
+    }
+
+    /// Waits for all submitted work.
+    pub(crate) fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+        self.check()
+    }
+}

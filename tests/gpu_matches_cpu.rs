@@ -1,0 +1,286 @@
+//! The GPU backend against its CPU twins: element metric, cube root, one
+//! coloured sweep, a full solve. Without an adapter these tests print why and
+//! pass — except under `CI`, where they fail.
+
+use meshsmooth::backend::gpu::{self, GpuBcd, GpuContext, GpuOptions, Precision};
+use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::metric::{self, TetShape, tet_det};
+use meshsmooth::problem::Problem;
+use meshsmooth::solve::{self, Method, Params, bcd};
+use meshsmooth::{Mesh, objective};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn context(precision: Precision) -> Option<GpuContext> {
+    match GpuContext::new(&GpuOptions {
+        adapter: None,
+        precision,
+    }) {
+        Ok(ctx) => {
+            eprintln!("GPU tests on {}", ctx.adapter_name());
+            Some(ctx)
+        }
+        Err(e) if std::env::var_os("CI").is_some() => panic!("no GPU for the GPU tests in CI: {e}"),
+        Err(e) => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+    }
+}
+
+type Tet = [[f64; 3]; 4];
+
+/// Random positively oriented tets; `flatten` squeezes z for poor shapes.
+fn random_tets(seed: u64, count: usize, flatten: f64) -> Vec<Tet> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut out = Vec::new();
+    while out.len() < count {
+        let mut t: Tet = [[0.0; 3]; 4];
+        for v in t.iter_mut() {
+            for c in v.iter_mut() {
+                *c = rng.random_range(-1.0..1.0);
+            }
+            v[2] *= flatten;
+        }
+        if tet_det(&t) < 0.0 {
+            t.swap(1, 2);
+        }
+        if TetShape::equilateral().value(&t).is_some() {
+            out.push(t);
+        }
+    }
+    out
+}
+
+/// Largest |gpu - cpu| / (|cpu| + floor) over the entries of each element,
+/// the floor being the element's largest entry (so near-zero entries are
+/// measured against their neighbours, not themselves).
+fn rel_err(gpu: &[f64], cpu: &[f64]) -> f64 {
+    let scale = cpu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    gpu.iter()
+        .zip(cpu)
+        .map(|(g, c)| (g - c).abs() / scale.max(f64::MIN_POSITIVE))
+        .fold(0.0, f64::max)
+}
+
+/// Worst relative errors (value, gradient, Hessian) of the device metric on `tets`.
+fn element_errors(ctx: &GpuContext, tets: &[Tet]) -> [f64; 3] {
+    let shape = TetShape::equilateral();
+    let x: Vec<[f64; 3]> = tets.iter().flatten().copied().collect();
+    let conn: Vec<[u32; 4]> = (0..tets.len() as u32)
+        .map(|e| [4 * e, 4 * e + 1, 4 * e + 2, 4 * e + 3])
+        .collect();
+    let out = gpu::mean_ratio_eval(ctx, &shape, &conn, &x).unwrap();
+    let mut worst = [0.0f64; 3];
+    for (e, t) in tets.iter().enumerate() {
+        let (eta, g, h) = shape.hessian(t).unwrap();
+        let gf: Vec<f64> = g.iter().flatten().copied().collect();
+        let hf: Vec<f64> = h.iter().flatten().copied().collect();
+        let errs = [
+            (out.value[e] - eta).abs() / eta,
+            rel_err(&out.grad[12 * e..12 * e + 12], &gf),
+            rel_err(&out.hess[144 * e..144 * e + 144], &hf),
+        ];
+        for i in 0..3 {
+            assert!(errs[i].is_finite(), "element {e}: non-finite error {errs:?}");
+            worst[i] = worst[i].max(errs[i]);
+        }
+    }
+    worst
+}
+
+#[test]
+fn mean_ratio_eval_matches_cpu_f64() {
+    let Some(ctx) = context(Precision::F64) else {
+        return;
+    };
+    for (flatten, name) in [(1.0, "random"), (0.02, "flattened")] {
+        let w = element_errors(&ctx, &random_tets(11, 4000, flatten));
+        eprintln!(
+            "f64 {name}: worst relative error value {:.1e} grad {:.1e} hess {:.1e}",
+            w[0], w[1], w[2]
+        );
+        assert!(w.iter().all(|&e| e < 1e-10), "{name}: {w:?}");
+    }
+    // an inverted element is flagged, not evaluated
+    let mut t = random_tets(3, 1, 1.0)[0];
+    t.swap(1, 2);
+    let x: Vec<[f64; 3]> = t.to_vec();
+    let out = gpu::mean_ratio_eval(&ctx, &TetShape::equilateral(), &[[0, 1, 2, 3]], &x).unwrap();
+    assert_eq!(out.value[0], -1.0);
+}
+
+#[test]
+fn mean_ratio_eval_matches_cpu_f32() {
+    let Some(ctx) = context(Precision::F32) else {
+        return;
+    };
+    // well-shaped: eta below 3
+    let good: Vec<Tet> = random_tets(12, 4000, 1.0)
+        .into_iter()
+        .filter(|t| TetShape::equilateral().value(t).unwrap() < 3.0)
+        .collect();
+    assert!(good.len() > 500);
+    let w = element_errors(&ctx, &good);
+    eprintln!(
+        "f32 well-shaped ({}): worst relative error value {:.1e} grad {:.1e} hess {:.1e}",
+        good.len(),
+        w[0],
+        w[1],
+        w[2]
+    );
+    assert!(w.iter().all(|&e| e < 1e-4), "{w:?}");
+    // poorly shaped: measured, bounded loosely (f32 cancellation in det and cofactors)
+    let w = element_errors(&ctx, &random_tets(13, 4000, 0.02));
+    eprintln!(
+        "f32 poorly shaped: worst relative error value {:.1e} grad {:.1e} hess {:.1e}",
+        w[0], w[1], w[2]
+    );
+    assert!(w.iter().all(|&e| e < 1.0), "{w:?}");
+}
+
+#[test]
+fn cbrt_matches_cpu_f64() {
+    let Some(ctx) = context(Precision::F64) else {
+        return;
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let values: Vec<f64> = (0..5000)
+        .map(|_| 10f64.powf(rng.random_range(-30.0..30.0)) * rng.random_range(1.0..2.0))
+        .chain([1.0, 8.0, 27.0, 1e-30, 1e30, 1e-300, 1e300, f64::MIN_POSITIVE])
+        .collect();
+    let got = gpu::cbrt_eval(&ctx, &values).unwrap();
+    let mut worst_ulps = 0.0f64;
+    for (v, g) in values.iter().zip(&got) {
+        let c = v.cbrt();
+        let ulps = (g - c).abs() / (c * f64::EPSILON);
+        worst_ulps = worst_ulps.max(ulps);
+    }
+    eprintln!("f64 cube root: worst error {worst_ulps:.2} ulp");
+    assert!(worst_ulps <= 1.0, "{worst_ulps} ulp");
+}
+
+fn perturbed_box(n: usize) -> Mesh {
+    let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.3 },
+        fraction: 1.0,
+        seed: 1,
+    };
+    generate::perturb(&mut m, &opts).unwrap();
+    m
+}
+
+fn sweep_matches(precision: Precision, tol_edge: f64, tol_rel: f64) {
+    let Some(ctx) = context(precision) else {
+        return;
+    };
+    let mesh = perturbed_box(8);
+    let p = Problem::new(&mesh).unwrap();
+    let x0 = p.gather(&mesh.points);
+    let mut gpu = GpuBcd::new(&ctx, &p, &x0).unwrap();
+    let (f0, g0) = gpu.objective_and_grad_norm().unwrap().unwrap();
+    let (cf0, cg0) = objective::gradient(&p, &x0).unwrap();
+    let cg0 = objective::norm(&cg0);
+    assert!((f0 - cf0).abs() <= tol_rel * cf0, "F {f0} vs {cf0}");
+    assert!((g0 - cg0).abs() <= tol_rel * cg0, "|g| {g0} vs {cg0}");
+
+    let mut x = x0.clone();
+    bcd::sweep_colored(&p, &mut x, &Default::default(), None);
+    gpu.sweep().unwrap();
+    let got = gpu.download().unwrap();
+    let edge = p.mean_edge_length(&x0);
+    let worst = x
+        .iter()
+        .zip(&got)
+        .map(|(a, b)| (0..3).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    eprintln!(
+        "{precision:?} sweep: worst coordinate difference {:.1e} mean edges",
+        worst / edge
+    );
+    assert!(worst <= tol_edge * edge, "{worst} vs edge {edge}");
+    // the scalars read back are those of the device's positions ...
+    let (f1, g1) = gpu.objective_and_grad_norm().unwrap().unwrap();
+    let (cf1, cg1) = objective::gradient(&p, &got).unwrap();
+    let cg1 = objective::norm(&cg1);
+    assert!((f1 - cf1).abs() <= tol_rel * cf1, "F {f1} vs {cf1}");
+    assert!((g1 - cg1).abs() <= tol_rel * cg1, "|g| {g1} vs {cg1}");
+    // ... and the sweep decreased F as much as the CPU's did
+    let cpu_f1 = objective::value(&p, &x).unwrap();
+    assert!((f1 - cpu_f1).abs() <= tol_rel * cpu_f1, "F {f1} vs CPU sweep {cpu_f1}");
+}
+
+#[test]
+fn bcd_sweep_matches_cpu_sweep_colored_f64() {
+    sweep_matches(Precision::F64, 1e-9, 1e-12);
+}
+
+#[test]
+fn bcd_sweep_matches_cpu_sweep_colored_f32() {
+    // an f32 Armijo test may accept a different step length for a vertex
+    sweep_matches(Precision::F32, 1e-2, 1e-4);
+}
+
+fn full_solve(precision: Precision, tol: f64, gpu_tol: f64) {
+    let Some(ctx) = context(precision) else {
+        return;
+    };
+    let mut mesh = perturbed_box(20);
+    let p = Problem::new(&mesh).unwrap();
+    let x0 = p.gather(&mesh.points);
+    let params = Params::default();
+    let mut cpu_x = x0.clone();
+    let cpu = solve::solve(&p, &mut cpu_x, Method::BcdColored, &params, &mut |_| true).unwrap();
+    let gpu_params = Params {
+        tol: gpu_tol,
+        ..Params::default()
+    };
+    let mut x = x0.clone();
+    let info = gpu::solve_gpu(&ctx, &p, &mut x, &gpu_params, &mut |_| true).unwrap();
+    eprintln!(
+        "{precision:?} solve: GPU {} sweeps in {:.2} s ({:?}) F = {:.12}, CPU {} sweeps in {:.2} s F = {:.12}",
+        info.iterations, info.seconds, info.stop, info.objective, cpu.iterations, cpu.seconds, cpu.objective
+    );
+    assert!((info.objective - cpu.objective).abs() <= tol * cpu.objective);
+    mesh.points = p.scatter(&x);
+    assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
+    // the reported objective is that of the positions handed back
+    let f = objective::value(&p, &x).unwrap();
+    assert!((f - info.objective).abs() <= tol * f, "{f} vs {}", info.objective);
+}
+
+#[test]
+fn full_solve_matches_cpu_f64() {
+    full_solve(Precision::F64, 1e-6, 1e-6);
+}
+
+#[test]
+fn full_solve_matches_cpu_f32() {
+    // f32 cannot resolve |grad F| = 1e-6 at F ~ 1.3
+    full_solve(Precision::F32, 1e-4, 1e-5);
+}
+
+#[test]
+fn unknown_adapter_name_is_an_error_listing_what_was_found() {
+    let e = GpuContext::new(&GpuOptions {
+        adapter: Some("no-such-adapter-xyz".into()),
+        precision: Precision::Auto,
+    })
+    .err()
+    .expect("no adapter is called that");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("no-such-adapter-xyz") && msg.contains("adapters:"),
+        "{msg}"
+    );
+    let Some(ctx) = context(Precision::Auto) else {
+        return;
+    };
+    let listed = gpu::list_adapters();
+    assert!(
+        listed.iter().any(|a| ctx.adapter_name().starts_with(&a.name)),
+        "{listed:?}"
+    );
+    eprintln!("{listed:#?}");
+}
