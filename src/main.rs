@@ -3,5 +3,11 @@
 mod cli;
 
 fn main() {
+    // Mesa's device-select Vulkan layer probes the display server and prints
+    // errors on headless machines; meshsmooth chooses adapters itself.
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: still single-threaded; nothing else reads the environment yet.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
     std::process::exit(cli::run(std::env::args_os()));
 }

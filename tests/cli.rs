@@ -199,3 +199,77 @@ fn bad_inputs_fail_cleanly_and_write_nothing() {
         "only the tangled input remains"
     );
 }
+
+#[test]
+fn devices_lists_adapters_and_gpu_smoothing_names_the_device() {
+    let o = meshsmooth(&["devices"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let listing = text(&o);
+    if listing.contains("no GPU adapters") {
+        assert!(std::env::var_os("CI").is_none(), "CI must provide lavapipe: {listing}");
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.vtk");
+    let out = dir.path().join("out.vtk");
+    assert!(
+        meshsmooth(&[
+            "generate",
+            "box",
+            "--cells",
+            "4",
+            "4",
+            "4",
+            "--perturb",
+            "random:0.3",
+            "-o",
+            s(&input)
+        ])
+        .status
+        .success()
+    );
+    let o = meshsmooth(&[
+        "smooth",
+        s(&input),
+        "-o",
+        s(&out),
+        "--device",
+        "gpu",
+        "--precision",
+        "f64",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("on gpu") && text(&o).contains("(f64)"),
+        "{}",
+        text(&o)
+    );
+    assert!(text(&o).contains("converged"), "{}", text(&o));
+
+    let o = meshsmooth(&[
+        "smooth",
+        s(&input),
+        "-o",
+        s(&out),
+        "--device",
+        "gpu",
+        "--method",
+        "newton",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o).contains("CPU only"), "{}", text(&o));
+    let o = meshsmooth(&[
+        "smooth",
+        s(&input),
+        "-o",
+        s(&out),
+        "--device",
+        "gpu",
+        "--adapter",
+        "no-such-gpu",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o).contains("no-such-gpu"), "{}", text(&o));
+}

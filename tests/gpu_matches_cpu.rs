@@ -284,3 +284,31 @@ fn unknown_adapter_name_is_an_error_listing_what_was_found() {
     );
     eprintln!("{listed:#?}");
 }
+
+#[test]
+fn a_failure_midway_leaves_the_last_checkpoint_which_is_feasible() {
+    let Some(ctx) = context(Precision::F64) else { return };
+    let mut mesh = perturbed_box(6);
+    let start = mesh.points.clone();
+    let opts = gpu::GpuRunOptions {
+        checkpoint_every: Some(2),
+        fail_after: Some(5),
+    };
+    let err = gpu::smooth_mesh_gpu(&ctx, &mut mesh, &Params::default(), &opts, &mut |_| true).unwrap_err();
+    assert!(err.to_string().contains("device lost"), "{err}");
+    assert_ne!(
+        mesh.points, start,
+        "the checkpoint after sweep 4 should have moved vertices"
+    );
+    assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
+    // the checkpoint is the state after exactly four sweeps
+    let p = Problem::new(&perturbed_box(6)).unwrap();
+    let mut x = p.gather(&start);
+    let four = Params {
+        max_iter: 4,
+        ..Params::default()
+    };
+    gpu::solve_gpu(&ctx, &p, &mut x, &four, &mut |_| true).unwrap();
+    let expected = p.scatter(&x);
+    assert_eq!(mesh.points, expected);
+}

@@ -1,7 +1,9 @@
 //! The subcommands.
 
+use super::device::{self, Backend};
 use super::progress::Progress;
 use super::{BoxArgs, CompareArgs, DemoArgs, QualityArgs, SmoothArgs, SolverArgs};
+use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::report::quality_report;
@@ -82,6 +84,19 @@ fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     )
 }
 
+/// `out.vtk` -> `out.partial.vtk`
+fn partial_path(output: &Path) -> std::path::PathBuf {
+    let stem = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = match output.extension() {
+        Some(ext) => format!("{stem}.partial.{}", ext.to_string_lossy()),
+        None => format!("{stem}.partial"),
+    };
+    output.with_file_name(name)
+}
+
 fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
     if io::same_file(input, output) {
         return Err(Error::InvalidArgument(format!(
@@ -92,15 +107,16 @@ fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
     Ok(())
 }
 
-fn summary(info: &Info, f0: f64) -> String {
+fn summary(info: &Info, f0: f64, backend: &Backend) -> String {
     let change = if f0 != 0.0 {
         100.0 * (info.objective - f0) / f0
     } else {
         0.0
     };
     format!(
-        "{} on cpu (f64): {} after {} {} in {:.3} s (setup {:.3} s); F {:.8} -> {:.8} ({:+.2}%), |grad F| = {:.3e}",
+        "{} on {}: {} after {} {} in {:.3} s (setup {:.3} s); F {:.8} -> {:.8} ({:+.2}%), |grad F| = {:.3e}",
         info.method,
+        backend.describe(),
         info.stop,
         info.iterations,
         if info.method == Method::Newton {
@@ -118,22 +134,32 @@ fn summary(info: &Info, f0: f64) -> String {
 }
 
 /// Smooths `mesh` in place, printing reports and iterations unless `quiet`.
-fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool) -> Result<Info> {
+fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: bool) -> Result<Info> {
     let method = solver.method()?;
     let params = solver.params()?;
+    let backend = device::choose(&solver.device, &solver.precision, solver.adapter.as_deref(), method)?;
     let before = quality_report(mesh, &mesh.points);
     if !quiet {
         println!("== initial mesh ==\n{before}");
     }
     let mut progress = Progress::new(params.max_iter, !quiet);
-    let result = solve::smooth_mesh(mesh, method, &params, &mut |r| progress.update(r));
+    let result = match &backend {
+        Backend::Cpu => solve::smooth_mesh(mesh, method, &params, &mut |r| progress.update(r)),
+        Backend::Gpu(ctx) => {
+            let opts = GpuRunOptions {
+                checkpoint_every: save_partial.then_some(10),
+                fail_after: None,
+            };
+            smooth_mesh_gpu(ctx, mesh, &params, &opts, &mut |r| progress.update(r))
+        }
+    };
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
     let info = result?;
     if !quiet {
         println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
-    println!("{}", summary(&info, f0));
+    println!("{}", summary(&info, f0, &backend));
     Ok(info)
 }
 
@@ -144,7 +170,20 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         refuse_overwrite(&a.input, h)?;
     }
     let mut mesh = io::read(&a.input)?;
-    let info = run_solver(&mut mesh, &a.solver, a.quiet)?;
+    let start = mesh.points.clone();
+    let info = match run_solver(&mut mesh, &a.solver, a.quiet, a.save_partial) {
+        Ok(info) => info,
+        Err(e) => {
+            if a.save_partial && mesh.points != start {
+                let partial = partial_path(&a.output);
+                match write_mesh(&partial, &mesh, format) {
+                    Ok(()) => eprintln!("saved the last feasible positions to {}", partial.display()),
+                    Err(w) => eprintln!("could not save partial positions: {w}"),
+                }
+            }
+            return Err(e);
+        }
+    };
     write_mesh(&a.output, &mesh, format)?;
     if let Some(h) = &a.history {
         io::write_atomic(h, |w| Ok(w.write_all(info.history.to_csv().as_bytes())?))?;
@@ -217,7 +256,7 @@ pub fn demo(a: &DemoArgs) -> Result<()> {
         "meshsmooth demo: a {n}x{n}x{n} box of {} tetrahedra, interior vertices perturbed randomly by 0.3 of the edge length\n",
         mesh.num_elements()
     );
-    run_solver(&mut mesh, &a.solver, false)?;
+    run_solver(&mut mesh, &a.solver, false, false)?;
     if let Some(out) = &a.output {
         write_mesh(out, &mesh, Format::from_path(out)?)?;
         println!("wrote {}", out.display());
@@ -304,6 +343,31 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         io::write_atomic(plot, |w| {
             Ok(w.write_all(meshsmooth::plot::histories_svg(&series).as_bytes())?)
         })?;
+    }
+    Ok(())
+}
+
+pub fn devices() -> Result<()> {
+    let adapters = list_adapters();
+    if adapters.is_empty() {
+        println!("no GPU adapters found (install a Vulkan driver; for software Vulkan: mesa-vulkan-drivers)");
+        return Ok(());
+    }
+    println!(
+        "{:<44} {:<8} {:<14} {:<5} {:<8} driver",
+        "adapter", "backend", "type", "f64", "compute"
+    );
+    for a in adapters {
+        println!(
+            "{:<44} {:<8} {:<14} {:<5} {:<8} {} {}",
+            a.name,
+            a.backend,
+            a.device_type,
+            if a.f64 { "yes" } else { "no" },
+            if a.compute { "yes" } else { "no" },
+            a.driver,
+            a.driver_info
+        );
     }
     Ok(())
 }

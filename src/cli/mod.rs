@@ -2,6 +2,7 @@
 //! command calls the library and prints what it returns.
 
 mod commands;
+mod device;
 mod progress;
 
 use clap::{Args, Parser, Subcommand};
@@ -32,6 +33,8 @@ pub enum Command {
     /// Run several methods from the same start and compare their histories
     /// (iterations, T50/T90/T100, setup time, memory, crossover points).
     Compare(CompareArgs),
+    /// List the GPU adapters wgpu finds.
+    Devices,
     /// Generate a test mesh.
     #[command(subcommand)]
     Generate(GenerateCommand),
@@ -57,6 +60,10 @@ pub struct SmoothArgs {
     /// Print only the final summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// If the run fails midway (e.g. the GPU is lost), save the last feasible positions
+    /// next to the output as NAME.partial.EXT.
+    #[arg(long)]
+    pub save_partial: bool,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -64,9 +71,16 @@ pub struct SolverArgs {
     /// bcd: block coordinate descent (per-vertex Newton); bcd-colored: the same, colour by colour in parallel; newton: inexact Newton with block-Jacobi PCG; laplace: smart Laplacian smoothing.
     #[arg(long, default_value = "bcd", value_parser = ["bcd", "bcd-colored", "newton", "laplace"])]
     pub method: String,
-    /// Where to run; only the CPU backend exists so far.
-    #[arg(long, default_value = "cpu", value_parser = ["cpu"])]
+    /// cpu: f64 on all cores; gpu: wgpu (bcd runs colour by colour); auto: a hardware GPU if
+    /// there is one, else the CPU.
+    #[arg(long, default_value = "auto", value_parser = ["cpu", "gpu", "auto"])]
     pub device: String,
+    /// GPU arithmetic: f64 needs the adapter's SHADER_F64; auto takes f64 where available.
+    #[arg(long, default_value = "auto", value_parser = ["f32", "f64", "auto"])]
+    pub precision: String,
+    /// Use the GPU adapter whose name contains this (also: MESHSMOOTH_ADAPTER).
+    #[arg(long)]
+    pub adapter: Option<String>,
     /// Stop when the 2-norm of the objective's gradient falls below this.
     #[arg(long, default_value_t = 1e-6)]
     pub tol: f64,
@@ -163,21 +177,16 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         }
     };
     let result = match cli.command {
-        None => commands::demo(&DemoArgs {
-            output: None,
-            cells: 16,
-            solver: SolverArgs {
-                method: "bcd".into(),
-                device: "cpu".into(),
-                tol: 1e-6,
-                max_iter: 1000,
-                time_limit: None,
-            },
-        }),
+        // no command: the demo with its defaults, as `meshsmooth demo` would parse them
+        None => match Cli::parse_from(["meshsmooth", "demo"]).command {
+            Some(Command::Demo(a)) => commands::demo(&a),
+            _ => unreachable!("`demo` parses as the demo command"),
+        },
         Some(Command::Demo(a)) => commands::demo(&a),
         Some(Command::Smooth(a)) => commands::smooth(&a),
         Some(Command::Quality(a)) => commands::quality(&a),
         Some(Command::Compare(a)) => commands::compare(&a),
+        Some(Command::Devices) => commands::devices(),
         Some(Command::Generate(GenerateCommand::Box(a))) => commands::generate_box(&a),
     };
     match result {

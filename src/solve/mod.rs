@@ -153,6 +153,21 @@ pub(crate) fn accepted_step_inverted() -> Error {
     Error::InvalidMesh("an accepted step inverted an element (solver bug)".into())
 }
 
+/// Iterations without progress after which a run counts as stalled: the
+/// tolerance is below what the arithmetic can resolve (f32 on a GPU).
+const STALL_WINDOW: usize = 10;
+
+/// True when over the last `window` iterations F did not decrease and the
+/// gradient norm did not even halve.
+fn no_progress(h: &History, window: usize) -> bool {
+    let r = &h.records;
+    if r.len() <= window {
+        return false;
+    }
+    let (now, then) = (&r[r.len() - 1], &r[r.len() - 1 - window]);
+    now.objective >= then.objective && now.grad_norm > 0.5 * then.grad_norm
+}
+
 /// What one sweep of any backend reports to the shared loop.
 pub(crate) struct Sweep {
     pub objective: f64,
@@ -215,7 +230,9 @@ pub(crate) fn iterate(
         history.push(record);
         if !progress(&record) {
             stop = Some(StopReason::Cancelled);
-        } else if sweep.max_move_sq.sqrt() <= params.min_move * edge && gnorm >= params.tol {
+        } else if gnorm >= params.tol
+            && (sweep.max_move_sq.sqrt() <= params.min_move * edge || no_progress(&history, STALL_WINDOW))
+        {
             stop = Some(StopReason::Stalled);
         }
     }

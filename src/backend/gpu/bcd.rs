@@ -37,6 +37,8 @@ pub struct GpuBcd<'c> {
     reduce: wgpu::BindGroup,
     out: wgpu::Buffer,
     staging: wgpu::Buffer,
+    /// Bytes of every buffer this solver allocated on the device.
+    device_bytes: u64,
 }
 
 const OUT_LEN: usize = 5;
@@ -126,6 +128,26 @@ impl<'c> GpuBcd<'c> {
         );
         let reduce = ctx.bind(Kernel::Reduce, &[&sizes, &obj_partials, &vert_partials, &out]);
         ctx.check()?;
+        let device_bytes = [
+            &sizes,
+            &shape,
+            &xb,
+            &tets,
+            &inc_off,
+            &inc,
+            &free,
+            &color_items,
+            &disp,
+            &grad,
+            &obj_partials,
+            &vert_partials,
+            &out,
+            &staging,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum::<u64>()
+            + 16 * colors.len() as u64;
         Ok(GpuBcd {
             ctx,
             n_vertices: nv,
@@ -138,6 +160,7 @@ impl<'c> GpuBcd<'c> {
             reduce,
             out,
             staging,
+            device_bytes,
         })
     }
 
@@ -189,6 +212,11 @@ impl<'c> GpuBcd<'c> {
     }
 
     /// The current positions (problem numbering).
+    /// Bytes held on the device.
+    pub fn device_bytes(&self) -> usize {
+        self.device_bytes as usize
+    }
+
     pub fn download(&self) -> Result<Vec<Vec3>> {
         let flat = self.ctx.read_real(&self.x, 3 * self.n_vertices)?;
         Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())

@@ -37,10 +37,9 @@ pub struct AdapterSummary {
     pub compute: bool,
 }
 
-fn instance() -> wgpu::Instance {
-    // all native backends that work headless; browsers are out of scope
+fn instance_with(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12 | wgpu::Backends::GL;
+    desc.backends = backends;
     wgpu::Instance::new(desc)
 }
 
@@ -67,13 +66,18 @@ fn can_compute(a: &wgpu::Adapter) -> bool {
 
 /// Every adapter wgpu finds, best first.
 pub fn list_adapters() -> Vec<AdapterSummary> {
-    ranked(&instance()).iter().map(summary).collect()
+    ranked().iter().map(summary).collect()
 }
 
-/// Discrete, integrated, then virtual and CPU adapters; Vulkan before the
-/// other backends (GL on llvmpipe has no f64).
-fn ranked(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
-    let mut all = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+/// Discrete, integrated, then virtual and CPU adapters. The native compute
+/// backends come first; GL is asked only when they find nothing, because it
+/// lacks f64 on llvmpipe and its EGL start-up complains on headless machines.
+fn ranked() -> Vec<wgpu::Adapter> {
+    let native = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12;
+    let mut all = pollster::block_on(instance_with(native).enumerate_adapters(native));
+    if all.is_empty() {
+        all = pollster::block_on(instance_with(wgpu::Backends::GL).enumerate_adapters(wgpu::Backends::GL));
+    }
     all.sort_by_key(|a| {
         let info = a.get_info();
         let kind = match info.device_type {
@@ -106,8 +110,7 @@ pub struct GpuContext {
 
 impl GpuContext {
     pub fn new(opts: &GpuOptions) -> Result<GpuContext> {
-        let instance = instance();
-        let adapters = ranked(&instance);
+        let adapters = ranked();
         let wanted = opts
             .adapter
             .clone()

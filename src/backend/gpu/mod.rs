@@ -13,4 +13,4 @@ pub use bcd::{GpuBcd, Scalars};
 pub use buffers::{BindingLimits, check_bindings};
 pub use context::{AdapterSummary, GpuContext, GpuOptions, Precision, list_adapters};
 pub use mean_ratio_eval::{ElementEval, cbrt_eval, mean_ratio_eval};
-pub use solve::solve_gpu;
+pub use solve::{GpuRunOptions, smooth_mesh_gpu, solve_gpu, solve_gpu_with};

@@ -9,6 +9,18 @@ use crate::problem::Problem;
 use crate::solve::{self, Info, Method, Params, Record, Sweep};
 use std::time::Instant;
 
+/// How the device run guards against losing work.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GpuRunOptions {
+    /// Download the positions every this many sweeps, so that a failure
+    /// mid-run (device lost, out of memory) leaves the last feasible positions
+    /// in `x`. `None`: positions come back only at the end.
+    pub checkpoint_every: Option<usize>,
+    /// Testing aid: fail as a lost device would, after this many sweeps.
+    #[doc(hidden)]
+    pub fail_after: Option<usize>,
+}
+
 /// Runs coloured BCD on the device from `x` (problem numbering), updating `x`
 /// at the end. The time limit is checked between sweeps (a sweep is one
 /// submission); `Info::method` is `BcdColored`, the CPU method it mirrors.
@@ -17,6 +29,20 @@ pub fn solve_gpu(
     p: &Problem,
     x: &mut [Vec3],
     params: &Params,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    solve_gpu_with(ctx, p, x, params, &GpuRunOptions::default(), progress)
+}
+
+/// `solve_gpu` with checkpoints. On an error after the start, `x` holds the
+/// positions of the last checkpoint (or of the last sweep, when the device
+/// can still be read); every checkpoint is a feasible state.
+pub fn solve_gpu_with(
+    ctx: &GpuContext,
+    p: &Problem,
+    x: &mut [Vec3],
+    params: &Params,
+    opts: &GpuRunOptions,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
     if !(params.tol >= 0.0) {
@@ -34,26 +60,64 @@ pub fn solve_gpu(
             "the device finds inverted elements the CPU does not (f32 rounding of a nearly flat element?)".into(),
         )
     })?;
-    let mut step = || -> Result<Sweep> {
-        gpu.sweep()?;
-        let s = gpu.evaluate()?;
-        let objective = s.objective.ok_or_else(solve::accepted_step_inverted)?;
-        Ok(Sweep {
-            objective,
-            grad_norm: s.grad_norm,
-            max_move_sq: s.max_move_sq,
-        })
+    let mut sweeps = 0;
+    let mut checkpoint: Option<Vec<Vec3>> = None;
+    let result = {
+        let mut step = || -> Result<Sweep> {
+            if opts.fail_after.is_some_and(|n| sweeps >= n) {
+                return Err(Error::Gpu("device lost (simulated for testing)".into()));
+            }
+            gpu.sweep()?;
+            let s = gpu.evaluate()?;
+            let objective = s.objective.ok_or_else(solve::accepted_step_inverted)?;
+            sweeps += 1;
+            if opts.checkpoint_every.is_some_and(|k| sweeps % k.max(1) == 0) {
+                checkpoint = Some(gpu.download()?);
+            }
+            Ok(Sweep {
+                objective,
+                grad_norm: s.grad_norm,
+                max_move_sq: s.max_move_sq,
+            })
+        };
+        solve::iterate(
+            Method::BcdColored,
+            params,
+            start,
+            edge,
+            p.setup_time.as_secs_f64(),
+            first,
+            &mut step,
+            progress,
+        )
     };
-    let info = solve::iterate(
-        Method::BcdColored,
-        params,
-        start,
-        edge,
-        p.setup_time.as_secs_f64(),
-        first,
-        &mut step,
-        progress,
-    )?;
-    x.copy_from_slice(&gpu.download()?);
-    Ok(info)
+    match result {
+        Ok(mut info) => {
+            x.copy_from_slice(&gpu.download()?);
+            info.memory_bytes = p.bytes() + std::mem::size_of_val(x) + gpu.device_bytes();
+            Ok(info)
+        }
+        Err(e) => {
+            if let Some(c) = checkpoint {
+                x.copy_from_slice(&c);
+            }
+            Err(e)
+        }
+    }
+}
+
+/// Smooths `mesh` in place on the device (coloured BCD), like `solve::smooth_mesh`.
+pub fn smooth_mesh_gpu(
+    ctx: &GpuContext,
+    mesh: &mut crate::Mesh,
+    params: &Params,
+    opts: &GpuRunOptions,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let p = Problem::new(mesh)?;
+    let mut x = p.gather(&mesh.points);
+    let result = solve_gpu_with(ctx, &p, &mut x, params, opts, progress);
+    // on failure the mesh gets the last checkpoint, so a caller can save it
+    mesh.points = p.scatter(&x);
+    result
 }
