@@ -1,10 +1,10 @@
 //! The vertex colouring behind parallel BCD: no two vertices of one colour
 //! share an element, every free vertex has exactly one colour.
 
+use meshsmooth::Mesh;
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, Format};
 use meshsmooth::problem::Problem;
-use meshsmooth::Mesh;
 use std::path::PathBuf;
 
 fn check_coloring(mesh: &Mesh, name: &str) -> usize {
@@ -18,13 +18,20 @@ fn check_coloring(mesh: &Mesh, name: &str) -> usize {
         }
     }
     for v in 0..p.num_vertices() {
-        assert_eq!(p.free[v], color_of[v] != usize::MAX, "{name}: free vertex {v} uncoloured");
+        assert_eq!(
+            p.free[v],
+            color_of[v] != usize::MAX,
+            "{name}: free vertex {v} uncoloured"
+        );
     }
     for (e, t) in p.tets.iter().enumerate() {
         for a in 0..4 {
             for b in a + 1..4 {
                 let (ca, cb) = (color_of[t[a] as usize], color_of[t[b] as usize]);
-                assert!(ca == usize::MAX || ca != cb, "{name}: element {e} has two vertices of colour {ca}");
+                assert!(
+                    ca == usize::MAX || ca != cb,
+                    "{name}: element {e} has two vertices of colour {ca}"
+                );
             }
         }
     }
@@ -34,7 +41,11 @@ fn check_coloring(mesh: &Mesh, name: &str) -> usize {
 #[test]
 fn colours_never_share_an_element_on_generated_meshes() {
     let mut m = generate::tet_box(12, 7, 5, [12.0, 7.0, 5.0]);
-    let opts = PerturbOptions { perturbation: Perturbation::Random { alpha: 0.3 }, fraction: 1.0, seed: 5 };
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.3 },
+        fraction: 1.0,
+        seed: 5,
+    };
     generate::perturb(&mut m, &opts).unwrap();
     let colours = check_coloring(&m, "box");
     // a Kuhn box vertex touches 14 others; greedy needs at most 15 colours
@@ -48,8 +59,15 @@ fn colours_never_share_an_element_on_gmsh_and_real_meshes() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("box.msh");
     let mut m = generate::tet_box(6, 6, 6, [1.0; 3]);
-    generate::perturb(&mut m, &PerturbOptions { perturbation: Perturbation::Random { alpha: 0.2 }, fraction: 1.0, seed: 2 })
-        .unwrap();
+    generate::perturb(
+        &mut m,
+        &PerturbOptions {
+            perturbation: Perturbation::Random { alpha: 0.2 },
+            fraction: 1.0,
+            seed: 2,
+        },
+    )
+    .unwrap();
     io::write(&path, &m, Format::Msh41Binary, &[]).unwrap();
     check_coloring(&io::read(&path).unwrap(), "gmsh box");
     let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");

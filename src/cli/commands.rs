@@ -7,6 +7,7 @@ use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::report::quality_report;
+use meshsmooth::solve::pcg::NegativeCurvature;
 use meshsmooth::solve::{self, Info, Method, Params};
 use meshsmooth::{Error, Mesh, Result, metric};
 use std::path::Path;
@@ -18,7 +19,11 @@ impl SolverArgs {
     }
 
     fn params(&self) -> Result<Params> {
-        params(self.tol, self.max_iter, self.time_limit)
+        let mut p = params(self.tol, self.max_iter, self.time_limit)?;
+        if self.negative_curvature == "iterate" {
+            p.newton.negative_curvature = NegativeCurvature::Iterate;
+        }
+        Ok(p)
     }
 }
 

@@ -90,6 +90,10 @@ pub struct SolverArgs {
     /// Stop after this many seconds (the mesh so far is kept; it is always valid).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
+    /// Newton: what CG returns on negative curvature, the direction itself (as in the
+    /// paper) or the CG iterate so far (truncated Newton).
+    #[arg(long, default_value = "direction", value_parser = ["direction", "iterate"])]
+    pub negative_curvature: String,
 }
 
 #[derive(Args, Debug)]

@@ -168,8 +168,9 @@ impl TetShape {
     /// block (k,l) = (2h/3)(b_k.b_l) I - (4/9) d^(-5/3) (s_k c_l^T + c_k s_l^T)
     ///             + (10/27) f d^(-8/3) c_k c_l^T - (2/9) f d^(-5/3) [S (b_k x b_l)]_x
     /// with s_k = S b_k, c_k = C b_k and [w]_x[i][q] = sum_m eps_iqm w_m.
-    /// This is what the Newton assembly calls.
-    pub fn hessian_blocks(&self, x: &[Vec3; 4]) -> Option<(f64, [Vec3; 4], [[Mat3; 4]; 4])> {
+    /// This is what the Newton assembly calls; the blocks go to `out` (a
+    /// 1 KiB array is cheaper to fill in place than to return).
+    pub fn hessian_blocks(&self, x: &[Vec3; 4], out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
         let p = self.parts(x)?;
         let g = self.b.map(|bk| mul_vec(&p.grad_s, &bk));
         let sv = self.b.map(|bk| mul_vec(&p.s, &bk));
@@ -180,7 +181,6 @@ impl TetShape {
         let cross = -(4.0 / 9.0) * dm53;
         let cc = (10.0 / 27.0) * p.f * dm83;
         let skew = -(2.0 / 9.0) * p.f * dm53;
-        let mut out = [[[[0.0; 3]; 3]; 4]; 4];
         for k in 0..4 {
             for l in k..4 {
                 let (bk, bl) = (&self.b[k], &self.b[l]);
@@ -216,7 +216,7 @@ impl TetShape {
                 }
             }
         }
-        Some((p.eta, g, out))
+        Some((p.eta, g))
     }
 
     /// Value, gradient and the 12x12 Hessian (index 3*vertex + coordinate).

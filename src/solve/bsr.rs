@@ -187,9 +187,10 @@ impl HessianPattern {
             blocks.iter_mut().for_each(|b| *b = [[0.0; 3]; 3]);
             grads.iter_mut().for_each(|g| *g = [0.0; 3]);
             let base = offsets[r.start as usize];
+            let mut h = [[[[0.0; 3]; 3]; 4]; 4];
             for &e in &r.elements {
                 let e = e as usize;
-                let Some((_, g, h)) = p.shape.hessian_blocks(&p.tet_points(x, e)) else {
+                let Some((_, g)) = p.shape.hessian_blocks(&p.tet_points(x, e), &mut h) else {
                     return false;
                 };
                 let t = &p.tets[e];

@@ -133,8 +133,18 @@ pub fn solve(
             let max_move_sq = match method {
                 Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
                 Method::BcdColored => bcd::sweep_colored(p, x, &params.line_search, deadline),
-                Method::Newton => newton.as_mut().expect("built above").step(p, x, &params.line_search),
                 Method::Laplace => laplace::sweep(p, x, deadline),
+                Method::Newton => {
+                    // Newton evaluates F and |grad F| at its new point itself
+                    let n = newton.as_mut().expect("built above");
+                    let (objective, grad_norm, max_move_sq) =
+                        n.step(p, x, &params.line_search).ok_or_else(accepted_step_inverted)?;
+                    return Ok(Sweep {
+                        objective,
+                        grad_norm,
+                        max_move_sq,
+                    });
+                }
             };
             let (objective, grad_norm) = evaluate(x)?;
             Ok(Sweep {

@@ -42,6 +42,8 @@ pub struct Newton {
     dir: Vec<Vec3>,
     trial: Vec<Vec3>,
     g0: Option<f64>,
+    /// F at the current point when `grad` and the matrix are assembled there.
+    current: Option<f64>,
     /// What the last PCG solve did.
     pub last_pcg: Option<PcgInfo>,
     pub cg_iterations: usize,
@@ -62,6 +64,7 @@ impl Newton {
             dir: vec![[0.0; 3]; m],
             trial: Vec::new(),
             g0: None,
+            current: None,
             last_pcg: None,
             cg_iterations: 0,
             setup_time: start.elapsed(),
@@ -80,15 +83,23 @@ impl Newton {
             + 24 * self.pattern.free_index.len() // trial positions
     }
 
-    /// One Newton iteration; returns the largest squared vertex displacement
-    /// (0 when the line search found no acceptable step).
-    pub fn step(&mut self, p: &Problem, x: &mut [Vec3], ls: &LineSearch) -> f64 {
-        if !self.pattern.assemble(p, x, &mut self.grad) {
-            return 0.0;
+    /// Assembles gradient and Hessian at `x` unless the last step already did.
+    fn ensure_assembled(&mut self, p: &Problem, x: &[Vec3]) -> Option<f64> {
+        if self.current.is_none() {
+            if !self.pattern.assemble(p, x, &mut self.grad) {
+                return None;
+            }
+            self.current = Some(objective::value(p, x)?);
         }
-        let Some(f) = objective::value(p, x) else {
-            return 0.0;
-        };
+        self.current
+    }
+
+    /// One Newton iteration. Returns F and |grad F| at the new point (the
+    /// assembly for the next iteration is done here, so nothing is evaluated
+    /// twice) and the largest squared vertex displacement, 0 when the line
+    /// search found no acceptable step.
+    pub fn step(&mut self, p: &Problem, x: &mut [Vec3], ls: &LineSearch) -> Option<(f64, f64, f64)> {
+        let f = self.ensure_assembled(p, x)?;
         let gnorm = objective::norm(&self.grad);
         let g0 = *self.g0.get_or_insert(gnorm);
         let rtol = self.params.forcing_max.min((gnorm / g0).sqrt());
@@ -98,37 +109,28 @@ impl Newton {
             .par_iter_mut()
             .zip(&self.grad)
             .for_each(|(r, g)| *r = g.map(|c| -c));
-        let info = pcg(
-            m,
-            &precond,
-            &self.rhs,
-            &mut self.dir,
-            &PcgParams {
-                max_iter: self.params.cg_max_iter,
-                rtol,
-                negative_curvature: self.params.negative_curvature,
-            },
-        );
+        let pcg_params = PcgParams {
+            max_iter: self.params.cg_max_iter,
+            rtol,
+            negative_curvature: self.params.negative_curvature,
+        };
+        let info = pcg(m, &precond, &self.rhs, &mut self.dir, &pcg_params);
         self.cg_iterations += info.iterations;
         self.last_pcg = Some(info);
-        let mut slope: f64 = self
-            .grad
-            .iter()
-            .zip(&self.dir)
-            .map(|(g, d)| g[0] * d[0] + g[1] * d[1] + g[2] * d[2])
-            .sum();
+        let slope_of = |g: &[Vec3], d: &[Vec3]| -> f64 {
+            g.iter()
+                .zip(d)
+                .map(|(g, d)| g[0] * d[0] + g[1] * d[1] + g[2] * d[2])
+                .sum()
+        };
+        let mut slope = slope_of(&self.grad, &self.dir);
         if !(slope < 0.0) {
             // not downhill (rounding at a near-stationary point): preconditioned steepest descent
             use super::pcg::Precond;
             precond.apply(&self.rhs, &mut self.dir);
-            slope = self
-                .grad
-                .iter()
-                .zip(&self.dir)
-                .map(|(g, d)| g[0] * d[0] + g[1] * d[1] + g[2] * d[2])
-                .sum();
+            slope = slope_of(&self.grad, &self.dir);
             if !(slope < 0.0) {
-                return 0.0;
+                return Some((f, gnorm, 0.0));
             }
         }
         let mut alpha = 1.0;
@@ -150,10 +152,15 @@ impl Newton {
                     .iter()
                     .map(|d| d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
                     .fold(0.0, f64::max);
-                return alpha * alpha * dmax;
+                // the next iteration's gradient and Hessian, and this one's |grad F|
+                if !self.pattern.assemble(p, x, &mut self.grad) {
+                    return None;
+                }
+                self.current = Some(ft);
+                return Some((ft, objective::norm(&self.grad), alpha * alpha * dmax));
             }
             alpha *= ls.beta;
         }
-        0.0
+        Some((f, gnorm, 0.0))
     }
 }
