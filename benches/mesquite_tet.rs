@@ -1,11 +1,12 @@
-//! Block coordinate descent on Mesquite's tetrahedral test meshes, against
-//! Mesquite's own results (../shared/meshes/README.md). Prints a Markdown table:
-//! time to reach Mesquite's final F, and time to |grad F| < 1e-6.
+//! Our solvers on Mesquite's tetrahedral test meshes, against Mesquite's own
+//! results (../shared/meshes/README.md; Mesquite ran on one core). Prints a
+//! Markdown table: time to reach Mesquite's final F (within 1e-4 relative) and
+//! time to |grad F| < 1e-6, on one thread and on all cores.
 //!
 //! Run: cargo bench --bench mesquite_tet
 
 use meshsmooth::io;
-use meshsmooth::solve::{self, Method, Params};
+use meshsmooth::solve::{self, Info, Method, Params};
 use std::path::PathBuf;
 
 /// name, Mesquite FN final F, FN seconds, Mesquite BCD seconds, BCD sweeps
@@ -23,34 +24,42 @@ fn main() {
         eprintln!("{} not found; nothing to compare", dir.display());
         return;
     }
-    let threads = rayon::current_num_threads();
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let all = rayon::current_num_threads();
     println!(
-        "| mesh | method | F start | F end | Mesquite F | sweeps | s to Mesquite F | s to converge | Mesquite BCD s (sweeps) | Mesquite FN s |"
+        "| mesh | method | threads | F end | Mesquite F | iterations | s to Mesquite F | s to converge | vs Mesquite FN (s) | vs Mesquite BCD (s, sweeps) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for &(name, mq_f, mq_fn_s, mq_bcd_s, mq_sweeps) in MESQUITE {
         let mesh = io::read(&dir.join(name)).expect("mesh reads");
-        for method in [Method::Bcd, Method::BcdColored] {
-            // best of three runs, as the machine is shared
-            let info = (0..3)
-                .map(|_| {
-                    let mut m = mesh.clone();
-                    solve::smooth_mesh(&mut m, method, &Params::default(), &mut |_| true).unwrap()
-                })
-                .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
-                .unwrap();
-            let reach = info
-                .history
-                .time_to_value(mq_f * (1.0 + 1e-4))
-                .map_or("never".into(), |t| format!("{t:.3}"));
-            let label = if method == Method::BcdColored {
-                format!("{method} ({threads} threads)")
-            } else {
-                method.to_string()
+        let runs = [
+            (Method::Bcd, 1),
+            (Method::Newton, 1),
+            (Method::BcdColored, all),
+            (Method::Newton, all),
+        ];
+        for (method, threads) in runs {
+            let run = || -> Info {
+                // best of three: the machine may be shared
+                (0..3)
+                    .map(|_| {
+                        let mut m = mesh.clone();
+                        solve::smooth_mesh(&mut m, method, &Params::default(), &mut |_| true).unwrap()
+                    })
+                    .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+                    .unwrap()
             };
+            let info = if threads == 1 { one.install(run) } else { run() };
+            let reach = info.history.time_to_value(mq_f * (1.0 + 1e-4));
+            let speedup = |mq: f64| reach.map_or("-".into(), |t| format!("{:.1}x faster", mq / t.max(1e-6)));
             println!(
-                "| {name} | {label} | {:.5} | {:.5} | {mq_f} | {} | {reach} | {:.3} | {mq_bcd_s} ({mq_sweeps}) | {mq_fn_s} |",
-                info.history.records[0].objective, info.objective, info.iterations, info.seconds
+                "| {name} | {method} | {threads} | {:.5} | {mq_f} | {} | {} | {:.3} | {} ({mq_fn_s}) | {} ({mq_bcd_s}, {mq_sweeps}) |",
+                info.objective,
+                info.iterations,
+                reach.map_or("never".into(), |t| format!("{t:.3}")),
+                info.seconds,
+                speedup(mq_fn_s),
+                speedup(mq_bcd_s),
             );
         }
     }
