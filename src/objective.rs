@@ -1,6 +1,7 @@
-//! The harmonic-mean template (equation 2 of the Newton paper):
-//! F = (1/|E|) sum_e 1/q_e = mean inverse mean ratio; its gradient over the
-//! free vertices and that gradient's 2-norm.
+//! The objective F = sum over corners of w_c m(S_c) (the mean over elements of
+//! the mean corner term; for the inverse mean ratio under the harmonic template,
+//! equation 2 of the Newton paper), its gradient over the free vertices and
+//! that gradient's 2-norm.
 
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
@@ -8,29 +9,28 @@ use rayon::prelude::*;
 
 const CHUNK: usize = 4096;
 
-/// Objective value; `None` when any element is inverted or degenerate.
+/// Objective value; `None` when any corner is inverted or degenerate.
 pub fn value(p: &Problem, x: &[Vec3]) -> Option<f64> {
-    let n = p.num_elements();
+    let n = p.num_corners();
     // fixed chunks summed in a fixed order: the value repeats bit for bit
     let partial: Option<Vec<f64>> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
-        .map(|c| {
-            (c * CHUNK..((c + 1) * CHUNK).min(n))
-                .map(|e| p.shape.value(&p.tet_points(x, e)))
-                .sum()
-        })
+        .map(|c| (c * CHUNK..((c + 1) * CHUNK).min(n)).map(|k| p.corner_term(x, k)).sum())
         .collect();
-    partial.map(|v| v.iter().sum::<f64>() / n as f64)
+    partial.map(|v| v.iter().sum::<f64>())
 }
 
 /// Objective and its gradient (zero at fixed vertices); `None` if infeasible.
 pub fn gradient(p: &Problem, x: &[Vec3]) -> Option<(f64, Vec<Vec3>)> {
-    let n = p.num_elements();
-    let scale = 1.0 / n as f64;
+    let n = p.num_corners();
     let grads: Option<Vec<(f64, [Vec3; 4])>> = (0..n)
         .into_par_iter()
-        .with_min_len(4096)
-        .map(|e| p.shape.gradient(&p.tet_points(x, e)))
+        .with_min_len(CHUNK)
+        .map(|c| {
+            let (v, g) = p.model.gradient(p.shape(c), &p.corner_points(x, c))?;
+            let w = p.corner_weight[c];
+            Some((w * v, g.map(|gk| gk.map(|t| t * w))))
+        })
         .collect();
     let grads = grads?;
     // gather per vertex (not scatter) so that the sum order is fixed and the
@@ -48,10 +48,15 @@ pub fn gradient(p: &Problem, x: &[Vec3]) -> Option<(f64, Vec<Vec3>)> {
                     }
                 }
             }
-            acc.map(|c| c * scale)
+            acc
         })
         .collect();
-    let f = grads.iter().map(|(eta, _)| eta).sum::<f64>() * scale;
+    let f = grads
+        .par_chunks(CHUNK)
+        .map(|c| c.iter().map(|(t, _)| t).sum::<f64>())
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum();
     Some((f, g))
 }
 

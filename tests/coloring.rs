@@ -24,9 +24,10 @@ fn check_coloring(mesh: &Mesh, name: &str) -> usize {
             "{name}: free vertex {v} uncoloured"
         );
     }
-    for (e, t) in p.tets.iter().enumerate() {
-        for a in 0..4 {
-            for b in a + 1..4 {
+    for e in 0..p.num_elements() {
+        let t = p.elements.of(e);
+        for a in 0..t.len() {
+            for b in a + 1..t.len() {
                 let (ca, cb) = (color_of[t[a] as usize], color_of[t[b] as usize]);
                 assert!(
                     ca == usize::MAX || ca != cb,

@@ -42,7 +42,11 @@ impl TetShape {
 
     /// From the upper-triangular factor R of a reference W = Q R.
     pub fn from_r(r: &Mat3) -> Self {
-        let m = upper_inverse(r);
+        Self::from_winv(&upper_inverse(r))
+    }
+
+    /// From W^-1 (any invertible reference corner, rotation included).
+    pub fn from_winv(m: &Mat3) -> Self {
         let b0 = [
             -(m[0][0] + m[1][0] + m[2][0]),
             -(m[0][1] + m[1][1] + m[2][1]),

@@ -2,8 +2,10 @@
 //! per vertex. Each file here is the CPU twin of a WGSL kernel in `shaders/metric/`.
 
 pub mod corner;
+pub mod corner_model;
 pub mod mat3;
 pub mod mean_ratio;
+pub mod smetric;
 
 pub use mean_ratio::{TetShape, tet_det};
 

@@ -2,7 +2,6 @@
 //! step per free vertex on its 3x3 block, Armijo backtracking on the elements
 //! around it, vertices in the problem's locality order.
 
-use crate::metric::TetShape;
 use crate::metric::mat3::{Mat3, Vec3, cholesky_solve, dot};
 use crate::problem::Problem;
 use rayon::prelude::*;
@@ -29,47 +28,52 @@ impl Default for LineSearch {
     }
 }
 
-/// The elements around one vertex, each as S without the vertex's term
-/// (`TetShape::s_rest`) and the vertex's corner: trial points then cost one
-/// rank-one update per element instead of a gather.
+/// The corners around one vertex, each as S without the vertex's term
+/// (`TetShape::s_rest`), the vertex's slot and the corner: trial points then
+/// cost one rank-one update per corner instead of a gather.
 #[derive(Default)]
 pub struct Patch {
-    rest: Vec<(Mat3, usize)>,
+    rest: Vec<(Mat3, usize, usize)>,
 }
 
 impl Patch {
     pub fn load(&mut self, p: &Problem, x: &[Vec3], v: usize) {
         self.rest.clear();
         for &packed in p.incidence.of(v) {
-            let (e, k) = ((packed >> 2) as usize, (packed & 3) as usize);
-            self.rest.push((p.shape.s_rest(&p.tet_points(x, e), k), k));
+            let (c, k) = ((packed >> 2) as usize, (packed & 3) as usize);
+            self.rest.push((p.shape(c).tet.s_rest(&p.corner_points(x, c), k), k, c));
         }
     }
 
-    /// Sum of the inverse mean ratios with the vertex at `at`; `None` if any
-    /// element would be inverted.
+    /// The objective terms of these corners with the vertex at `at`; `None` if
+    /// any corner would be inverted.
     #[inline]
     pub fn value(&self, p: &Problem, at: &Vec3) -> Option<f64> {
         let mut sum = 0.0;
-        for (rest, k) in &self.rest {
-            sum += TetShape::value_of_s(&p.shape.s_with(rest, *k, at))?;
+        for &(ref rest, k, c) in &self.rest {
+            let shape = p.shape(c);
+            sum += p.corner_weight[c] * p.model.value_of_s(shape, &shape.tet.s_with(rest, k, at))?;
         }
         Some(sum)
     }
 
-    /// The sum, its gradient and 3x3 Hessian with respect to the vertex at `at`.
+    /// That sum, its gradient and 3x3 Hessian with respect to the vertex at `at`.
     #[inline]
     pub fn gradient_hessian(&self, p: &Problem, at: &Vec3) -> Option<(f64, Vec3, Mat3)> {
         let mut f = 0.0;
         let mut g = [0.0; 3];
         let mut h = [[0.0; 3]; 3];
-        for (rest, k) in &self.rest {
-            let (eta, ge, he) = p.shape.vertex_gradient_hessian_of_s(p.shape.s_with(rest, *k, at), *k)?;
-            f += eta;
+        for &(ref rest, k, c) in &self.rest {
+            let shape = p.shape(c);
+            let w = p.corner_weight[c];
+            let (eta, ge, he) = p
+                .model
+                .vertex_gradient_hessian_of_s(shape, shape.tet.s_with(rest, k, at), k)?;
+            f += w * eta;
             for i in 0..3 {
-                g[i] += ge[i];
+                g[i] += w * ge[i];
                 for j in 0..3 {
-                    h[i][j] += he[i][j];
+                    h[i][j] += w * he[i][j];
                 }
             }
         }

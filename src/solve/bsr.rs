@@ -60,7 +60,7 @@ pub struct HessianPattern {
     pub matrix: BlockCsr,
 }
 
-/// Rows `start..end` and the elements with a vertex among them. Each range
+/// Rows `start..end` and the corners with a vertex among them. Each range
 /// is assembled by one thread that writes only its own rows, so no two
 /// threads write one block; an element on a range border is evaluated once
 /// per range it touches. Ranges follow the problem size, not the thread
@@ -84,38 +84,43 @@ impl HessianPattern {
             free_index[v as usize] = i as u32;
         }
         let rows = free_vertex.len();
-        // row pattern: free neighbours (tets: every vertex pair is an edge) and the diagonal
-        let mut row_offsets = Vec::with_capacity(rows + 1);
-        let mut cols = Vec::new();
-        let mut diag = Vec::with_capacity(rows);
-        row_offsets.push(0u32);
-        for &v in &free_vertex {
-            let i = free_index[v as usize];
-            let mut row: Vec<u32> = p
-                .neighbours
-                .of(v as usize)
-                .iter()
-                .map(|&w| free_index[w as usize])
-                .filter(|&j| j != u32::MAX)
-                .chain(std::iter::once(i))
-                .collect();
-            row.sort_unstable();
-            row.dedup();
-            diag.push(cols.len() as u32 + row.iter().position(|&j| j == i).unwrap() as u32);
-            cols.extend_from_slice(&row);
-            row_offsets.push(cols.len() as u32);
+        // row pattern: the free vertices sharing a corner with the row's vertex
+        // (for hexahedra that includes face diagonals), and the diagonal
+        let nslots = p.dim + 1;
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for t in &p.corners {
+            for a in 0..nslots {
+                for b in 0..nslots {
+                    let (i, j) = (free_index[t[a] as usize], free_index[t[b] as usize]);
+                    if i != u32::MAX && j != u32::MAX {
+                        pairs.push((i, j));
+                    }
+                }
+            }
         }
+        pairs.extend((0..rows as u32).map(|i| (i, i)));
+        pairs.sort_unstable();
+        pairs.dedup();
+        let pattern = crate::mesh::topology::Csr::from_pairs(rows, pairs.into_iter());
+        let row_offsets = pattern.offsets;
+        let cols = pattern.items;
+        let diag: Vec<u32> = (0..rows)
+            .map(|i| {
+                let (a, b) = (row_offsets[i] as usize, row_offsets[i + 1] as usize);
+                a as u32 + cols[a..b].binary_search(&(i as u32)).expect("diagonal present") as u32
+            })
+            .collect();
         let slot = |i: u32, j: u32| -> u32 {
             let (a, b) = (row_offsets[i as usize] as usize, row_offsets[i as usize + 1] as usize);
             a as u32 + cols[a..b].binary_search(&j).expect("pattern holds every element pair") as u32
         };
         let slots: Vec<[u32; 16]> = p
-            .tets
+            .corners
             .iter()
             .map(|t| {
                 let mut s = [u32::MAX; 16];
-                for a in 0..4 {
-                    for b in 0..4 {
+                for a in 0..nslots {
+                    for b in 0..nslots {
                         let (i, j) = (free_index[t[a] as usize], free_index[t[b] as usize]);
                         if i != u32::MAX && j != u32::MAX {
                             s[4 * a + b] = slot(i, j);
@@ -135,9 +140,9 @@ impl HessianPattern {
             .collect();
         let range_of = |i: u32| ranges.partition_point(|r| r.end <= i);
         let mut touched: Vec<(usize, u32)> = Vec::new();
-        for (e, t) in p.tets.iter().enumerate() {
+        for (e, t) in p.corners.iter().enumerate() {
             let mut seen = [usize::MAX; 4];
-            for (k, &v) in t.iter().enumerate() {
+            for (k, &v) in t.iter().enumerate().take(nslots) {
                 let i = free_index[v as usize];
                 if i != u32::MAX {
                     let r = range_of(i);
@@ -169,7 +174,7 @@ impl HessianPattern {
     /// Assembles the free gradient and the Hessian of F at `x` into `grad`
     /// (indexed by free index) and `self.matrix`. `false` if an element is infeasible.
     pub fn assemble(&mut self, p: &Problem, x: &[Vec3], grad: &mut [Vec3]) -> bool {
-        let scale = 1.0 / p.num_elements() as f64;
+        let nslots = p.dim + 1;
         let offsets = &self.matrix.row_offsets;
         // hand each range its own rows of blocks and gradient
         let mut parts = Vec::with_capacity(self.ranges.len());
@@ -190,11 +195,12 @@ impl HessianPattern {
             let mut h = [[[[0.0; 3]; 3]; 4]; 4];
             for &e in &r.elements {
                 let e = e as usize;
-                let Some((_, g)) = p.shape.hessian_blocks(&p.tet_points(x, e), &mut h) else {
+                let Some((_, g)) = p.model.blocks(p.shape(e), &p.corner_points(x, e), &mut h) else {
                     return false;
                 };
-                let t = &p.tets[e];
-                for a in 0..4 {
+                let scale = p.corner_weight[e];
+                let t = &p.corners[e];
+                for a in 0..nslots {
                     let i = free_index[t[a] as usize];
                     if i < r.start || i >= r.end {
                         continue;
@@ -203,7 +209,7 @@ impl HessianPattern {
                     for c in 0..3 {
                         gi[c] += g[a][c] * scale;
                     }
-                    for b in 0..4 {
+                    for b in 0..nslots {
                         let s = slots[e][4 * a + b];
                         if s != u32::MAX {
                             let blk = &mut blocks[(s - base) as usize];

@@ -6,14 +6,17 @@ use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use std::time::Instant;
 
-/// Largest inverse mean ratio around `v` with `v` at `at`; `None` if inverted.
+/// Worst corner term around `v` with `v` at `at`; `None` if inverted.
 fn patch_worst(p: &Problem, x: &[Vec3], v: usize, at: &Vec3) -> Option<f64> {
-    let mut worst: f64 = 0.0;
+    let mut worst: f64 = f64::NEG_INFINITY;
     for &packed in p.incidence.of(v) {
-        let (e, k) = ((packed >> 2) as usize, (packed & 3) as usize);
-        let mut xe = p.tet_points(x, e);
-        xe[k] = *at;
-        worst = worst.max(p.shape.value(&xe)?);
+        let (c, k) = ((packed >> 2) as usize, (packed & 3) as usize);
+        let mut xc = p.corner_points(x, c);
+        xc[k] = *at;
+        if p.dim == 2 {
+            xc[3] = xc[0];
+        }
+        worst = worst.max(p.model.value(p.shape(c), &xc)?);
     }
     Some(worst)
 }

@@ -1,0 +1,219 @@
+//! One corner of an element as the solvers see it: S = sum_k x_k b_k^T over
+//! the corner vertex and its n neighbours (B = D W^-1), a metric of S, and a
+//! template applied to it. Derivatives with respect to the vertices are
+//! contractions of the S-derivatives with the rows b_k.
+//!
+//! The inverse mean ratio of tetrahedra under the harmonic template (the
+//! papers' main case) takes the closed forms of `TetShape`; everything else
+//! goes through the dense S-Hessian of `smetric`.
+
+use super::mat3::{Mat3, Vec3, inverse};
+use super::mean_ratio::TetShape;
+use super::smetric::{self, Hess9, MetricKind};
+
+/// How corner values are combined into the objective.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Template {
+    /// F = mean over elements of the mean corner metric (for the inverse mean
+    /// ratio: the harmonic mean of the mean ratios, equation 2 of the Newton paper).
+    #[default]
+    Harmonic,
+    /// F = mean over elements of the mean of 1 - 1/m: maximises the linear
+    /// average of the quality q = 1/m (mean ratio, inverse condition number).
+    Average,
+}
+
+impl std::str::FromStr for Template {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "harmonic" => Ok(Template::Harmonic),
+            "average" => Ok(Template::Average),
+            _ => Err(crate::Error::InvalidArgument(format!(
+                "unknown template '{s}' (expected harmonic or average)"
+            ))),
+        }
+    }
+}
+
+/// A corner's reference: the B rows (vertex 0 = the corner, 1..=n its
+/// neighbours; row n+1.. zero) and the dimension.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CornerShape {
+    pub tet: TetShape,
+    pub n: usize,
+}
+
+impl CornerShape {
+    /// From the reference corner matrix W (columns = reference edges), n x n in
+    /// the leading block; `None` if W is singular or inverted.
+    pub fn from_w(w: &Mat3, n: usize) -> Option<CornerShape> {
+        let mut full = *w;
+        if n == 2 {
+            full[2] = [0.0, 0.0, 1.0];
+            full[0][2] = 0.0;
+            full[1][2] = 0.0;
+        }
+        if !(smetric::det_n(&full, n) > 0.0) {
+            return None;
+        }
+        let mut winv = inverse(&full)?;
+        if n == 2 {
+            winv[2] = [0.0; 3];
+            winv[0][2] = 0.0;
+            winv[1][2] = 0.0;
+        }
+        Some(CornerShape {
+            tet: TetShape::from_winv(&winv),
+            n,
+        })
+    }
+}
+
+/// Metric, template and dimension: everything that turns corner positions
+/// into objective terms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Model {
+    pub metric: MetricKind,
+    pub template: Template,
+}
+
+impl Model {
+    fn fast(&self, shape: &CornerShape) -> bool {
+        shape.n == 3 && self.metric == MetricKind::InverseMeanRatio && self.template == Template::Harmonic
+    }
+
+    /// The template applied to a metric value, gradient and Hessian in S.
+    fn templated(&self, (m, g, h): (f64, Mat3, Hess9), hess: bool) -> (f64, Mat3, Hess9) {
+        match self.template {
+            Template::Harmonic => (m, g, h),
+            Template::Average => {
+                let (d1, d2) = (1.0 / (m * m), -2.0 / (m * m * m));
+                let gf: Vec<f64> = g.iter().flatten().copied().collect();
+                let mut h2 = [[0.0; 9]; 9];
+                if hess {
+                    for a in 0..9 {
+                        for b in 0..9 {
+                            h2[a][b] = d1 * h[a][b] + d2 * gf[a] * gf[b];
+                        }
+                    }
+                }
+                (1.0 - 1.0 / m, g.map(|r| r.map(|v| v * d1)), h2)
+            }
+        }
+    }
+
+    /// Objective term of a corner from its S.
+    #[inline]
+    pub fn value_of_s(&self, shape: &CornerShape, s: &Mat3) -> Option<f64> {
+        if self.fast(shape) {
+            return TetShape::value_of_s(s);
+        }
+        let m = smetric::eval(self.metric, shape.n, s, false)?.0;
+        Some(match self.template {
+            Template::Harmonic => m,
+            Template::Average => 1.0 - 1.0 / m,
+        })
+    }
+
+    #[inline]
+    pub fn value(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<f64> {
+        self.value_of_s(shape, &shape.tet.s_rest(x, usize::MAX))
+    }
+
+    /// Term, gradient and 3x3 Hessian with respect to vertex `k`, from S. In
+    /// 2D the z row and column carry 1 on the diagonal so the blocks stay
+    /// invertible; the z gradient is 0, so z never moves.
+    #[inline]
+    pub fn vertex_gradient_hessian_of_s(&self, shape: &CornerShape, s: Mat3, k: usize) -> Option<(f64, Vec3, Mat3)> {
+        if self.fast(shape) {
+            return shape.tet.vertex_gradient_hessian_of_s(s, k);
+        }
+        let n = shape.n;
+        let (v, g, h) = self.templated(smetric::eval(self.metric, n, &s, true)?, true);
+        let b = shape.tet.b(k);
+        let mut gv = [0.0; 3];
+        let mut hv = [[0.0; 3]; 3];
+        for i in 0..n {
+            gv[i] = (0..n).map(|j| g[i][j] * b[j]).sum();
+            for q in 0..n {
+                let mut acc = 0.0;
+                for j in 0..n {
+                    for m in 0..n {
+                        acc += h[3 * i + j][3 * q + m] * b[j] * b[m];
+                    }
+                }
+                hv[i][q] = acc;
+            }
+        }
+        if n == 2 {
+            hv[2][2] = 1.0;
+        }
+        Some((v, gv, hv))
+    }
+
+    /// Term and gradient with respect to the corner's vertices.
+    pub fn gradient(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<(f64, [Vec3; 4])> {
+        if self.fast(shape) {
+            return shape.tet.gradient(x);
+        }
+        let n = shape.n;
+        let s = shape.tet.s_rest(x, usize::MAX);
+        let (v, g, _) = self.templated(smetric::eval(self.metric, n, &s, false)?, false);
+        let mut out = [[0.0; 3]; 4];
+        for (k, o) in out.iter_mut().enumerate().take(n + 1) {
+            let b = shape.tet.b(k);
+            for i in 0..n {
+                o[i] = (0..n).map(|j| g[i][j] * b[j]).sum();
+            }
+        }
+        Some((v, out))
+    }
+
+    /// Term, gradient and the 4x4 vertex blocks of the Hessian (into `out`).
+    pub fn blocks(&self, shape: &CornerShape, x: &[Vec3; 4], out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
+        if self.fast(shape) {
+            return shape.tet.hessian_blocks(x, out);
+        }
+        let n = shape.n;
+        let s = shape.tet.s_rest(x, usize::MAX);
+        let (v, g, h) = self.templated(smetric::eval(self.metric, n, &s, true)?, true);
+        let nv = n + 1;
+        let mut grad = [[0.0; 3]; 4];
+        // t[l][(i,j)][q] = sum_m H[(i,j),(q,m)] b_l[m]
+        let mut t = [[[0.0; 3]; 9]; 4];
+        for l in 0..nv {
+            let bl = shape.tet.b(l);
+            for i in 0..n {
+                for j in 0..n {
+                    for q in 0..n {
+                        t[l][3 * i + j][q] = (0..n).map(|m| h[3 * i + j][3 * q + m] * bl[m]).sum();
+                    }
+                }
+            }
+            for i in 0..n {
+                grad[l][i] = (0..n).map(|j| g[i][j] * bl[j]).sum();
+            }
+        }
+        for k in 0..4 {
+            for l in 0..4 {
+                out[k][l] = [[0.0; 3]; 3];
+            }
+        }
+        for k in 0..nv {
+            let bk = shape.tet.b(k);
+            for l in 0..nv {
+                let blk = &mut out[k][l];
+                for i in 0..n {
+                    for q in 0..n {
+                        blk[i][q] = (0..n).map(|j| bk[j] * t[l][3 * i + j][q]).sum();
+                    }
+                }
+            }
+            if n == 2 {
+                out[k][k][2][2] = 1.0;
+            }
+        }
+        Some((v, grad))
+    }
+}

@@ -1,0 +1,316 @@
+//! Metrics as functions of one corner's S = A W^-1 (n x n, n = 2 or 3), with
+//! value, gradient and Hessian in S. Solvers turn these into vertex
+//! derivatives by contracting with the corner's B rows (`corner_model.rs`).
+//!
+//! Index convention: S[i][j] for i, j < n; the Hessian is 9x9 with index
+//! 3*i + j (in 2D only the entries with i, j < 2 are used).
+
+use super::mat3::{Mat3, cofactor, det};
+
+/// The element metrics meshsmooth optimises (all: lower is better).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum MetricKind {
+    /// Inverse mean ratio |S|^2 / (n det(S)^(2/n)) >= 1, 1 only for S a scaled rotation.
+    #[default]
+    InverseMeanRatio,
+    /// Frobenius condition number |S| |S^-1| / n >= 1 (equal to the inverse mean ratio in 2D).
+    ConditionNumber,
+    /// Target-matrix shape+size |S - I|^2 >= 0, 0 only when the corner equals its target.
+    TargetShapeSize,
+}
+
+impl MetricKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            MetricKind::InverseMeanRatio => "imr",
+            MetricKind::ConditionNumber => "cn",
+            MetricKind::TargetShapeSize => "tmp",
+        }
+    }
+}
+
+impl std::str::FromStr for MetricKind {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "imr" => Ok(MetricKind::InverseMeanRatio),
+            "cn" => Ok(MetricKind::ConditionNumber),
+            "tmp" => Ok(MetricKind::TargetShapeSize),
+            _ => Err(crate::Error::InvalidArgument(format!(
+                "unknown metric '{s}' (expected imr, cn or tmp)"
+            ))),
+        }
+    }
+}
+
+impl std::fmt::Display for MetricKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+pub type Hess9 = [[f64; 9]; 9];
+
+/// det of the leading n x n block.
+pub fn det_n(s: &Mat3, n: usize) -> f64 {
+    if n == 2 {
+        s[0][0] * s[1][1] - s[0][1] * s[1][0]
+    } else {
+        det(s)
+    }
+}
+
+/// d det / dS of the leading n x n block.
+fn cof_n(s: &Mat3, n: usize) -> Mat3 {
+    if n == 2 {
+        [[s[1][1], -s[1][0], 0.0], [-s[0][1], s[0][0], 0.0], [0.0; 3]]
+    } else {
+        cofactor(s)
+    }
+}
+
+fn frob_n(s: &Mat3, n: usize) -> f64 {
+    let mut f = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            f += s[i][j] * s[i][j];
+        }
+    }
+    f
+}
+
+/// Second derivative of det: 3D sum_{m,l} eps_ikm eps_jln S[m][l]; 2D eps_ik eps_jl.
+fn d2det(s: &Mat3, n: usize) -> Hess9 {
+    let mut h = [[0.0; 9]; 9];
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                for l in 0..n {
+                    if i == k || j == l {
+                        continue;
+                    }
+                    h[3 * i + j][3 * k + l] = if n == 2 {
+                        eps2(i, k) * eps2(j, l)
+                    } else {
+                        eps3(i, k, 3 - i - k) * eps3(j, l, 3 - j - l) * s[3 - i - k][3 - j - l]
+                    };
+                }
+            }
+        }
+    }
+    h
+}
+
+fn eps2(i: usize, j: usize) -> f64 {
+    if i == j {
+        0.0
+    } else if i < j {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+fn eps3(i: usize, j: usize, k: usize) -> f64 {
+    match (i, j, k) {
+        (0, 1, 2) | (1, 2, 0) | (2, 0, 1) => 1.0,
+        (0, 2, 1) | (2, 1, 0) | (1, 0, 2) => -1.0,
+        _ => 0.0,
+    }
+}
+
+fn flat(m: &Mat3) -> [f64; 9] {
+    [
+        m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2],
+    ]
+}
+
+/// Value, gradient and (if `hess`) Hessian of `metric` at S; `None` when the
+/// corner is inverted or degenerate (det <= 0), which every metric treats as
+/// infeasible.
+pub fn eval(metric: MetricKind, n: usize, s: &Mat3, hess: bool) -> Option<(f64, Mat3, Hess9)> {
+    let d = det_n(s, n);
+    if !(d > 0.0) || !d.is_finite() {
+        return None;
+    }
+    let out = match metric {
+        MetricKind::InverseMeanRatio => imr(n, s, d, hess),
+        MetricKind::ConditionNumber if n == 2 => imr(n, s, d, hess),
+        MetricKind::ConditionNumber => cn3(s, d, hess),
+        MetricKind::TargetShapeSize => tmp(n, s),
+    };
+    out.0.is_finite().then_some(out)
+}
+
+/// eta = f h / n with f = |S|^2, h = d^(-2/n).
+fn imr(n: usize, s: &Mat3, d: f64, hess: bool) -> (f64, Mat3, Hess9) {
+    let nf = n as f64;
+    let h = if n == 2 { 1.0 / d } else { 1.0 / (d.cbrt() * d.cbrt()) };
+    let f = frob_n(s, n);
+    let eta = f * h / nf;
+    let c = cof_n(s, n);
+    let p = 2.0 / nf; // d h / d det = -p h / d
+    let mut g = [[0.0; 3]; 3];
+    for i in 0..n {
+        for j in 0..n {
+            g[i][j] = (2.0 * h * s[i][j] - f * p * h / d * c[i][j]) / nf;
+        }
+    }
+    let mut hm = [[0.0; 9]; 9];
+    if hess {
+        let d2 = d2det(s, n);
+        let (sf, cf) = (flat(s), flat(&c));
+        let cross = -2.0 * p * h / d / nf;
+        let cc = f * p * (p + 1.0) * h / (d * d) / nf;
+        let dd = -f * p * h / d / nf;
+        for a in 0..9 {
+            if a % 3 >= n || a / 3 >= n {
+                continue;
+            }
+            for b in 0..9 {
+                if b % 3 >= n || b / 3 >= n {
+                    continue;
+                }
+                hm[a][b] = cross * (sf[a] * cf[b] + cf[a] * sf[b]) + cc * cf[a] * cf[b] + dd * d2[a][b];
+            }
+            hm[a][a] += 2.0 * h / nf;
+        }
+    }
+    (eta, g, hm)
+}
+
+/// |S - I|^2: gradient 2 (S - I), Hessian 2 I.
+fn tmp(n: usize, s: &Mat3) -> (f64, Mat3, Hess9) {
+    let mut v = 0.0;
+    let mut g = [[0.0; 3]; 3];
+    let mut h = [[0.0; 9]; 9];
+    for i in 0..n {
+        for j in 0..n {
+            let e = s[i][j] - if i == j { 1.0 } else { 0.0 };
+            v += e * e;
+            g[i][j] = 2.0 * e;
+            h[3 * i + j][3 * i + j] = 2.0;
+        }
+    }
+    (v, g, h)
+}
+
+/// 3D condition number kappa = |S| |C| / (3 d) through L = ln kappa:
+/// grad kappa = kappa grad L, Hess kappa = kappa (Hess L + grad L grad L^T), with
+/// |S^-1| = |C| / d, grad |C|^2 = 2 D2 vec(C), Hess |C|^2 = 2 (D2^T D2 + E),
+/// E[(p,q),(r,s)] = sum_ij C_ij eps_ipr eps_jqs.
+fn cn3(s: &Mat3, d: f64, hess: bool) -> (f64, Mat3, Hess9) {
+    let c = cofactor(s);
+    let a = frob_n(s, 3);
+    let cc = frob_n(&c, 3);
+    let kappa = (a * cc).sqrt() / (3.0 * d);
+    let d2 = d2det(s, 3);
+    let (sf, cf) = (flat(s), flat(&c));
+    // grad of |C|^2
+    let mut gc = [0.0; 9];
+    for a_ in 0..9 {
+        gc[a_] = 2.0 * (0..9).map(|b| d2[b][a_] * cf[b]).sum::<f64>();
+    }
+    let mut gl = [0.0; 9];
+    for k in 0..9 {
+        gl[k] = sf[k] / a + 0.5 * gc[k] / cc - cf[k] / d;
+    }
+    let mut g = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            g[i][j] = kappa * gl[3 * i + j];
+        }
+    }
+    let mut hm = [[0.0; 9]; 9];
+    if hess {
+        for p in 0..9 {
+            for q in 0..9 {
+                let (pi, pj, qi, qj) = (p / 3, p % 3, q / 3, q % 3);
+                // E term
+                let mut e = 0.0;
+                for i in 0..3 {
+                    for j in 0..3 {
+                        e += c[i][j] * eps3(i, pi, qi) * eps3(j, pj, qj);
+                    }
+                }
+                let dtd: f64 = (0..9).map(|b| d2[b][p] * d2[b][q]).sum();
+                let hc = 2.0 * (dtd + e);
+                let ha = if p == q { 2.0 } else { 0.0 };
+                let hl = 0.5 * (ha / a - 4.0 * sf[p] * sf[q] / (a * a)) + 0.5 * (hc / cc - gc[p] * gc[q] / (cc * cc))
+                    - (d2[p][q] / d - cf[p] * cf[q] / (d * d));
+                hm[p][q] = kappa * (hl + gl[p] * gl[q]);
+            }
+        }
+    }
+    (kappa, g, hm)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fd_check(metric: MetricKind, n: usize, s: Mat3) {
+        let (v, g, h) = eval(metric, n, &s, true).unwrap();
+        let step = 1e-5;
+        let gs = g.iter().flatten().map(|x| x.abs()).fold(1e-12, f64::max);
+        let hs = h.iter().flatten().map(|x| x.abs()).fold(1e-12, f64::max);
+        for i in 0..n {
+            for j in 0..n {
+                let at = |t: f64| {
+                    let mut m = s;
+                    m[i][j] += t * step;
+                    m
+                };
+                let f4 = |f: &dyn Fn(&Mat3) -> f64| {
+                    (-f(&at(2.0)) + 8.0 * f(&at(1.0)) - 8.0 * f(&at(-1.0)) + f(&at(-2.0))) / (12.0 * step)
+                };
+                let fd = f4(&|m| eval(metric, n, m, false).unwrap().0);
+                assert!(
+                    (fd - g[i][j]).abs() < 1e-7 * gs,
+                    "{metric} n={n} grad[{i}][{j}] {} vs {fd}",
+                    g[i][j]
+                );
+                for k in 0..n {
+                    for l in 0..n {
+                        let fdh = f4(&|m| eval(metric, n, m, false).unwrap().1[k][l]);
+                        let an = h[3 * i + j][3 * k + l];
+                        assert!(
+                            (fdh - an).abs() < 1e-6 * hs,
+                            "{metric} n={n} H[{i}{j}][{k}{l}] {an} vs {fdh}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(v.is_finite());
+    }
+
+    #[test]
+    fn every_metric_matches_finite_differences_in_s() {
+        let s3 = [[1.1, 0.3, -0.2], [0.1, 0.9, 0.4], [-0.3, 0.2, 1.3]];
+        let s2 = [[1.2, 0.4, 0.0], [-0.3, 0.8, 0.0], [0.0, 0.0, 0.0]];
+        for m in [
+            MetricKind::InverseMeanRatio,
+            MetricKind::ConditionNumber,
+            MetricKind::TargetShapeSize,
+        ] {
+            fd_check(m, 3, s3);
+            fd_check(m, 2, s2);
+        }
+    }
+
+    #[test]
+    fn ideal_values_and_infeasibility() {
+        let id = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let rot = [[0.0, -2.0, 0.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]];
+        for n in [2, 3] {
+            assert!((eval(MetricKind::InverseMeanRatio, n, &rot, false).unwrap().0 - 1.0).abs() < 1e-14);
+            assert!((eval(MetricKind::ConditionNumber, n, &rot, false).unwrap().0 - 1.0).abs() < 1e-14);
+            assert_eq!(eval(MetricKind::TargetShapeSize, n, &id, false).unwrap().0, 0.0);
+            let mut flip = id;
+            flip[0][0] = -1.0;
+            assert!(eval(MetricKind::InverseMeanRatio, n, &flip, false).is_none());
+            assert!(eval(MetricKind::TargetShapeSize, n, &flip, false).is_none());
+        }
+    }
+}
