@@ -5,7 +5,7 @@
 
 use crate::Mesh;
 use crate::error::Result;
-use crate::problem::Problem;
+use crate::problem::{Problem, ProblemOptions};
 use crate::solve::{self, History, Info, Method, Params};
 use serde::Serialize;
 
@@ -140,7 +140,17 @@ pub fn summarise(vertices: usize, elements: usize, infos: &[Info], tol: f64) -> 
 
 /// Runs every method on a copy of `mesh` (same start) on the CPU.
 pub fn compare(mesh: &Mesh, methods: &[Method], params: &Params) -> Result<(Comparison, Vec<Info>)> {
-    let p = Problem::new(mesh)?;
+    compare_with(mesh, &ProblemOptions::default(), methods, params)
+}
+
+/// `compare` with a metric, template or reference mesh of choice.
+pub fn compare_with(
+    mesh: &Mesh,
+    options: &ProblemOptions,
+    methods: &[Method],
+    params: &Params,
+) -> Result<(Comparison, Vec<Info>)> {
+    let p = Problem::with_options(mesh, options)?;
     let x0 = p.gather(&mesh.points);
     let mut infos = Vec::new();
     for &m in methods {

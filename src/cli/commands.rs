@@ -2,10 +2,11 @@
 
 use super::device::{self, Backend};
 use super::progress::Progress;
-use super::{BoxArgs, CompareArgs, DemoArgs, QualityArgs, SmoothArgs, SolverArgs};
+use super::{BoxArgs, CompareArgs, DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs};
 use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
+use meshsmooth::problem::ProblemOptions;
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::pcg::NegativeCurvature;
 use meshsmooth::solve::{self, Info, Method, Params};
@@ -20,9 +21,10 @@ impl SolverArgs {
 
     fn params(&self) -> Result<Params> {
         let mut p = params(self.tol, self.max_iter, self.time_limit)?;
-        if self.negative_curvature == "iterate" {
-            p.newton.negative_curvature = NegativeCurvature::Iterate;
-        }
+        p.newton.negative_curvature = match self.negative_curvature.as_str() {
+            "direction" => NegativeCurvature::Direction,
+            _ => NegativeCurvature::Iterate,
+        };
         Ok(p)
     }
 }
@@ -48,6 +50,25 @@ fn params(tol: f64, max_iter: usize, time_limit: Option<f64>) -> Result<Params> 
         time_limit,
         ..Params::default()
     })
+}
+
+impl ObjectiveArgs {
+    /// The reference mesh, read when given.
+    fn reference(&self) -> Result<Option<Mesh>> {
+        self.reference.as_deref().map(io::read).transpose()
+    }
+
+    fn options<'a>(&self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
+        Ok(ProblemOptions {
+            metric: self.metric.parse()?,
+            template: self.template.parse()?,
+            reference,
+        })
+    }
+
+    fn is_default(&self) -> bool {
+        self.metric == "imr" && self.template == "harmonic" && self.reference.is_none()
+    }
 }
 
 fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
@@ -142,14 +163,22 @@ fn summary(info: &Info, f0: f64, backend: &Backend) -> String {
 fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: bool) -> Result<Info> {
     let method = solver.method()?;
     let params = solver.params()?;
-    let backend = device::choose(&solver.device, &solver.precision, solver.adapter.as_deref(), method)?;
+    let reference = solver.objective.reference()?;
+    let options = solver.objective.options(reference.as_ref())?;
+    let backend = device::choose(
+        &solver.device,
+        &solver.precision,
+        solver.adapter.as_deref(),
+        method,
+        solver.objective.is_default() && mesh.kinds.iter().all(|&k| k == meshsmooth::ElementKind::Tetrahedron),
+    )?;
     let before = quality_report(mesh, &mesh.points);
     if !quiet {
         println!("== initial mesh ==\n{before}");
     }
     let mut progress = Progress::new(params.max_iter, !quiet);
     let result = match &backend {
-        Backend::Cpu => solve::smooth_mesh(mesh, method, &params, &mut |r| progress.update(r)),
+        Backend::Cpu => solve::smooth_mesh_with(mesh, &options, method, &params, &mut |r| progress.update(r)),
         Backend::Gpu(ctx) => {
             let opts = GpuRunOptions {
                 checkpoint_every: save_partial.then_some(10),
@@ -287,7 +316,9 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     }
     let params = params(a.tol, a.max_iter, a.time_limit)?;
     let mesh = io::read(&a.input)?;
-    let (cmp, infos) = meshsmooth::compare::compare(&mesh, &methods, &params)?;
+    let reference = a.objective.reference()?;
+    let options = a.objective.options(reference.as_ref())?;
+    let (cmp, infos) = meshsmooth::compare::compare_with(&mesh, &options, &methods, &params)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&cmp).expect("comparison serialises"));
     } else {

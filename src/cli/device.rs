@@ -40,7 +40,7 @@ fn runs_on_gpu(method: Method) -> bool {
 /// method runs there; software adapters (lavapipe, llvmpipe) emulate a GPU on
 /// the CPU and are slower than the CPU backend, so `auto` passes them over
 /// unless `--adapter` names one.
-pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method) -> Result<Backend> {
+pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, gpu_case: bool) -> Result<Backend> {
     let opts = GpuOptions {
         adapter: adapter.map(str::to_string),
         precision: precision(prec),
@@ -55,6 +55,13 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method) -
             Ok(Backend::Cpu)
         }
         "gpu" => {
+            if !gpu_case {
+                return Err(Error::InvalidArgument(
+                    "the GPU runs tetrahedral meshes with the inverse mean ratio, the harmonic template and ideal \
+                     references so far; use --device cpu for other element kinds, metrics, templates or a reference mesh"
+                        .into(),
+                ));
+            }
             if !runs_on_gpu(method) {
                 return Err(Error::InvalidArgument(format!(
                     "{method} runs on the CPU only so far (the GPU runs bcd, colour by colour); use --device cpu"
@@ -63,7 +70,7 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method) -
             Ok(Backend::Gpu(GpuContext::new(&opts)?))
         }
         _ => {
-            if !runs_on_gpu(method) {
+            if !runs_on_gpu(method) || !gpu_case {
                 return Ok(Backend::Cpu);
             }
             let adapters = gpu::list_adapters();

@@ -90,15 +90,35 @@ pub struct SolverArgs {
     /// Stop after this many seconds (the mesh so far is kept; it is always valid).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
-    /// Newton: what CG returns on negative curvature, the direction itself (as in the
-    /// paper) or the CG iterate so far (truncated Newton).
-    #[arg(long, default_value = "direction", value_parser = ["direction", "iterate"])]
+    #[command(flatten)]
+    pub objective: ObjectiveArgs,
+    /// Newton: what CG returns on negative curvature: the CG iterate so far (truncated
+    /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
+    #[arg(long, default_value = "iterate", value_parser = ["direction", "iterate"])]
     pub negative_curvature: String,
+}
+
+/// What is optimised.
+#[derive(Args, Debug, Clone)]
+pub struct ObjectiveArgs {
+    /// imr: inverse mean ratio |S|^2/(n det S^(2/n)); cn: condition number |S||S^-1|/n;
+    /// tmp: target-matrix |S - I|^2 (needs --reference). S = A W^-1 at each element corner.
+    #[arg(long, default_value = "imr", value_parser = ["imr", "cn", "tmp"])]
+    pub metric: String,
+    /// harmonic: minimise the mean metric (for imr: the harmonic mean of the mean ratios);
+    /// average: maximise the mean quality 1/metric (imr, cn).
+    #[arg(long, default_value = "harmonic", value_parser = ["harmonic", "average"])]
+    pub template: String,
+    /// Reference mesh with the same connectivity: its corners are the targets W.
+    #[arg(long, value_name = "MESH")]
+    pub reference: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
 pub struct CompareArgs {
     pub input: PathBuf,
+    #[command(flatten)]
+    pub objective: ObjectiveArgs,
     /// Comma-separated methods to run.
     #[arg(long, default_value = "bcd,newton", value_delimiter = ',')]
     pub methods: Vec<String>,

@@ -14,7 +14,7 @@ use crate::Mesh;
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::objective;
-use crate::problem::Problem;
+use crate::problem::{Problem, ProblemOptions};
 use std::fmt;
 use std::str::FromStr;
 use std::time::{Duration, Instant};
@@ -268,7 +268,18 @@ pub fn smooth_mesh(
     params: &Params,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    let p = Problem::new(mesh)?;
+    smooth_mesh_with(mesh, &ProblemOptions::default(), method, params, progress)
+}
+
+/// `smooth_mesh` with a metric, template or reference mesh of choice.
+pub fn smooth_mesh_with(
+    mesh: &mut Mesh,
+    options: &ProblemOptions,
+    method: Method,
+    params: &Params,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let p = Problem::with_options(mesh, options)?;
     let mut x = p.gather(&mesh.points);
     let info = solve(&p, &mut x, method, params, progress)?;
     mesh.points = p.scatter(&x);
