@@ -80,7 +80,11 @@ fn newton_matches_mesquite_on_planar_and_hexahedral_meshes() {
             info.history.records[0].objective, info.objective, info.iterations, info.seconds, info.stop
         );
         assert_eq!(info.stop, StopReason::Converged, "{name}");
-        assert!(info.objective <= mesquite_f * (1.0 + 1e-4), "{name}: F = {} vs Mesquite {mesquite_f}", info.objective);
+        assert!(
+            info.objective <= mesquite_f * (1.0 + 1e-4),
+            "{name}: F = {} vs Mesquite {mesquite_f}",
+            info.objective
+        );
         assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty(), "{name}");
         for v in 0..mesh.num_points() {
             if fixed[v] {

@@ -165,7 +165,17 @@ pub(crate) fn accepted_step_inverted() -> Error {
 
 /// Iterations without progress after which a run counts as stalled: the
 /// tolerance is below what the arithmetic can resolve (f32 on a GPU).
-const STALL_WINDOW: usize = 10;
+const STALL_WINDOW: usize = 50;
+
+/// Laplace has no gradient to drive it: it has settled when nothing moves
+/// farther than `min_move`. The optimisers move less and less as they converge,
+/// so for them only a sweep in which no vertex moved at all means a halt.
+fn no_move(method: Method, max_move_sq: f64, min_move: f64) -> bool {
+    match method {
+        Method::Laplace => max_move_sq.sqrt() <= min_move,
+        _ => max_move_sq == 0.0,
+    }
+}
 
 /// True when over the last `window` iterations F did not decrease and the
 /// gradient norm did not even halve.
@@ -241,7 +251,7 @@ pub(crate) fn iterate(
         if !progress(&record) {
             stop = Some(StopReason::Cancelled);
         } else if gnorm >= params.tol
-            && (sweep.max_move_sq.sqrt() <= params.min_move * edge || no_progress(&history, STALL_WINDOW))
+            && (no_move(method, sweep.max_move_sq, params.min_move * edge) || no_progress(&history, STALL_WINDOW))
         {
             stop = Some(StopReason::Stalled);
         }
