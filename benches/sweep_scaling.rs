@@ -15,7 +15,11 @@ use std::time::Instant;
 
 fn perturbed_box(n: usize) -> Mesh {
     let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
-    let opts = PerturbOptions { perturbation: Perturbation::Random { alpha: 0.3 }, fraction: 1.0, seed: 1 };
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.3 },
+        fraction: 1.0,
+        seed: 1,
+    };
     generate::perturb(&mut m, &opts).unwrap();
     m
 }
@@ -48,7 +52,11 @@ fn main() {
     let gpus: Vec<(String, GpuContext)> = [Precision::F32, Precision::F64]
         .into_iter()
         .filter_map(|precision| {
-            let ctx = GpuContext::new(&GpuOptions { adapter: None, precision }).ok()?;
+            let ctx = GpuContext::new(&GpuOptions {
+                adapter: None,
+                precision,
+            })
+            .ok()?;
             Some((format!("{precision:?}").to_lowercase(), ctx))
         })
         .collect();
@@ -76,7 +84,13 @@ fn main() {
             bcd::sweep_colored(&p, &mut x, &ls, None);
         });
         let rate = |s: f64| format!("{:.2} M/s ({:.1} ms)", ne / s / 1e6, s * 1e3);
-        let mut row = format!("| {name} | {} | {} | {} | {} |", p.num_elements(), p.colors.len(), rate(seq), rate(col));
+        let mut row = format!(
+            "| {name} | {} | {} | {} | {} |",
+            p.num_elements(),
+            p.colors.len(),
+            rate(seq),
+            rate(col)
+        );
         for (_, ctx) in &gpus {
             match GpuBcd::new(ctx, &p, &x0) {
                 Ok(mut g) => {
