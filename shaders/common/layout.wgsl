@@ -24,3 +24,21 @@ fn linear_group(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
 fn shape_b(s: Shape) -> array<vec3<real>, 4> {
     return array<vec3<real>, 4>(s.b[0].xyz, s.b[1].xyz, s.b[2].xyz, s.b[3].xyz);
 }
+
+// Small per-dispatch parameters of the Newton kernels; what each field means
+// is stated in the kernel that reads it.
+struct Dims {
+    n: u32,
+    op: u32,
+    slot: u32,
+    aux: u32,
+}
+
+// Per element in the Newton assembly buffer: the gradient (12 reals, vertex
+// k at 3 k) then the upper Hessian blocks (k, l), k <= l, 9 reals each, row-major.
+const ELEM_STRIDE: u32 = 102u;
+
+// Position of block (k, l), k <= l, among the 10 upper blocks.
+fn upper_block(k: u32, l: u32) -> u32 {
+    return k * (9u - k) / 2u + (l - k);
+}

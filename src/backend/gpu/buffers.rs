@@ -57,7 +57,7 @@ pub(crate) fn grid(threads: usize) -> Result<(u32, u32)> {
 }
 
 impl GpuContext {
-    fn real_bytes(&self, v: &[f64]) -> Vec<u8> {
+    pub(crate) fn real_bytes(&self, v: &[f64]) -> Vec<u8> {
         match self.real {
             Real::F64 => bytemuck::cast_slice(v).to_vec(),
             Real::F32 => {
@@ -94,6 +94,13 @@ impl GpuContext {
 
     pub(crate) fn uniform<T: bytemuck::Pod>(&self, label: &str, v: &T) -> wgpu::Buffer {
         self.init(label, bytemuck::bytes_of(v).to_vec(), wgpu::BufferUsages::UNIFORM)
+    }
+
+    /// Overwrites the start of `dst` with `v` (applied before the next submission).
+    pub(crate) fn write_real(&self, dst: &wgpu::Buffer, v: &[f64]) {
+        if !v.is_empty() {
+            self.queue.write_buffer(dst, 0, &self.real_bytes(v));
+        }
     }
 
     /// A zeroed storage array of `n` reals.

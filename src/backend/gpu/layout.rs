@@ -27,6 +27,17 @@ pub(crate) struct Color {
 }
 const _: () = assert!(std::mem::size_of::<Color>() == 16);
 
+/// `struct Dims` of `layout.wgsl`: per-dispatch parameters of the Newton kernels.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub(crate) struct Dims {
+    pub n: u32,
+    pub op: u32,
+    pub slot: u32,
+    pub aux: u32,
+}
+const _: () = assert!(std::mem::size_of::<Dims>() == 16);
+
 /// `struct Shape { b: array<vec4<real>, 4>, ls: vec4<real> }` as 20 reals.
 pub(crate) fn shape_values(shape: &TetShape, ls: &LineSearch, n_elements: usize) -> [f64; 20] {
     let mut v = [0.0; 20];

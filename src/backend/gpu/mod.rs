@@ -6,6 +6,7 @@ pub mod buffers;
 pub mod context;
 mod layout;
 pub mod mean_ratio_eval;
+pub mod newton;
 pub mod shader;
 pub mod solve;
 
@@ -13,4 +14,5 @@ pub use bcd::{GpuBcd, Scalars};
 pub use buffers::{BindingLimits, check_bindings};
 pub use context::{AdapterSummary, GpuContext, GpuOptions, Precision, list_adapters};
 pub use mean_ratio_eval::{ElementEval, cbrt_eval, mean_ratio_eval};
-pub use solve::{GpuRunOptions, smooth_mesh_gpu, solve_gpu, solve_gpu_with};
+pub use newton::GpuNewton;
+pub use solve::{GpuRunOptions, smooth_mesh_gpu, smooth_mesh_gpu_method, solve_gpu, solve_gpu_with, solve_newton_gpu};

@@ -44,16 +44,34 @@ pub enum Kernel {
     Reduce,
     Bcd,
     CbrtEval,
+    HessianAssemble,
+    HessianGather,
+    GradientGather,
+    BsrSpmv,
+    BlockJacobi,
+    Vector,
+    Dot,
+    DotFinal,
+    LineSearch,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 6] = [
+    pub const ALL: [Kernel; 15] = [
         Kernel::MeanRatioEval,
         Kernel::Objective,
         Kernel::VertexGradient,
         Kernel::Reduce,
         Kernel::Bcd,
         Kernel::CbrtEval,
+        Kernel::HessianAssemble,
+        Kernel::HessianGather,
+        Kernel::GradientGather,
+        Kernel::BsrSpmv,
+        Kernel::BlockJacobi,
+        Kernel::Vector,
+        Kernel::Dot,
+        Kernel::DotFinal,
+        Kernel::LineSearch,
     ];
 
     pub fn name(self) -> &'static str {
@@ -64,6 +82,15 @@ impl Kernel {
             Kernel::Reduce => "reduce",
             Kernel::Bcd => "bcd",
             Kernel::CbrtEval => "cbrt_eval",
+            Kernel::HessianAssemble => "hessian_assemble",
+            Kernel::HessianGather => "hessian_gather",
+            Kernel::GradientGather => "gradient_gather",
+            Kernel::BsrSpmv => "bsr_spmv",
+            Kernel::BlockJacobi => "block_jacobi",
+            Kernel::Vector => "vector",
+            Kernel::Dot => "dot",
+            Kernel::DotFinal => "dot_final",
+            Kernel::LineSearch => "line_search",
         }
     }
 
@@ -75,6 +102,15 @@ impl Kernel {
             Kernel::Reduce => include_str!("../../../shaders/reduce.wgsl"),
             Kernel::Bcd => include_str!("../../../shaders/bcd.wgsl"),
             Kernel::CbrtEval => include_str!("../../../shaders/cbrt_eval.wgsl"),
+            Kernel::HessianAssemble => include_str!("../../../shaders/hessian_assemble.wgsl"),
+            Kernel::HessianGather => include_str!("../../../shaders/hessian_gather.wgsl"),
+            Kernel::GradientGather => include_str!("../../../shaders/gradient_gather.wgsl"),
+            Kernel::BsrSpmv => include_str!("../../../shaders/bsr_spmv.wgsl"),
+            Kernel::BlockJacobi => include_str!("../../../shaders/block_jacobi.wgsl"),
+            Kernel::Vector => include_str!("../../../shaders/vector.wgsl"),
+            Kernel::Dot => include_str!("../../../shaders/dot.wgsl"),
+            Kernel::DotFinal => include_str!("../../../shaders/dot_final.wgsl"),
+            Kernel::LineSearch => include_str!("../../../shaders/line_search.wgsl"),
         }
     }
 

@@ -3,6 +3,7 @@
 
 use super::bcd::GpuBcd;
 use super::context::GpuContext;
+use super::newton::GpuNewton;
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
@@ -114,10 +115,99 @@ pub fn smooth_mesh_gpu(
     opts: &GpuRunOptions,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
+    smooth_mesh_gpu_method(ctx, mesh, Method::BcdColored, params, opts, progress)
+}
+
+/// Runs inexact Newton on the device from `x` (problem numbering), updating
+/// `x` at the end; the twin of `solve::solve` with `Method::Newton`, sharing
+/// its loop and stop rules. Checkpoints as in `solve_gpu_with`.
+pub fn solve_newton_gpu(
+    ctx: &GpuContext,
+    p: &Problem,
+    x: &mut [Vec3],
+    params: &Params,
+    opts: &GpuRunOptions,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    if !(params.tol >= 0.0) {
+        return Err(Error::InvalidArgument(format!(
+            "tolerance must be non-negative, got {}",
+            params.tol
+        )));
+    }
+    p.check_feasible(x)?;
+    let mut gpu = GpuNewton::new(ctx, p, x, params.newton, &params.line_search)?;
+    let setup_seconds = p.setup_time.as_secs_f64() + gpu.setup_time.as_secs_f64();
+    let start = Instant::now();
+    let edge = p.mean_edge_length(x);
+    let first = gpu.assemble()?;
+    let mut steps = 0;
+    let mut checkpoint: Option<Vec<Vec3>> = None;
+    let result = {
+        let mut step = || -> Result<Sweep> {
+            if opts.fail_after.is_some_and(|n| steps >= n) {
+                return Err(Error::Gpu("device lost (simulated for testing)".into()));
+            }
+            let (objective, grad_norm, max_move_sq) = gpu.step()?;
+            steps += 1;
+            if opts.checkpoint_every.is_some_and(|k| steps % k.max(1) == 0) {
+                checkpoint = Some(gpu.download()?);
+            }
+            Ok(Sweep {
+                objective,
+                grad_norm,
+                max_move_sq,
+            })
+        };
+        solve::iterate(
+            Method::Newton,
+            params,
+            start,
+            edge,
+            setup_seconds,
+            first,
+            &mut step,
+            progress,
+        )
+    };
+    match result {
+        Ok(mut info) => {
+            x.copy_from_slice(&gpu.download()?);
+            info.memory_bytes = p.bytes() + std::mem::size_of_val(x) + gpu.device_bytes();
+            Ok(info)
+        }
+        Err(e) => {
+            if let Some(c) = checkpoint {
+                x.copy_from_slice(&c);
+            }
+            Err(e)
+        }
+    }
+}
+
+/// Smooths `mesh` in place on the device with `method`: `Bcd` and
+/// `BcdColored` run coloured BCD, `Newton` inexact Newton; Laplace has no
+/// device version. On failure the mesh gets the last checkpoint.
+pub fn smooth_mesh_gpu_method(
+    ctx: &GpuContext,
+    mesh: &mut crate::Mesh,
+    method: Method,
+    params: &Params,
+    opts: &GpuRunOptions,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let run = match method {
+        Method::Bcd | Method::BcdColored => solve_gpu_with,
+        Method::Newton => solve_newton_gpu,
+        Method::Laplace => {
+            return Err(Error::InvalidArgument(format!(
+                "method '{method}' has no GPU version (use bcd, bcd-colored or newton)"
+            )));
+        }
+    };
     let p = Problem::new(mesh)?;
     let mut x = p.gather(&mesh.points);
-    let result = solve_gpu_with(ctx, &p, &mut x, params, opts, progress);
-    // on failure the mesh gets the last checkpoint, so a caller can save it
+    let result = run(ctx, &p, &mut x, params, opts, progress);
     mesh.points = p.scatter(&x);
     result
 }

@@ -1,0 +1,37 @@
+// y = A x for the symmetric block matrix stored with both triangles, one
+// thread per block row, so no two threads write one entry.
+// CPU twin: `BlockCsr::mul` (same sum order).
+
+#import layout
+
+// n = number of block rows
+@group(0) @binding(0) var<uniform> dims: Dims;
+@group(0) @binding(1) var<storage, read> row_offsets: array<u32>;
+@group(0) @binding(2) var<storage, read> cols: array<u32>;
+@group(0) @binding(3) var<storage, read> blocks: array<real>;
+@group(0) @binding(4) var<storage, read> x: array<real>;
+@group(0) @binding(5) var<storage, read_write> y: array<real>;
+
+@compute @workgroup_size(64)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let i = linear_group(wid, nwg) * 64u + lid;
+    if i >= dims.n {
+        return;
+    }
+    var acc = vec3<real>(real(0.0));
+    for (var s = row_offsets[i]; s < row_offsets[i + 1u]; s++) {
+        let j = cols[s];
+        let xj = vec3<real>(x[3u * j], x[3u * j + 1u], x[3u * j + 2u]);
+        for (var r = 0u; r < 3u; r++) {
+            let b = 9u * s + 3u * r;
+            acc[r] += blocks[b] * xj[0] + blocks[b + 1u] * xj[1] + blocks[b + 2u] * xj[2];
+        }
+    }
+    y[3u * i] = acc[0];
+    y[3u * i + 1u] = acc[1];
+    y[3u * i + 2u] = acc[2];
+}

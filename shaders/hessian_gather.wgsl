@@ -1,0 +1,54 @@
+// One thread per block of the BSR Hessian: the sum of its element
+// contributions, each `element * 16 + 4 a + b` (local pair (a, b)), listed in
+// ascending element order so that the sum order is the CPU's.
+// CPU twin: `HessianPattern::assemble` (matrix part).
+
+#import layout
+
+// n = number of blocks
+@group(0) @binding(0) var<uniform> dims: Dims;
+@group(0) @binding(1) var<uniform> shape: Shape;
+@group(0) @binding(2) var<storage, read> contrib_offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> contrib_items: array<u32>;
+@group(0) @binding(4) var<storage, read> elem: array<real>;
+@group(0) @binding(5) var<storage, read_write> blocks: array<real>;
+
+@compute @workgroup_size(64)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let s = linear_group(wid, nwg) * 64u + lid;
+    if s >= dims.n {
+        return;
+    }
+    let scale = shape.ls.z;
+    var acc: array<real, 9>;
+    for (var i = 0u; i < 9u; i++) {
+        acc[i] = real(0.0);
+    }
+    for (var it = contrib_offsets[s]; it < contrib_offsets[s + 1u]; it++) {
+        let item = contrib_items[it];
+        let e = item >> 4u;
+        let a = (item >> 2u) & 3u;
+        let b = item & 3u;
+        let base = ELEM_STRIDE * e + 12u;
+        if a <= b {
+            let at = base + 9u * upper_block(a, b);
+            for (var i = 0u; i < 9u; i++) {
+                acc[i] += elem[at + i] * scale;
+            }
+        } else {
+            let at = base + 9u * upper_block(b, a);
+            for (var i = 0u; i < 3u; i++) {
+                for (var q = 0u; q < 3u; q++) {
+                    acc[3u * i + q] += elem[at + 3u * q + i] * scale;
+                }
+            }
+        }
+    }
+    for (var i = 0u; i < 9u; i++) {
+        blocks[9u * s + i] = acc[i];
+    }
+}
