@@ -18,11 +18,17 @@ fn main() {
     }
     let threads = rayon::current_num_threads();
     println!("Ducts, {threads} threads, tol |grad F| < 1e-6; T in seconds (setup excluded)\n");
-    println!("| vertices | elements | F0 | Newton I | Newton T100 | Newton T50 | BCD I | BCD T100 | BCD T50 | crossover (s, % optimal) |");
+    println!(
+        "| vertices | elements | F0 | Newton I | Newton T100 | Newton T50 | BCD I | BCD T100 | BCD T50 | crossover (s, % optimal) |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for n in sizes {
         let mut mesh = generate::duct(n);
-        let opts = PerturbOptions { perturbation: Perturbation::Random { alpha: 0.2 }, fraction: 1.0, seed: 1 };
+        let opts = PerturbOptions {
+            perturbation: Perturbation::Random { alpha: 0.2 },
+            fraction: 1.0,
+            seed: 1,
+        };
         generate::perturb(&mut mesh, &opts).expect("perturbation");
         let (cmp, _) = compare::compare(&mesh, &[Method::Newton, Method::Bcd], &Params::default()).expect("solves");
         let (nw, bcd) = (&cmp.runs[0], &cmp.runs[1]);
@@ -31,7 +37,9 @@ fn main() {
             .crossovers
             .iter()
             .find(|c| c.second == "newton")
-            .map_or("-".into(), |c| format!("{:.3}, {:.2}%", c.seconds, c.optimality_percent));
+            .map_or("-".into(), |c| {
+                format!("{:.3}, {:.2}%", c.seconds, c.optimality_percent)
+            });
         println!(
             "| {} | {} | {:.4} | {} | {} | {} | {} | {} | {} | {cross} |",
             cmp.vertices,

@@ -248,18 +248,20 @@ fn devices_lists_adapters_and_gpu_smoothing_names_the_device() {
     );
     assert!(text(&o).contains("converged"), "{}", text(&o));
 
-    let o = meshsmooth(&[
-        "smooth",
-        s(&input),
-        "-o",
-        s(&out),
-        "--device",
-        "gpu",
-        "--method",
-        "newton",
-    ]);
+    let gpu = |extra: &[&str]| {
+        let mut args = vec!["smooth", s(&input), "-o", s(&out), "--device", "gpu"];
+        args.extend_from_slice(extra);
+        meshsmooth(&args)
+    };
+    let o = gpu(&["--method", "newton", "-q"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("newton on gpu"), "{}", text(&o));
+    let o = gpu(&["--method", "laplace"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(text(&o).contains("CPU only"), "{}", text(&o));
+    let o = gpu(&["--metric", "cn"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o).contains("--device cpu"), "{}", text(&o));
     let o = meshsmooth(&[
         "smooth",
         s(&input),

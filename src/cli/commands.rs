@@ -3,7 +3,7 @@
 use super::device::{self, Backend};
 use super::progress::Progress;
 use super::{BoxArgs, CompareArgs, DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs};
-use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu};
+use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_method};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::problem::ProblemOptions;
@@ -184,7 +184,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
                 checkpoint_every: save_partial.then_some(10),
                 fail_after: None,
             };
-            smooth_mesh_gpu(ctx, mesh, &params, &opts, &mut |r| progress.update(r))
+            smooth_mesh_gpu_method(ctx, mesh, method, &params, &opts, &mut |r| progress.update(r))
         }
     };
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));

@@ -6,7 +6,7 @@ use meshsmooth::{Error, Result};
 
 pub enum Backend {
     Cpu,
-    Gpu(GpuContext),
+    Gpu(Box<GpuContext>),
 }
 
 impl Backend {
@@ -33,7 +33,7 @@ fn precision(p: &str) -> Precision {
 }
 
 fn runs_on_gpu(method: Method) -> bool {
-    matches!(method, Method::Bcd | Method::BcdColored)
+    matches!(method, Method::Bcd | Method::BcdColored | Method::Newton)
 }
 
 /// Picks the backend. `auto` takes a hardware GPU when there is one and the
@@ -64,10 +64,10 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, g
             }
             if !runs_on_gpu(method) {
                 return Err(Error::InvalidArgument(format!(
-                    "{method} runs on the CPU only so far (the GPU runs bcd, colour by colour); use --device cpu"
+                    "{method} runs on the CPU only (the GPU runs bcd, colour by colour, and newton); use --device cpu"
                 )));
             }
-            Ok(Backend::Gpu(GpuContext::new(&opts)?))
+            Ok(Backend::Gpu(Box::new(GpuContext::new(&opts)?)))
         }
         _ => {
             if !runs_on_gpu(method) || !gpu_case {
@@ -76,7 +76,7 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, g
             let adapters = gpu::list_adapters();
             let hardware = adapters.iter().any(|a| a.compute && a.device_type != "Cpu");
             if hardware || adapter.is_some() {
-                return Ok(Backend::Gpu(GpuContext::new(&opts)?));
+                return Ok(Backend::Gpu(Box::new(GpuContext::new(&opts)?)));
             }
             let found: Vec<String> = adapters
                 .iter()

@@ -91,6 +91,22 @@ pub fn cholesky_solve(h: &Mat3, rhs: &Vec3) -> Option<Vec3> {
     Some([x0, x1, x2])
 }
 
+/// General inverse through the adjugate; `None` for a singular matrix.
+pub fn inverse(m: &Mat3) -> Option<Mat3> {
+    let d = det(m);
+    if d == 0.0 || !d.is_finite() {
+        return None;
+    }
+    let c = cofactor(m);
+    let mut inv = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            inv[i][j] = c[j][i] / d;
+        }
+    }
+    Some(inv)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -135,20 +151,4 @@ mod tests {
             }
         }
     }
-}
-
-/// General inverse through the adjugate; `None` for a singular matrix.
-pub fn inverse(m: &Mat3) -> Option<Mat3> {
-    let d = det(m);
-    if d == 0.0 || !d.is_finite() {
-        return None;
-    }
-    let c = cofactor(m);
-    let mut inv = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            inv[i][j] = c[j][i] / d;
-        }
-    }
-    Some(inv)
 }

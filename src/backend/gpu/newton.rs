@@ -149,6 +149,13 @@ impl<'c> GpuNewton<'c> {
         ls: &LineSearch,
     ) -> Result<GpuNewton<'c>> {
         let start = Instant::now();
+        if !p.is_uniform_tet_mean_ratio() {
+            return Err(Error::InvalidArgument(
+                "the GPU backend handles tetrahedral meshes with the inverse mean ratio, the harmonic template and \
+                 ideal references so far; use --device cpu"
+                    .into(),
+            ));
+        }
         let (nv, ne, nf) = (p.num_vertices(), p.num_elements(), p.free_vertices.len());
         if x.len() != nv {
             return Err(Error::InvalidArgument(format!(
@@ -195,11 +202,11 @@ impl<'c> GpuNewton<'c> {
                 },
             )
         };
-        let shape = ctx.uniform_real("shape", &shape_values(&p.shape, ls, ne));
+        let shape = ctx.uniform_real("shape", &shape_values(&p.shapes[0].tet, ls, ne));
         let flat: Vec<f64> = x.iter().flatten().copied().collect();
         let xb = ctx.storage_real("positions", &flat);
         let trial = ctx.storage_real("trial positions", &flat);
-        let tets = ctx.storage_u32("tets", bytemuck::cast_slice(&p.tets));
+        let tets = ctx.storage_u32("tets", bytemuck::cast_slice(&p.corners));
         let inc_off = ctx.storage_u32("incidence offsets", &p.incidence.offsets);
         let inc = ctx.storage_u32("incidence", &p.incidence.items);
         let free = ctx.storage_u32("free vertices", &pattern.free_vertex);
