@@ -11,9 +11,14 @@
 //!   normal to it, so the box keeps its shape; its gradient is at most
 //!   `2 pi A = 0.38`, which keeps the map orientation preserving.
 //! * short wave: every free (non-skin) vertex then moves by [`perturb`] with
-//!   `Random { alpha: 0.4 }`: a uniform random vector in `[-1, 1]^3` times 0.4
+//!   `Random { alpha: 0.5 }`: a uniform random vector in `[-1, 1]^3` times 0.5
 //!   times its mean edge length, in a seeded random order, each move halved
 //!   until no incident element has a non-positive corner determinant.
+//!
+//! The amplitudes are tuned to the paper's original prism mesh (shape quality
+//! avg 2.1, max 378 in its condition-number measure): the distorted prism
+//! mesh has a mean inverse mean ratio of about 1.9 and a worst element in the
+//! hundreds, while most elements stay good.
 //!
 //! Skin vertices keep the long-wave position only: the solver fixes them.
 
@@ -25,7 +30,7 @@ use crate::metric::inverted_elements;
 /// Long-wave amplitude on the unit cube.
 pub const LONG_WAVE_AMPLITUDE: f64 = 0.06;
 /// Short-wave noise, relative to each vertex's mean edge length.
-pub const NOISE_ALPHA: f64 = 0.4;
+pub const NOISE_ALPHA: f64 = 0.5;
 
 /// Cells per axis of the paper's prism mesh: 11^3 = 1331 nodes.
 const PRISM_CELLS: usize = 10;
