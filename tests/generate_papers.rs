@@ -24,12 +24,8 @@ fn free_vertices(mesh: &Mesh) -> usize {
     fixed_vertices(mesh).iter().filter(|&&f| !f).count()
 }
 
-fn volume(mesh: &Mesh, e: usize) -> f64 {
-    quality_report_volume(mesh, e)
-}
-
 /// Tet volume from the corner determinant at vertex 0 (all corners agree for a tet).
-fn quality_report_volume(mesh: &Mesh, e: usize) -> f64 {
+fn volume(mesh: &Mesh, e: usize) -> f64 {
     let vs = mesh.element(e);
     let x: Vec<[f64; 3]> = vs.iter().map(|&v| mesh.points[v as usize]).collect();
     let d = |k: usize| std::array::from_fn::<f64, 3, _>(|i| x[k][i] - x[0][i]);
@@ -227,7 +223,7 @@ fn horseshoe_family_small() {
 
 #[test]
 fn horseshoe_20k_counts() {
-    for kind in [HorseshoeKind::SqIV, HorseshoeKind::UtIV] {
+    for kind in HorseshoeKind::ALL {
         check_horseshoe(kind, 20_000);
     }
 }
