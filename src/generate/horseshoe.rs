@@ -28,7 +28,8 @@
 //! * `SqII`: quads, cells 5:1, long along the bend.
 //! * `SqIV`: the `SqII` grid with its rows clustered toward the inner wall by a
 //!   geometric progression whose outermost row spacing is [`BIAS`] = 5 times the
-//!   innermost, so aspect ratios range over about 2:1 to 12:1.
+//!   innermost: row spacings run from 0.40 to 2.0 times `SqII`'s, so the
+//!   cells range from about 12:1 (innermost) to 2.5:1 (outermost).
 //! * `UtI`: triangles on a trapezoidal logical domain: row `j` (at `eta_j`)
 //!   has `m_j` segments with `m_j` proportional to its radius
 //!   `r_j = 1 + eta_j` (`m_j = round(pi r_j / e)`), so the logical domain is
@@ -44,8 +45,8 @@
 //! * `UtIV`: the `UtI` construction with rows clustered as in `SqIV`.
 //!
 //! Grid sizes are chosen so the free (non-skin) vertex count is as close to
-//! the requested one as the integer counts allow (within a fraction of a
-//! percent for a few thousand vertices and more), with at least 8 segments
+//! the requested one as the integer counts allow (within about 1% for a few
+//! thousand vertices, a fraction of a percent from 20K), with at least 8 segments
 //! along the bend, so tiny targets get more free vertices than asked.
 
 use std::fmt;
@@ -208,8 +209,14 @@ fn rows(n: usize, biased: bool) -> Vec<f64> {
 fn structured(target: usize, aspect: f64, biased: bool) -> (Vec<(f64, f64)>, Mesh) {
     // cells along / across for the requested reference aspect at the centre radius
     let q = std::f64::consts::PI * R_CENTRE / (aspect * WIDTH);
-    let n_eta = ((target as f64 / q).sqrt().round() as usize).max(1) + 1;
-    let n_xi = ((target as f64 / (n_eta - 1) as f64).round() as usize + 1).max(MIN_ALONG);
+    // rows of free vertices across; a few rows either way hardly change the
+    // aspect but let the product land closer to the target
+    let across = (target as f64 / q).sqrt().round() as usize;
+    let along = |m: usize| ((target as f64 / m as f64).round() as usize + 1).max(MIN_ALONG) - 1;
+    let m = (across.saturating_sub(2).max(1)..=across.max(1) + 2)
+        .min_by_key(|&m| (m * along(m)).abs_diff(target))
+        .unwrap();
+    let (n_eta, n_xi) = (m + 1, along(m) + 1);
     let etas = rows(n_eta, biased);
     let mut logical = Vec::with_capacity((n_xi + 1) * (n_eta + 1));
     for &eta in &etas {
