@@ -1,7 +1,17 @@
-//! Mesh generators and perturbations for tests and benchmarks.
+//! Mesh generators and perturbations for tests and benchmarks, including the
+//! test meshes of the papers (horseshoe family, distorted prism and hex
+//! boxes, graded tet boxes).
 
 pub mod box_mesh;
+pub mod graded;
+pub mod grid;
+pub mod horseshoe;
 pub mod perturb;
+pub mod prism;
 
 pub use box_mesh::{duct, tet_box};
+pub use graded::graded_tet_box;
+pub use grid::{hex_box, quad_grid, tri_grid};
+pub use horseshoe::{HorseshoeKind, horseshoe};
 pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb};
+pub use prism::{distorted_hex_box, prism_mesh};
