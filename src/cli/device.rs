@@ -4,8 +4,6 @@ use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
 use meshsmooth::solve::Method;
 use meshsmooth::{Error, Result};
 
-// one Backend per process, so boxing the large GPU context would buy nothing
-#[allow(clippy::large_enum_variant)]
 pub enum Backend {
     Cpu,
     Gpu(Box<GpuContext>),
