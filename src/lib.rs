@@ -10,6 +10,7 @@ pub mod generate;
 pub mod io;
 pub mod mesh;
 pub mod metric;
+pub mod metric_report;
 pub mod objective;
 pub mod plot;
 pub mod problem;

@@ -2,15 +2,19 @@
 
 use super::device::{self, Backend};
 use super::progress::Progress;
-use super::{BoxArgs, CompareArgs, DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs};
+use super::{
+    CompareArgs, DemoArgs, GenerateCommand, ObjectiveArgs, OutputArgs, PerturbArgs, QualityArgs, SmoothArgs, SolverArgs,
+};
 use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_method};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::metric_report;
 use meshsmooth::problem::ProblemOptions;
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::pcg::NegativeCurvature;
 use meshsmooth::solve::{self, Info, Method, Params};
-use meshsmooth::{Error, Mesh, Result, metric};
+use meshsmooth::{ElementKind, Error, Mesh, Result, metric};
 use std::path::Path;
 use std::time::Duration;
 
@@ -176,6 +180,11 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
     if !quiet {
         println!("== initial mesh ==\n{before}");
     }
+    let start = mesh.points.clone();
+    // other metrics get the paper-style table of their own values as well
+    let metric_before = (options.metric != MetricKind::InverseMeanRatio)
+        .then(|| metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference))
+        .transpose()?;
     let mut progress = Progress::new(params.max_iter, !quiet);
     let result = match &backend {
         Backend::Cpu => solve::smooth_mesh_with(mesh, &options, method, &params, &mut |r| progress.update(r)),
@@ -191,6 +200,22 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
     let info = result?;
     if !quiet {
         println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
+        let displacement = metric_report::displacement_percent(mesh, &start, &mesh.points);
+        match &metric_before {
+            Some(b) => {
+                let after = metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference)?;
+                let table = metric_report::Comparison {
+                    before: b,
+                    after: &after,
+                    displacement: Some(displacement),
+                };
+                println!("{table}");
+            }
+            None => println!(
+                "node displacement, % of the average local spacing: min {:.1}, avg {:.1}, max {:.1}\n",
+                displacement.min, displacement.avg, displacement.max
+            ),
+        }
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
     println!("{}", summary(&info, f0, &backend));
@@ -239,42 +264,119 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn generate_box(a: &BoxArgs) -> Result<()> {
-    let format = output_format(&a.output, a.format.as_deref())?;
-    let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
-    if nx == 0 || ny == 0 || nz == 0 {
-        return Err(Error::InvalidArgument("--cells needs three positive counts".into()));
+fn perturb(mesh: &mut Mesh, a: &PerturbArgs) -> Result<()> {
+    let Some(spec) = &a.perturb else { return Ok(()) };
+    let perturbation: Perturbation = spec.parse()?;
+    if !(a.fraction > 0.0 && a.fraction <= 1.0) {
+        return Err(Error::InvalidArgument(format!(
+            "--fraction must be in (0, 1], got {}",
+            a.fraction
+        )));
     }
-    let mut mesh = generate::tet_box(nx, ny, nz, [nx as f64, ny as f64, nz as f64]);
-    if let Some(spec) = &a.perturb {
-        let perturbation: Perturbation = spec.parse()?;
-        if !(a.fraction > 0.0 && a.fraction <= 1.0) {
-            return Err(Error::InvalidArgument(format!(
-                "--fraction must be in (0, 1], got {}",
-                a.fraction
-            )));
-        }
-        let stats = generate::perturb(
-            &mut mesh,
-            &PerturbOptions {
-                perturbation,
-                fraction: a.fraction,
-                seed: a.seed,
-            },
-        )?;
-        println!(
-            "perturbed {} vertices ({} shortened to keep elements valid)",
-            stats.moved, stats.backtracked
-        );
-    }
-    write_mesh(&a.output, &mesh, format)?;
+    let stats = generate::perturb(
+        mesh,
+        &PerturbOptions {
+            perturbation,
+            fraction: a.fraction,
+            seed: a.seed,
+        },
+    )?;
     println!(
-        "wrote {} ({} vertices, {} tetrahedra)",
-        a.output.display(),
-        mesh.num_points(),
-        mesh.num_elements()
+        "perturbed {} vertices ({} shortened to keep elements valid)",
+        stats.moved, stats.backtracked
     );
     Ok(())
+}
+
+fn positive(counts: &[usize], what: &str) -> Result<()> {
+    if counts.contains(&0) {
+        return Err(Error::InvalidArgument(format!(
+            "{what} needs positive cell counts, got {counts:?}"
+        )));
+    }
+    Ok(())
+}
+
+fn save(out: &OutputArgs, mesh: &Mesh) -> Result<()> {
+    let format = output_format(&out.output, out.format.as_deref())?;
+    write_mesh(&out.output, mesh, format)?;
+    let kinds: Vec<String> = ElementKind::ALL
+        .iter()
+        .filter_map(|&k| match mesh.count_kind(k) {
+            0 => None,
+            n => Some(format!("{n} {k}")),
+        })
+        .collect();
+    println!(
+        "wrote {} ({} vertices; {})",
+        out.output.display(),
+        mesh.num_points(),
+        kinds.join(", ")
+    );
+    Ok(())
+}
+
+pub fn generate(g: &GenerateCommand) -> Result<()> {
+    match g {
+        GenerateCommand::Box(a) => {
+            positive(&a.cells, "--cells")?;
+            let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
+            let lengths = [nx as f64, ny as f64, nz as f64];
+            let mut mesh = if a.kind == "hex" {
+                generate::hex_box(nx, ny, nz, lengths)
+            } else {
+                generate::tet_box(nx, ny, nz, lengths)
+            };
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+        GenerateCommand::Grid(a) => {
+            positive(&a.cells, "--cells")?;
+            let (nx, ny) = (a.cells[0], a.cells[1]);
+            let lengths = [nx as f64, ny as f64];
+            let mut mesh = if a.kind == "tri" {
+                generate::tri_grid(nx, ny, lengths)
+            } else {
+                generate::quad_grid(nx, ny, lengths)
+            };
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+        GenerateCommand::Duct(a) => {
+            positive(&[a.cells_across], "--cells-across")?;
+            let mut mesh = generate::duct(a.cells_across);
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+        GenerateCommand::Horseshoe(a) => {
+            let kind: generate::HorseshoeKind = a.kind.parse()?;
+            let (mesh, reference) = generate::horseshoe(kind, a.free.max(1));
+            save(&a.out, &mesh)?;
+            if let Some(r) = &a.reference_output {
+                save(
+                    &OutputArgs {
+                        output: r.clone(),
+                        format: a.out.format.clone(),
+                    },
+                    &reference,
+                )?;
+            }
+            Ok(())
+        }
+        GenerateCommand::Prism(a) => save(&a.out, &generate::prism_mesh(a.distorted, a.seed)),
+        GenerateCommand::Graded(a) => {
+            positive(&[a.cells], "--cells")?;
+            if !(a.ratio >= 1.0 && a.ratio.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "--ratio must be at least 1, got {}",
+                    a.ratio
+                )));
+            }
+            let mut mesh = generate::graded_tet_box(a.cells, a.ratio);
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+    }
 }
 
 pub fn demo(a: &DemoArgs) -> Result<()> {

@@ -153,8 +153,43 @@ pub struct QualityArgs {
 
 #[derive(Subcommand, Debug)]
 pub enum GenerateCommand {
-    /// A box of tetrahedra: NX x NY x NZ cubes, each split into 6 tetrahedra.
+    /// A box of NX x NY x NZ cubes: tetrahedra (each cube split into 6) or hexahedra.
     Box(BoxArgs),
+    /// A planar grid of NX x NY squares: quadrilaterals or triangles (each square split into 2).
+    Grid(GridArgs),
+    /// A duct (a 4 x 1 x 1 box of tetrahedra) with N cells across, for the size study.
+    Duct(DuctArgs),
+    /// The 2D horseshoe family of the vertex-reordering paper, with its semi-annulus reference.
+    Horseshoe(HorseshoeArgs),
+    /// The 1331-node, 2000-prism mesh of the reference-Jacobian paper.
+    Prism(PrismArgs),
+    /// A tetrahedral box graded toward one corner (element volume max:min about RATIO).
+    Graded(GradedArgs),
+}
+
+/// Perturbation of the interior vertices, shared by the generators.
+#[derive(Args, Debug)]
+pub struct PerturbArgs {
+    /// random:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA (ALPHA in units of the
+    /// local edge length; OMEGA in waves across the bounding box times 2 pi).
+    #[arg(long)]
+    pub perturb: Option<String>,
+    /// Fraction of the interior vertices to perturb.
+    #[arg(long, default_value_t = 1.0)]
+    pub fraction: f64,
+    /// Seed of the random numbers.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Where a generated mesh goes.
+#[derive(Args, Debug)]
+pub struct OutputArgs {
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output format (see `smooth --format`).
+    #[arg(long)]
+    pub format: Option<String>,
 }
 
 #[derive(Args, Debug)]
@@ -162,21 +197,74 @@ pub struct BoxArgs {
     /// Cells along x, y and z.
     #[arg(long, num_args = 3, value_names = ["NX", "NY", "NZ"], required = true)]
     pub cells: Vec<usize>,
-    /// Perturb interior vertices: random:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA
-    /// (ALPHA in units of the local edge length).
+    /// Element kind.
+    #[arg(long = "type", default_value = "tet", value_parser = ["tet", "hex"])]
+    pub kind: String,
+    #[command(flatten)]
+    pub perturb: PerturbArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct GridArgs {
+    #[arg(long, num_args = 2, value_names = ["NX", "NY"], required = true)]
+    pub cells: Vec<usize>,
+    #[arg(long = "type", default_value = "quad", value_parser = ["quad", "tri"])]
+    pub kind: String,
+    #[command(flatten)]
+    pub perturb: PerturbArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct DuctArgs {
+    #[arg(long, default_value_t = 8)]
+    pub cells_across: usize,
+    #[command(flatten)]
+    pub perturb: PerturbArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct HorseshoeArgs {
+    /// sqi, sqii, sqiv (structured quads 1:1, 1:5, biased 1:5), uti, utiv (triangles, biased).
+    #[arg(long, default_value = "sqi")]
+    pub kind: String,
+    /// About this many free vertices.
+    #[arg(long, default_value_t = 20_000)]
+    pub free: usize,
+    /// Also write the semi-annulus reference mesh (same connectivity) here.
+    #[arg(long, value_name = "FILE")]
+    pub reference_output: Option<PathBuf>,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct PrismArgs {
+    /// Add the paper's long-wavelength distortion and short-wavelength noise.
     #[arg(long)]
-    pub perturb: Option<String>,
-    /// Fraction of the interior vertices to perturb.
-    #[arg(long, default_value_t = 1.0)]
-    pub fraction: f64,
-    /// Seed of the perturbation's random numbers.
+    pub distorted: bool,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Output format (see `smooth --format`).
-    #[arg(long)]
-    pub format: Option<String>,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct GradedArgs {
+    #[arg(long, default_value_t = 20)]
+    pub cells: usize,
+    /// Element volume max:min.
+    #[arg(long, default_value_t = 1e3)]
+    pub ratio: f64,
+    #[command(flatten)]
+    pub perturb: PerturbArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
 }
 
 #[derive(Args, Debug)]
@@ -211,7 +299,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Quality(a)) => commands::quality(&a),
         Some(Command::Compare(a)) => commands::compare(&a),
         Some(Command::Devices) => commands::devices(),
-        Some(Command::Generate(GenerateCommand::Box(a))) => commands::generate_box(&a),
+        Some(Command::Generate(g)) => commands::generate(&g),
     };
     match result {
         Ok(()) => 0,
