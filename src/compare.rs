@@ -150,12 +150,26 @@ pub fn compare_with(
     methods: &[Method],
     params: &Params,
 ) -> Result<(Comparison, Vec<Info>)> {
+    compare_on(mesh, options, methods, params, &mut |p, x, m| {
+        solve::solve(p, x, m, params, &mut |_| true)
+    })
+}
+
+/// Runs every method through `run` (a backend: the CPU's `solve::solve`, or a
+/// device's solvers) from the same start, and summarises.
+pub fn compare_on(
+    mesh: &Mesh,
+    options: &ProblemOptions,
+    methods: &[Method],
+    params: &Params,
+    run: &mut dyn FnMut(&Problem, &mut [crate::metric::mat3::Vec3], Method) -> Result<Info>,
+) -> Result<(Comparison, Vec<Info>)> {
     let p = Problem::with_options(mesh, options)?;
     let x0 = p.gather(&mesh.points);
     let mut infos = Vec::new();
     for &m in methods {
         let mut x = x0.clone();
-        infos.push(solve::solve(&p, &mut x, m, params, &mut |_| true)?);
+        infos.push(run(&p, &mut x, m)?);
     }
     Ok((
         summarise(mesh.num_points(), mesh.num_elements(), &infos, params.tol),

@@ -275,3 +275,37 @@ fn devices_lists_adapters_and_gpu_smoothing_names_the_device() {
     assert_eq!(o.status.code(), Some(1));
     assert!(text(&o).contains("no-such-gpu"), "{}", text(&o));
 }
+
+#[test]
+fn compare_reports_both_methods_and_writes_csv_and_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.vtk");
+    let args = [
+        "generate",
+        "box",
+        "--cells",
+        "6",
+        "6",
+        "6",
+        "--perturb",
+        "random:0.3",
+        "-o",
+        s(&input),
+    ];
+    assert!(meshsmooth(&args).status.success());
+    let (csv, svg) = (dir.path().join("h.csv"), dir.path().join("h.svg"));
+    let o = meshsmooth(&["compare", s(&input), "--csv", s(&csv), "--plot", s(&svg)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = text(&o);
+    for needle in ["T50", "T100", "bcd ", "newton ", "paper est."] {
+        assert!(out.contains(needle), "missing {needle}: {out}");
+    }
+    let rows = std::fs::read_to_string(&csv).unwrap();
+    assert!(rows.lines().any(|l| l.starts_with("bcd,")) && rows.lines().any(|l| l.starts_with("newton,")));
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<polyline"));
+    let o = meshsmooth(&["compare", s(&input), "--json", "--methods", "newton,bcd-colored"]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["runs"].as_array().unwrap().len(), 2);
+    let o = meshsmooth(&["compare", s(&input), "--methods", "bcd,nonsense"]);
+    assert_eq!(o.status.code(), Some(1));
+}

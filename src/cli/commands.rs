@@ -5,7 +5,9 @@ use super::progress::Progress;
 use super::{
     CompareArgs, DemoArgs, GenerateCommand, ObjectiveArgs, OutputArgs, PerturbArgs, QualityArgs, SmoothArgs, SolverArgs,
 };
-use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_method};
+use meshsmooth::backend::gpu::{
+    GpuRunOptions, list_adapters, smooth_mesh_gpu_method, solve_gpu_with, solve_newton_gpu,
+};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::metric::smetric::MetricKind;
@@ -420,18 +422,36 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let mesh = io::read(&a.input)?;
     let reference = a.objective.reference()?;
     let options = a.objective.options(reference.as_ref())?;
-    let (cmp, infos) = meshsmooth::compare::compare_with(&mesh, &options, &methods, &params)?;
+    let tets = mesh.kinds.iter().all(|&k| k == ElementKind::Tetrahedron);
+    let mut where_ = format!("cpu (f64), {} threads", rayon::current_num_threads());
+    let (cmp, infos) = if a.device == "gpu" {
+        // every method needs a device version: check them all before running any
+        for &m in &methods {
+            device::gpu_allowed(m, a.objective.is_default() && tets)?;
+        }
+        let backend = device::choose("gpu", &a.precision, a.adapter.as_deref(), methods[0], true)?;
+        where_ = backend.describe();
+        let Backend::Gpu(ctx) = backend else {
+            unreachable!("--device gpu gives a GPU backend")
+        };
+        let opts = GpuRunOptions::default();
+        meshsmooth::compare::compare_on(&mesh, &options, &methods, &params, &mut |p, x, m| match m {
+            Method::Newton => solve_newton_gpu(&ctx, p, x, &params, &opts, &mut |_| true),
+            _ => solve_gpu_with(&ctx, p, x, &params, &opts, &mut |_| true),
+        })?
+    } else {
+        meshsmooth::compare::compare_with(&mesh, &options, &methods, &params)?
+    };
     if a.json {
         println!("{}", serde_json::to_string_pretty(&cmp).expect("comparison serialises"));
     } else {
         println!(
-            "{}: {} vertices, {} elements; F0 = {:.8}, best F = {:.8}; cpu (f64), {} threads",
+            "{}: {} vertices, {} elements; F0 = {:.8}, best F = {:.8}; {where_}",
             a.input.display(),
             cmp.vertices,
             cmp.elements,
             cmp.initial_objective,
             cmp.best_objective,
-            rayon::current_num_threads()
         );
         println!(
             "{:<12} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>14} {:>10} {:>11} {:>13}",

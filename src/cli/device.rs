@@ -55,18 +55,7 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, g
             Ok(Backend::Cpu)
         }
         "gpu" => {
-            if !gpu_case {
-                return Err(Error::InvalidArgument(
-                    "the GPU runs tetrahedral meshes with the inverse mean ratio, the harmonic template and ideal \
-                     references so far; use --device cpu for other element kinds, metrics, templates or a reference mesh"
-                        .into(),
-                ));
-            }
-            if !runs_on_gpu(method) {
-                return Err(Error::InvalidArgument(format!(
-                    "{method} runs on the CPU only (the GPU runs bcd, colour by colour, and newton); use --device cpu"
-                )));
-            }
+            gpu_allowed(method, gpu_case)?;
             Ok(Backend::Gpu(Box::new(GpuContext::new(&opts)?)))
         }
         _ => {
@@ -93,4 +82,21 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, g
             Ok(Backend::Cpu)
         }
     }
+}
+
+/// Why `method` cannot run on the GPU for this problem, if it cannot.
+pub fn gpu_allowed(method: Method, gpu_case: bool) -> Result<()> {
+    if !gpu_case {
+        return Err(Error::InvalidArgument(
+            "the GPU runs tetrahedral meshes with the inverse mean ratio, the harmonic template and ideal \
+             references so far; use --device cpu for other element kinds, metrics, templates or a reference mesh"
+                .into(),
+        ));
+    }
+    if !runs_on_gpu(method) {
+        return Err(Error::InvalidArgument(format!(
+            "{method} runs on the CPU only (the GPU runs bcd, colour by colour, and newton); use --device cpu"
+        )));
+    }
+    Ok(())
 }

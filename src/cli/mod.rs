@@ -122,9 +122,13 @@ pub struct CompareArgs {
     /// Comma-separated methods to run.
     #[arg(long, default_value = "bcd,newton", value_delimiter = ',')]
     pub methods: Vec<String>,
-    /// Where to run; only the CPU backend exists so far.
-    #[arg(long, default_value = "cpu", value_parser = ["cpu"])]
+    /// cpu, or gpu (bcd runs as the coloured sweep there; newton too).
+    #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
     pub device: String,
+    #[arg(long, default_value = "auto", value_parser = ["f32", "f64", "auto"])]
+    pub precision: String,
+    #[arg(long)]
+    pub adapter: Option<String>,
     #[arg(long, default_value_t = 1e-6)]
     pub tol: f64,
     #[arg(long, default_value_t = 1000)]
