@@ -155,6 +155,9 @@ pub fn compare_with(
     })
 }
 
+/// A backend's solve: problem, positions (updated), method.
+pub type Runner<'a> = dyn FnMut(&Problem, &mut [crate::metric::mat3::Vec3], Method) -> Result<Info> + 'a;
+
 /// Runs every method through `run` (a backend: the CPU's `solve::solve`, or a
 /// device's solvers) from the same start, and summarises.
 pub fn compare_on(
@@ -162,7 +165,7 @@ pub fn compare_on(
     options: &ProblemOptions,
     methods: &[Method],
     params: &Params,
-    run: &mut dyn FnMut(&Problem, &mut [crate::metric::mat3::Vec3], Method) -> Result<Info>,
+    run: &mut Runner,
 ) -> Result<(Comparison, Vec<Info>)> {
     let p = Problem::with_options(mesh, options)?;
     let x0 = p.gather(&mesh.points);
