@@ -40,12 +40,17 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for &(name, mq_f, mq_fn_s, mq_bcd_s, mq_sweeps) in MESQUITE {
         let mesh = io::read(&dir.join(name)).expect("mesh reads");
-        let runs = [
-            (Method::Bcd, 1),
-            (Method::Newton, 1),
-            (Method::BcdColored, all),
-            (Method::Newton, all),
-        ];
+        let tets = mesh.kinds.iter().all(|&k| k == meshsmooth::ElementKind::Tetrahedron);
+        let runs: &[(Method, usize)] = if tets {
+            &[
+                (Method::Bcd, 1),
+                (Method::Newton, 1),
+                (Method::BcdColored, all),
+                (Method::Newton, all),
+            ]
+        } else {
+            &[(Method::Newton, 1), (Method::Newton, all)]
+        };
         for &(method, threads) in runs {
             let run = || -> Info {
                 // best of three: the machine may be shared
