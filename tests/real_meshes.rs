@@ -28,34 +28,6 @@ fn meshes_dir() -> Option<PathBuf> {
     }
 }
 
-#[test]
-fn bcd_matches_mesquite_on_every_tetrahedral_mesh() {
-    let Some(dir) = meshes_dir() else { return };
-    for &(name, mesquite_f) in MESQUITE_TET {
-        let path = dir.join(name);
-        let mut mesh = io::read(&path).unwrap_or_else(|e| panic!("{e}"));
-        let fixed = topology::fixed_vertices(&mesh);
-        let start = mesh.points.clone();
-        let info = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap();
-        eprintln!(
-            "{name}: F {:.6} -> {:.6} (Mesquite {mesquite_f}) in {} sweeps, {:.2} s, {:?}",
-            info.history.records[0].objective, info.objective, info.iterations, info.seconds, info.stop
-        );
-        assert_eq!(info.stop, StopReason::Converged, "{name}");
-        assert!(
-            info.objective <= mesquite_f * (1.0 + 1e-4),
-            "{name}: F = {} vs Mesquite {mesquite_f}",
-            info.objective
-        );
-        assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty(), "{name}");
-        for v in 0..mesh.num_points() {
-            if fixed[v] {
-                assert_eq!(mesh.points[v], start[v], "{name}: fixed vertex {v} moved");
-            }
-        }
-    }
-}
-
 /// Mesquite's final F on the planar and hexahedral meshes (../shared/meshes/README.md).
 const MESQUITE_OTHER: &[(&str, f64)] = &[
     ("shashkov.vtk", 3.105),
@@ -66,17 +38,17 @@ const MESQUITE_OTHER: &[(&str, f64)] = &[
     ("cub_fru.vtk", 2.5350),
 ];
 
-#[test]
-fn newton_matches_mesquite_on_planar_and_hexahedral_meshes() {
+/// Smooths each mesh with `method` and checks convergence, Mesquite's F
+/// (relative 1e-4), no inversion, fixed vertices unmoved, planar meshes in their plane.
+fn matches_mesquite(meshes: &[(&str, f64)], method: Method) {
     let Some(dir) = meshes_dir() else { return };
-    for &(name, mesquite_f) in MESQUITE_OTHER {
-        let path = dir.join(name);
-        let mut mesh = io::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    for &(name, mesquite_f) in meshes {
+        let mut mesh = io::read(&dir.join(name)).unwrap_or_else(|e| panic!("{e}"));
         let fixed = topology::fixed_vertices(&mesh);
         let start = mesh.points.clone();
-        let info = solve::smooth_mesh(&mut mesh, Method::Newton, &Params::default(), &mut |_| true).unwrap();
+        let info = solve::smooth_mesh(&mut mesh, method, &Params::default(), &mut |_| true).unwrap();
         eprintln!(
-            "{name}: F {:.6} -> {:.6} (Mesquite {mesquite_f}) in {} iterations, {:.2} s, {:?}",
+            "{name}: F {:.6} -> {:.6} (Mesquite {mesquite_f}) in {} {method} iterations, {:.2} s, {:?}",
             info.history.records[0].objective, info.objective, info.iterations, info.seconds, info.stop
         );
         assert_eq!(info.stop, StopReason::Converged, "{name}");
@@ -95,6 +67,21 @@ fn newton_matches_mesquite_on_planar_and_hexahedral_meshes() {
             }
         }
     }
+}
+
+#[test]
+fn bcd_matches_mesquite_on_every_tetrahedral_mesh() {
+    matches_mesquite(MESQUITE_TET, Method::Bcd);
+}
+
+#[test]
+fn newton_matches_mesquite_on_every_tetrahedral_mesh() {
+    matches_mesquite(MESQUITE_TET, Method::Newton);
+}
+
+#[test]
+fn newton_matches_mesquite_on_planar_and_hexahedral_meshes() {
+    matches_mesquite(MESQUITE_OTHER, Method::Newton);
 }
 
 #[test]

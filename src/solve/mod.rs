@@ -102,6 +102,18 @@ pub struct Info {
     pub memory_bytes: usize,
 }
 
+/// What every backend checks before its first step: usable settings and a
+/// feasible start.
+pub(crate) fn check_start(p: &Problem, x: &[Vec3], params: &Params) -> Result<()> {
+    if !(params.tol >= 0.0) {
+        return Err(Error::InvalidArgument(format!(
+            "tolerance must be non-negative, got {}",
+            params.tol
+        )));
+    }
+    p.check_feasible(x)
+}
+
 /// Runs `method` from positions `x` (problem numbering), updating them in place.
 /// `progress` sees every history record and may return `false` to stop.
 pub fn solve(
@@ -111,13 +123,7 @@ pub fn solve(
     params: &Params,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    if !(params.tol >= 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "tolerance must be non-negative, got {}",
-            params.tol
-        )));
-    }
-    p.check_feasible(x)?;
+    check_start(p, x, params)?;
     let mut newton = (method == Method::Newton).then(|| newton::Newton::new(p, params.newton));
     let setup_seconds = p.setup_time.as_secs_f64() + newton.as_ref().map_or(0.0, |n| n.setup_time.as_secs_f64());
     let start = Instant::now();

@@ -46,13 +46,7 @@ pub fn solve_gpu_with(
     opts: &GpuRunOptions,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    if !(params.tol >= 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "tolerance must be non-negative, got {}",
-            params.tol
-        )));
-    }
-    p.check_feasible(x)?;
+    solve::check_start(p, x, params)?;
     let start = Instant::now();
     let edge = p.mean_edge_length(x);
     let mut gpu = GpuBcd::with_line_search(ctx, p, x, &params.line_search)?;
@@ -129,13 +123,7 @@ pub fn solve_newton_gpu(
     opts: &GpuRunOptions,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    if !(params.tol >= 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "tolerance must be non-negative, got {}",
-            params.tol
-        )));
-    }
-    p.check_feasible(x)?;
+    solve::check_start(p, x, params)?;
     let mut gpu = GpuNewton::new(ctx, p, x, params.newton, &params.line_search)?;
     let setup_seconds = p.setup_time.as_secs_f64() + gpu.setup_time.as_secs_f64();
     let start = Instant::now();
