@@ -55,36 +55,94 @@ pub fn solve_gpu_with(
             "the device finds inverted elements the CPU does not (f32 rounding of a nearly flat element?)".into(),
         )
     })?;
-    let mut sweeps = 0;
+    let setup_seconds = p.setup_time.as_secs_f64();
+    drive(
+        &mut gpu,
+        Method::BcdColored,
+        p,
+        x,
+        params,
+        opts,
+        (start, edge, setup_seconds),
+        first,
+        progress,
+    )
+}
+
+/// A solver whose state lives on the device, as the shared loop drives it.
+trait DeviceSolver {
+    /// One sweep or iteration, with F and |grad F| read back.
+    fn step(&mut self) -> Result<Sweep>;
+    fn download(&self) -> Result<Vec<Vec3>>;
+    fn device_bytes(&self) -> usize;
+}
+
+impl DeviceSolver for GpuBcd<'_> {
+    fn step(&mut self) -> Result<Sweep> {
+        self.sweep()?;
+        let s = self.evaluate()?;
+        let objective = s.objective.ok_or_else(solve::accepted_step_inverted)?;
+        Ok(Sweep {
+            objective,
+            grad_norm: s.grad_norm,
+            max_move_sq: s.max_move_sq,
+        })
+    }
+    fn download(&self) -> Result<Vec<Vec3>> {
+        GpuBcd::download(self)
+    }
+    fn device_bytes(&self) -> usize {
+        GpuBcd::device_bytes(self)
+    }
+}
+
+impl DeviceSolver for GpuNewton<'_> {
+    fn step(&mut self) -> Result<Sweep> {
+        let (objective, grad_norm, max_move_sq) = GpuNewton::step(self)?;
+        Ok(Sweep {
+            objective,
+            grad_norm,
+            max_move_sq,
+        })
+    }
+    fn download(&self) -> Result<Vec<Vec3>> {
+        GpuNewton::download(self)
+    }
+    fn device_bytes(&self) -> usize {
+        GpuNewton::device_bytes(self)
+    }
+}
+
+/// The shared loop (`solve::iterate`) over a device solver, with the
+/// checkpoints of `GpuRunOptions`: on success `x` gets the final positions, on
+/// failure the last checkpoint.
+#[allow(clippy::too_many_arguments)]
+fn drive(
+    gpu: &mut dyn DeviceSolver,
+    method: Method,
+    p: &Problem,
+    x: &mut [Vec3],
+    params: &Params,
+    opts: &GpuRunOptions,
+    (start, edge, setup_seconds): (Instant, f64, f64),
+    first: (f64, f64),
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let mut steps = 0;
     let mut checkpoint: Option<Vec<Vec3>> = None;
     let result = {
         let mut step = || -> Result<Sweep> {
-            if opts.fail_after.is_some_and(|n| sweeps >= n) {
+            if opts.fail_after.is_some_and(|n| steps >= n) {
                 return Err(Error::Gpu("device lost (simulated for testing)".into()));
             }
-            gpu.sweep()?;
-            let s = gpu.evaluate()?;
-            let objective = s.objective.ok_or_else(solve::accepted_step_inverted)?;
-            sweeps += 1;
-            if opts.checkpoint_every.is_some_and(|k| sweeps % k.max(1) == 0) {
+            let sweep = gpu.step()?;
+            steps += 1;
+            if opts.checkpoint_every.is_some_and(|k| steps % k.max(1) == 0) {
                 checkpoint = Some(gpu.download()?);
             }
-            Ok(Sweep {
-                objective,
-                grad_norm: s.grad_norm,
-                max_move_sq: s.max_move_sq,
-            })
+            Ok(sweep)
         };
-        solve::iterate(
-            Method::BcdColored,
-            params,
-            start,
-            edge,
-            p.setup_time.as_secs_f64(),
-            first,
-            &mut step,
-            progress,
-        )
+        solve::iterate(method, params, start, edge, setup_seconds, first, &mut step, progress)
     };
     match result {
         Ok(mut info) => {
@@ -129,48 +187,17 @@ pub fn solve_newton_gpu(
     let start = Instant::now();
     let edge = p.mean_edge_length(x);
     let first = gpu.assemble()?;
-    let mut steps = 0;
-    let mut checkpoint: Option<Vec<Vec3>> = None;
-    let result = {
-        let mut step = || -> Result<Sweep> {
-            if opts.fail_after.is_some_and(|n| steps >= n) {
-                return Err(Error::Gpu("device lost (simulated for testing)".into()));
-            }
-            let (objective, grad_norm, max_move_sq) = gpu.step()?;
-            steps += 1;
-            if opts.checkpoint_every.is_some_and(|k| steps % k.max(1) == 0) {
-                checkpoint = Some(gpu.download()?);
-            }
-            Ok(Sweep {
-                objective,
-                grad_norm,
-                max_move_sq,
-            })
-        };
-        solve::iterate(
-            Method::Newton,
-            params,
-            start,
-            edge,
-            setup_seconds,
-            first,
-            &mut step,
-            progress,
-        )
-    };
-    match result {
-        Ok(mut info) => {
-            x.copy_from_slice(&gpu.download()?);
-            info.memory_bytes = p.bytes() + std::mem::size_of_val(x) + gpu.device_bytes();
-            Ok(info)
-        }
-        Err(e) => {
-            if let Some(c) = checkpoint {
-                x.copy_from_slice(&c);
-            }
-            Err(e)
-        }
-    }
+    drive(
+        &mut gpu,
+        Method::Newton,
+        p,
+        x,
+        params,
+        opts,
+        (start, edge, setup_seconds),
+        first,
+        progress,
+    )
 }
 
 /// Smooths `mesh` in place on the device with `method`: `Bcd` and
