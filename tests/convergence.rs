@@ -201,3 +201,31 @@ fn an_inverted_start_is_refused_with_element_ids() {
     assert!(msg.contains(&format!("{} inverted", bad.len())), "{msg}");
     assert!(msg.contains(&bad[0].to_string()), "{msg}");
 }
+
+#[test]
+fn mixed_tet_prism_hex_meshes_optimise_with_every_metric() {
+    use meshsmooth::metric::corner_model::Template;
+    use meshsmooth::metric::smetric::MetricKind;
+    use meshsmooth::problem::ProblemOptions;
+    let mut base = generate::mixed_block(4, 3);
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.2 },
+        fraction: 1.0,
+        seed: 4,
+    };
+    generate::perturb(&mut base, &opts).unwrap();
+    for metric in [MetricKind::InverseMeanRatio, MetricKind::ConditionNumber] {
+        for method in [Method::Newton, Method::Bcd] {
+            let mut mesh = base.clone();
+            let po = ProblemOptions {
+                metric,
+                template: Template::Harmonic,
+                reference: None,
+            };
+            let info = solve::smooth_mesh_with(&mut mesh, &po, method, &Params::default(), &mut |_| true).unwrap();
+            assert_eq!(info.stop, StopReason::Converged, "{metric} {method}");
+            assert!(info.objective < info.history.records[0].objective, "{metric} {method}");
+            assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
+        }
+    }
+}

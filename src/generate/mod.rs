@@ -6,6 +6,7 @@ pub mod box_mesh;
 pub mod graded;
 pub mod grid;
 pub mod horseshoe;
+pub mod mixed;
 pub mod perturb;
 pub mod prism;
 
@@ -13,5 +14,6 @@ pub use box_mesh::{duct, tet_box};
 pub use graded::graded_tet_box;
 pub use grid::{hex_box, quad_grid, tri_grid};
 pub use horseshoe::{HorseshoeKind, horseshoe};
+pub use mixed::mixed_block;
 pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb};
 pub use prism::{distorted_hex_box, prism_mesh};
