@@ -151,10 +151,10 @@ fn summary(info: &Info, f0: f64, backend: &Backend) -> String {
         backend.describe(),
         info.stop,
         info.iterations,
-        if info.method == Method::Newton {
-            "iterations"
-        } else {
-            "sweeps"
+        match info.method {
+            Method::Newton => "iterations".to_string(),
+            Method::BcdColored => format!("sweeps of {} colours", info.colors),
+            _ => "sweeps".to_string(),
         },
         info.seconds,
         info.setup_seconds,

@@ -100,6 +100,8 @@ pub struct Info {
     pub setup_seconds: f64,
     /// Bytes the solver held: the problem, the positions and the method's own data.
     pub memory_bytes: usize,
+    /// Colour classes of the free vertices (the dispatches of a coloured sweep).
+    pub colors: usize,
 }
 
 /// What every backend checks before its first step: usable settings and a
@@ -162,6 +164,7 @@ pub fn solve(
         iterate(method, params, start, edge, setup_seconds, first, &mut step, progress)?
     };
     info.memory_bytes = p.bytes() + std::mem::size_of_val(x) + newton.as_ref().map_or(0, |n| n.bytes());
+    info.colors = p.colors.len();
     Ok(info)
 }
 
@@ -272,6 +275,7 @@ pub(crate) fn iterate(
         seconds: start.elapsed().as_secs_f64(),
         setup_seconds,
         memory_bytes: 0,
+        colors: 0,
     })
 }
 

@@ -148,6 +148,7 @@ fn drive(
         Ok(mut info) => {
             x.copy_from_slice(&gpu.download()?);
             info.memory_bytes = p.bytes() + std::mem::size_of_val(x) + gpu.device_bytes();
+            info.colors = p.colors.len();
             Ok(info)
         }
         Err(e) => {
