@@ -11,7 +11,11 @@ fn main() -> meshsmooth::Result<()> {
         [i, o] => (i.into(), o.into()),
         _ => {
             let mut m = meshsmooth::generate::tet_box(8, 8, 8, [1.0; 3]);
-            let p = meshsmooth::generate::PerturbOptions { perturbation: "random:0.3".parse()?, fraction: 1.0, seed: 1 };
+            let p = meshsmooth::generate::PerturbOptions {
+                perturbation: "random:0.3".parse()?,
+                fraction: 1.0,
+                seed: 1,
+            };
             meshsmooth::generate::perturb(&mut m, &p)?;
             let i = dir.join("meshsmooth-example-in.vtk");
             meshsmooth::io::write(&i, &m, meshsmooth::io::Format::VtkAscii, &[])?;
@@ -26,6 +30,9 @@ fn main() -> meshsmooth::Result<()> {
         true // return false to stop early
     })?;
     let after = meshsmooth::report::quality_report(&mesh, &mesh.points);
-    println!("{before}\n{after}\n{:?} after {} iterations", info.stop, info.iterations);
+    println!(
+        "{before}\n{after}\n{:?} after {} iterations",
+        info.stop, info.iterations
+    );
     meshsmooth::io::write(&output, &mesh, meshsmooth::io::Format::VtkAscii, &[])
 }

@@ -366,6 +366,12 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             Ok(())
         }
         GenerateCommand::Prism(a) => save(&a.out, &generate::prism_mesh(a.distorted, a.seed)),
+        GenerateCommand::Mixed(a) => {
+            positive(&[a.cells, a.layers], "--cells and --layers")?;
+            let mut mesh = generate::mixed_block(a.cells, a.layers);
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
         GenerateCommand::Graded(a) => {
             positive(&[a.cells], "--cells")?;
             if !(a.ratio >= 1.0 && a.ratio.is_finite()) {

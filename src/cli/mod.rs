@@ -169,6 +169,8 @@ pub enum GenerateCommand {
     Prism(PrismArgs),
     /// A tetrahedral box graded toward one corner (element volume max:min about RATIO).
     Graded(GradedArgs),
+    /// A conforming mixed mesh: tetrahedra under prisms, hexahedra beside the prisms.
+    Mixed(MixedArgs),
 }
 
 /// Perturbation of the interior vertices, shared by the generators.
@@ -254,6 +256,20 @@ pub struct PrismArgs {
     pub distorted: bool,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct MixedArgs {
+    /// Cells across each slab.
+    #[arg(long, default_value_t = 6)]
+    pub cells: usize,
+    /// Cells up each slab.
+    #[arg(long, default_value_t = 3)]
+    pub layers: usize,
+    #[command(flatten)]
+    pub perturb: PerturbArgs,
     #[command(flatten)]
     pub out: OutputArgs,
 }
