@@ -309,3 +309,64 @@ fn compare_reports_both_methods_and_writes_csv_and_svg() {
     let o = meshsmooth(&["compare", s(&input), "--methods", "bcd,nonsense"]);
     assert_eq!(o.status.code(), Some(1));
 }
+
+#[test]
+fn smooth_converges_on_the_perturbed_20_box_keeping_the_boundary() {
+    // interior vertices moved by 0.3 of the cell size: random:ALPHA is in units of the
+    // mean edge length at a vertex, 1.282 cells in a Kuhn box, so ALPHA = 0.3 / 1.282
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.vtk");
+    let output = dir.path().join("out.vtk");
+    let history = dir.path().join("h.csv");
+    let args = [
+        "generate",
+        "box",
+        "--cells",
+        "20",
+        "20",
+        "20",
+        "--perturb",
+        "random:0.234",
+        "--seed",
+        "5",
+        "-o",
+        s(&input),
+    ];
+    assert!(meshsmooth(&args).status.success());
+    let o = meshsmooth(&[
+        "smooth",
+        s(&input),
+        "-o",
+        s(&output),
+        "--history",
+        s(&history),
+        "-q",
+        "--device",
+        "cpu",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(&history)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.last().unwrap()[3] < 1e-6, "{:?}", rows.last());
+    for w in rows.windows(2) {
+        assert!(w[1][2] <= w[0][2], "objective rose: {:?} -> {:?}", w[0], w[1]);
+    }
+    let before = meshsmooth::io::read(&input).unwrap();
+    let after = meshsmooth::io::read(&output).unwrap();
+    assert_eq!(after.num_elements(), 48_000);
+    assert!(meshsmooth::metric::inverted_elements(&after, &after.points).is_empty());
+    let skin = meshsmooth::mesh::topology::skin_vertices(&before);
+    let mut moved = 0;
+    for v in 0..before.num_points() {
+        if skin[v] {
+            assert_eq!(before.points[v], after.points[v], "boundary vertex {v} moved");
+        } else if before.points[v] != after.points[v] {
+            moved += 1;
+        }
+    }
+    assert!(moved > 6000, "only {moved} interior vertices moved");
+}
