@@ -12,6 +12,9 @@ use super::mat3::{Mat3, Vec3, cofactor, det, frobenius_sq, mul_vec, upper_invers
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TetShape {
     b: [Vec3; 4],
+    /// b_k . b_l and (b_k x b_l), constants of the Hessian blocks.
+    bb: [[f64; 4]; 4],
+    bx: [[Vec3; 4]; 4],
 }
 
 /// The 9x9 second derivative of eta with respect to S, index 3*i + j for S[i][j].
@@ -52,9 +55,24 @@ impl TetShape {
             -(m[0][1] + m[1][1] + m[2][1]),
             -(m[0][2] + m[1][2] + m[2][2]),
         ];
-        TetShape {
-            b: [b0, m[0], m[1], m[2]],
+        Self::from_b([b0, m[0], m[1], m[2]])
+    }
+
+    fn from_b(b: [Vec3; 4]) -> Self {
+        let mut bb = [[0.0; 4]; 4];
+        let mut bx = [[[0.0; 3]; 4]; 4];
+        for k in 0..4 {
+            for l in 0..4 {
+                let (p, q) = (&b[k], &b[l]);
+                bb[k][l] = p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+                bx[k][l] = [
+                    p[1] * q[2] - p[2] * q[1],
+                    p[2] * q[0] - p[0] * q[2],
+                    p[0] * q[1] - p[1] * q[0],
+                ];
+            }
         }
+        TetShape { b, bb, bx }
     }
 
     fn s_of(&self, x: &[Vec3; 4]) -> Mat3 {
@@ -185,39 +203,39 @@ impl TetShape {
         let cross = -(4.0 / 9.0) * dm53;
         let cc = (10.0 / 27.0) * p.f * dm83;
         let skew = -(2.0 / 9.0) * p.f * dm53;
+        // block (k,l) = u_k c_l^T + c_k v_l^T + diag (b_k.b_l) I + skew [S (b_k x b_l)]_x
+        // with v = cross s and u = v + cc c (the two symmetric outer products folded)
+        let v = sv.map(|sk| sk.map(|t| cross * t));
+        let mut u = v;
+        for k in 0..4 {
+            for i in 0..3 {
+                u[k][i] += cc * cv[k][i];
+            }
+        }
         for k in 0..4 {
             for l in k..4 {
-                let (bk, bl) = (&self.b[k], &self.b[l]);
-                let bkl = bk[0] * bl[0] + bk[1] * bl[1] + bk[2] * bl[2];
                 let mut blk = [[0.0; 3]; 3];
                 for i in 0..3 {
                     for q in 0..3 {
-                        blk[i][q] = cross * (sv[k][i] * cv[l][q] + cv[k][i] * sv[l][q]) + cc * cv[k][i] * cv[l][q];
+                        blk[i][q] = u[k][i] * cv[l][q] + cv[k][i] * v[l][q];
                     }
-                    blk[i][i] += diag * bkl;
+                    blk[i][i] += diag * self.bb[k][l];
                 }
                 if k != l {
-                    let bx = [
-                        bk[1] * bl[2] - bk[2] * bl[1],
-                        bk[2] * bl[0] - bk[0] * bl[2],
-                        bk[0] * bl[1] - bk[1] * bl[0],
-                    ];
-                    let w = mul_vec(&p.s, &bx).map(|c| c * skew);
+                    let w = mul_vec(&p.s, &self.bx[k][l]).map(|c| c * skew);
                     blk[0][1] += w[2];
                     blk[1][0] -= w[2];
                     blk[1][2] += w[0];
                     blk[2][1] -= w[0];
                     blk[2][0] += w[1];
                     blk[0][2] -= w[1];
-                }
-                out[k][l] = blk;
-                if k != l {
                     for i in 0..3 {
                         for q in 0..3 {
                             out[l][k][q][i] = blk[i][q];
                         }
                     }
                 }
+                out[k][l] = blk;
             }
         }
         Some((p.eta, g))

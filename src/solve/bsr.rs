@@ -87,23 +87,28 @@ impl HessianPattern {
         // row pattern: the free vertices sharing a corner with the row's vertex
         // (for hexahedra that includes face diagonals), and the diagonal
         let nslots = p.dim + 1;
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        for t in &p.corners {
-            for a in 0..nslots {
-                for b in 0..nslots {
-                    let (i, j) = (free_index[t[a] as usize], free_index[t[b] as usize]);
-                    if i != u32::MAX && j != u32::MAX {
-                        pairs.push((i, j));
-                    }
-                }
+        // each row from the corners around its vertex: short sorts, not one big one
+        let mut row_offsets = Vec::with_capacity(rows + 1);
+        let mut cols: Vec<u32> = Vec::new();
+        row_offsets.push(0u32);
+        let mut row = Vec::new();
+        for &v in &free_vertex {
+            row.clear();
+            for &packed in p.incidence.of(v as usize) {
+                let t = &p.corners[(packed >> 2) as usize];
+                row.extend(
+                    t[..nslots]
+                        .iter()
+                        .map(|&w| free_index[w as usize])
+                        .filter(|&j| j != u32::MAX),
+                );
             }
+            row.push(free_index[v as usize]);
+            row.sort_unstable();
+            row.dedup();
+            cols.extend_from_slice(&row);
+            row_offsets.push(cols.len() as u32);
         }
-        pairs.extend((0..rows as u32).map(|i| (i, i)));
-        pairs.sort_unstable();
-        pairs.dedup();
-        let pattern = crate::mesh::topology::Csr::from_pairs(rows, pairs.into_iter());
-        let row_offsets = pattern.offsets;
-        let cols = pattern.items;
         let diag: Vec<u32> = (0..rows)
             .map(|i| {
                 let (a, b) = (row_offsets[i] as usize, row_offsets[i + 1] as usize);
