@@ -2,12 +2,8 @@
 
 use super::device::{self, Backend};
 use super::progress::Progress;
-use super::{
-    CompareArgs, DemoArgs, GenerateCommand, ObjectiveArgs, OutputArgs, PerturbArgs, QualityArgs, SmoothArgs, SolverArgs,
-};
-use meshsmooth::backend::gpu::{
-    GpuRunOptions, list_adapters, smooth_mesh_gpu_method, solve_gpu_with, solve_newton_gpu,
-};
+use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs};
+use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_method};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::metric::smetric::MetricKind;
@@ -16,7 +12,7 @@ use meshsmooth::problem::ProblemOptions;
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::pcg::NegativeCurvature;
 use meshsmooth::solve::{self, Info, Method, Params};
-use meshsmooth::{ElementKind, Error, Mesh, Result, metric};
+use meshsmooth::{Error, Mesh, Result, metric};
 use std::path::Path;
 use std::time::Duration;
 
@@ -35,7 +31,7 @@ impl SolverArgs {
     }
 }
 
-fn params(tol: f64, max_iter: usize, time_limit: Option<f64>) -> Result<Params> {
+pub(super) fn params(tol: f64, max_iter: usize, time_limit: Option<f64>) -> Result<Params> {
     if !(tol.is_finite() && tol >= 0.0) {
         return Err(Error::InvalidArgument(format!(
             "--tol must be a non-negative number, got {tol}"
@@ -60,11 +56,11 @@ fn params(tol: f64, max_iter: usize, time_limit: Option<f64>) -> Result<Params> 
 
 impl ObjectiveArgs {
     /// The reference mesh, read when given.
-    fn reference(&self) -> Result<Option<Mesh>> {
+    pub(super) fn reference(&self) -> Result<Option<Mesh>> {
         self.reference.as_deref().map(io::read).transpose()
     }
 
-    fn options<'a>(&self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
+    pub(super) fn options<'a>(&self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
         Ok(ProblemOptions {
             metric: self.metric.parse()?,
             template: self.template.parse()?,
@@ -72,12 +68,12 @@ impl ObjectiveArgs {
         })
     }
 
-    fn is_default(&self) -> bool {
+    pub(super) fn is_default(&self) -> bool {
         self.metric == "imr" && self.template == "harmonic" && self.reference.is_none()
     }
 }
 
-fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
+pub(super) fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
     match name {
         Some(n) => Format::from_name(n).ok_or_else(|| {
             Error::InvalidArgument(format!(
@@ -95,7 +91,7 @@ fn eta_field(mesh: &Mesh) -> Vec<f64> {
         .collect()
 }
 
-fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
+pub(super) fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     // the last line of defence: an output mesh never holds an inverted element
     let bad = metric::inverted_elements(mesh, &mesh.points);
     if !bad.is_empty() {
@@ -129,7 +125,7 @@ fn partial_path(output: &Path) -> std::path::PathBuf {
     output.with_file_name(name)
 }
 
-fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
+pub(super) fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
     if io::same_file(input, output) {
         return Err(Error::InvalidArgument(format!(
             "output {} is the input file; meshsmooth never overwrites its input",
@@ -266,127 +262,6 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
     Ok(())
 }
 
-fn perturb(mesh: &mut Mesh, a: &PerturbArgs) -> Result<()> {
-    let Some(spec) = &a.perturb else { return Ok(()) };
-    let perturbation: Perturbation = spec.parse()?;
-    if !(a.fraction > 0.0 && a.fraction <= 1.0) {
-        return Err(Error::InvalidArgument(format!(
-            "--fraction must be in (0, 1], got {}",
-            a.fraction
-        )));
-    }
-    let stats = generate::perturb(
-        mesh,
-        &PerturbOptions {
-            perturbation,
-            fraction: a.fraction,
-            seed: a.seed,
-        },
-    )?;
-    println!(
-        "perturbed {} vertices ({} shortened to keep elements valid)",
-        stats.moved, stats.backtracked
-    );
-    Ok(())
-}
-
-fn positive(counts: &[usize], what: &str) -> Result<()> {
-    if counts.contains(&0) {
-        return Err(Error::InvalidArgument(format!(
-            "{what} needs positive cell counts, got {counts:?}"
-        )));
-    }
-    Ok(())
-}
-
-fn save(out: &OutputArgs, mesh: &Mesh) -> Result<()> {
-    let format = output_format(&out.output, out.format.as_deref())?;
-    write_mesh(&out.output, mesh, format)?;
-    let kinds: Vec<String> = ElementKind::ALL
-        .iter()
-        .filter_map(|&k| match mesh.count_kind(k) {
-            0 => None,
-            n => Some(format!("{n} {k}")),
-        })
-        .collect();
-    println!(
-        "wrote {} ({} vertices; {})",
-        out.output.display(),
-        mesh.num_points(),
-        kinds.join(", ")
-    );
-    Ok(())
-}
-
-pub fn generate(g: &GenerateCommand) -> Result<()> {
-    match g {
-        GenerateCommand::Box(a) => {
-            positive(&a.cells, "--cells")?;
-            let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
-            let lengths = [nx as f64, ny as f64, nz as f64];
-            let mut mesh = if a.kind == "hex" {
-                generate::hex_box(nx, ny, nz, lengths)
-            } else {
-                generate::tet_box(nx, ny, nz, lengths)
-            };
-            perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
-        }
-        GenerateCommand::Grid(a) => {
-            positive(&a.cells, "--cells")?;
-            let (nx, ny) = (a.cells[0], a.cells[1]);
-            let lengths = [nx as f64, ny as f64];
-            let mut mesh = if a.kind == "tri" {
-                generate::tri_grid(nx, ny, lengths)
-            } else {
-                generate::quad_grid(nx, ny, lengths)
-            };
-            perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
-        }
-        GenerateCommand::Duct(a) => {
-            positive(&[a.cells_across], "--cells-across")?;
-            let mut mesh = generate::duct(a.cells_across);
-            perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
-        }
-        GenerateCommand::Horseshoe(a) => {
-            let kind: generate::HorseshoeKind = a.kind.parse()?;
-            let (mesh, reference) = generate::horseshoe(kind, a.free.max(1));
-            save(&a.out, &mesh)?;
-            if let Some(r) = &a.reference_output {
-                save(
-                    &OutputArgs {
-                        output: r.clone(),
-                        format: a.out.format.clone(),
-                    },
-                    &reference,
-                )?;
-            }
-            Ok(())
-        }
-        GenerateCommand::Prism(a) => save(&a.out, &generate::prism_mesh(a.distorted, a.seed)),
-        GenerateCommand::Mixed(a) => {
-            positive(&[a.cells, a.layers], "--cells and --layers")?;
-            let mut mesh = generate::mixed_block(a.cells, a.layers);
-            perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
-        }
-        GenerateCommand::Graded(a) => {
-            positive(&[a.cells], "--cells")?;
-            if !(a.ratio >= 1.0 && a.ratio.is_finite()) {
-                return Err(Error::InvalidArgument(format!(
-                    "--ratio must be at least 1, got {}",
-                    a.ratio
-                )));
-            }
-            let mut mesh = generate::graded_tet_box(a.cells, a.ratio);
-            perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
-        }
-    }
-}
-
 pub fn demo(a: &DemoArgs) -> Result<()> {
     let n = a.cells.max(1);
     let mut mesh = generate::tet_box(n, n, n, [1.0, 1.0, 1.0]);
@@ -404,109 +279,6 @@ pub fn demo(a: &DemoArgs) -> Result<()> {
     if let Some(out) = &a.output {
         write_mesh(out, &mesh, Format::from_path(out)?)?;
         println!("wrote {}", out.display());
-    }
-    Ok(())
-}
-
-fn opt_secs(t: Option<f64>) -> String {
-    t.map_or("-".into(), |t| format!("{t:.3}"))
-}
-
-fn mib(bytes: usize) -> String {
-    format!("{:.2} MiB", bytes as f64 / (1024.0 * 1024.0))
-}
-
-pub fn compare(a: &CompareArgs) -> Result<()> {
-    let methods: Vec<Method> = a.methods.iter().map(|m| m.trim().parse()).collect::<Result<_>>()?;
-    if methods.is_empty() {
-        return Err(Error::InvalidArgument("--methods needs at least one method".into()));
-    }
-    for out in [&a.csv, &a.plot].into_iter().flatten() {
-        refuse_overwrite(&a.input, out)?;
-    }
-    let params = params(a.tol, a.max_iter, a.time_limit)?;
-    let mesh = io::read(&a.input)?;
-    let reference = a.objective.reference()?;
-    let options = a.objective.options(reference.as_ref())?;
-    let tets = mesh.kinds.iter().all(|&k| k == ElementKind::Tetrahedron);
-    let mut where_ = format!("cpu (f64), {} threads", rayon::current_num_threads());
-    let (cmp, infos) = if a.device == "gpu" {
-        // every method needs a device version: check them all before running any
-        for &m in &methods {
-            device::gpu_allowed(m, a.objective.is_default() && tets)?;
-        }
-        let backend = device::choose("gpu", &a.precision, a.adapter.as_deref(), methods[0], true)?;
-        where_ = backend.describe();
-        let Backend::Gpu(ctx) = backend else {
-            unreachable!("--device gpu gives a GPU backend")
-        };
-        let opts = GpuRunOptions::default();
-        meshsmooth::compare::compare_on(&mesh, &options, &methods, &params, &mut |p, x, m| match m {
-            Method::Newton => solve_newton_gpu(&ctx, p, x, &params, &opts, &mut |_| true),
-            _ => solve_gpu_with(&ctx, p, x, &params, &opts, &mut |_| true),
-        })?
-    } else {
-        meshsmooth::compare::compare_with(&mesh, &options, &methods, &params)?
-    };
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&cmp).expect("comparison serialises"));
-    } else {
-        println!(
-            "{}: {} vertices, {} elements; F0 = {:.8}, best F = {:.8}; {where_}",
-            a.input.display(),
-            cmp.vertices,
-            cmp.elements,
-            cmp.initial_objective,
-            cmp.best_objective,
-        );
-        println!(
-            "{:<12} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>14} {:>10} {:>11} {:>13}",
-            "method",
-            "iters",
-            "T50 s",
-            "T90 s",
-            "T100 s",
-            "total s",
-            "setup s",
-            "F",
-            "|grad F|",
-            "memory",
-            "paper est."
-        );
-        for r in &cmp.runs {
-            println!(
-                "{:<12} {:>6} {:>9} {:>9} {:>9} {:>9.3} {:>9.3} {:>14.10} {:>10.3e} {:>11} {:>13}",
-                r.method,
-                r.iterations,
-                opt_secs(r.t50),
-                opt_secs(r.t90),
-                opt_secs(r.t100),
-                r.seconds,
-                r.setup_seconds,
-                r.objective,
-                r.grad_norm,
-                mib(r.memory_bytes),
-                r.paper_memory_bytes.map_or("-".into(), mib)
-            );
-        }
-        for c in &cmp.crossovers {
-            println!(
-                "{} passes {} at {:.3} s, {:.1}% of the way to the best objective",
-                c.second, c.first, c.seconds, c.optimality_percent
-            );
-        }
-    }
-    if let Some(csv) = &a.csv {
-        io::write_atomic(csv, |w| {
-            Ok(w.write_all(meshsmooth::compare::histories_csv(&infos).as_bytes())?)
-        })?;
-    }
-    if let Some(plot) = &a.plot {
-        let series: Vec<(String, &meshsmooth::solve::History)> =
-            infos.iter().map(|i| (i.method.to_string(), &i.history)).collect();
-        io::write_atomic(plot, |w| {
-            Ok(w.write_all(meshsmooth::plot::histories_svg(&series).as_bytes())?)
-        })?;
     }
     Ok(())
 }

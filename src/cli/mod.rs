@@ -2,7 +2,9 @@
 //! command calls the library and prints what it returns.
 
 mod commands;
+mod compare;
 mod device;
+mod generate;
 mod progress;
 
 use clap::{Args, Parser, Subcommand};
@@ -317,9 +319,9 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Demo(a)) => commands::demo(&a),
         Some(Command::Smooth(a)) => commands::smooth(&a),
         Some(Command::Quality(a)) => commands::quality(&a),
-        Some(Command::Compare(a)) => commands::compare(&a),
+        Some(Command::Compare(a)) => compare::compare(&a),
         Some(Command::Devices) => commands::devices(),
-        Some(Command::Generate(g)) => commands::generate(&g),
+        Some(Command::Generate(g)) => generate::generate(&g),
     };
     match result {
         Ok(()) => 0,

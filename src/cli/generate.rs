@@ -1,0 +1,127 @@
+//! `meshsmooth generate`: the test meshes of the papers, written to a file.
+
+use super::commands::{output_format, write_mesh};
+use super::{GenerateCommand, OutputArgs, PerturbArgs};
+use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::{ElementKind, Error, Mesh, Result};
+
+pub(super) fn perturb(mesh: &mut Mesh, a: &PerturbArgs) -> Result<()> {
+    let Some(spec) = &a.perturb else { return Ok(()) };
+    let perturbation: Perturbation = spec.parse()?;
+    if !(a.fraction > 0.0 && a.fraction <= 1.0) {
+        return Err(Error::InvalidArgument(format!(
+            "--fraction must be in (0, 1], got {}",
+            a.fraction
+        )));
+    }
+    let stats = generate::perturb(
+        mesh,
+        &PerturbOptions {
+            perturbation,
+            fraction: a.fraction,
+            seed: a.seed,
+        },
+    )?;
+    println!(
+        "perturbed {} vertices ({} shortened to keep elements valid)",
+        stats.moved, stats.backtracked
+    );
+    Ok(())
+}
+
+fn positive(counts: &[usize], what: &str) -> Result<()> {
+    if counts.contains(&0) {
+        return Err(Error::InvalidArgument(format!(
+            "{what} needs positive cell counts, got {counts:?}"
+        )));
+    }
+    Ok(())
+}
+
+fn save(out: &OutputArgs, mesh: &Mesh) -> Result<()> {
+    let format = output_format(&out.output, out.format.as_deref())?;
+    write_mesh(&out.output, mesh, format)?;
+    let kinds: Vec<String> = ElementKind::ALL
+        .iter()
+        .filter_map(|&k| match mesh.count_kind(k) {
+            0 => None,
+            n => Some(format!("{n} {k}")),
+        })
+        .collect();
+    println!(
+        "wrote {} ({} vertices; {})",
+        out.output.display(),
+        mesh.num_points(),
+        kinds.join(", ")
+    );
+    Ok(())
+}
+
+pub fn generate(g: &GenerateCommand) -> Result<()> {
+    match g {
+        GenerateCommand::Box(a) => {
+            positive(&a.cells, "--cells")?;
+            let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
+            let lengths = [nx as f64, ny as f64, nz as f64];
+            let mut mesh = if a.kind == "hex" {
+                generate::hex_box(nx, ny, nz, lengths)
+            } else {
+                generate::tet_box(nx, ny, nz, lengths)
+            };
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+        GenerateCommand::Grid(a) => {
+            positive(&a.cells, "--cells")?;
+            let (nx, ny) = (a.cells[0], a.cells[1]);
+            let lengths = [nx as f64, ny as f64];
+            let mut mesh = if a.kind == "tri" {
+                generate::tri_grid(nx, ny, lengths)
+            } else {
+                generate::quad_grid(nx, ny, lengths)
+            };
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+        GenerateCommand::Duct(a) => {
+            positive(&[a.cells_across], "--cells-across")?;
+            let mut mesh = generate::duct(a.cells_across);
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+        GenerateCommand::Horseshoe(a) => {
+            let kind: generate::HorseshoeKind = a.kind.parse()?;
+            let (mesh, reference) = generate::horseshoe(kind, a.free.max(1));
+            save(&a.out, &mesh)?;
+            if let Some(r) = &a.reference_output {
+                save(
+                    &OutputArgs {
+                        output: r.clone(),
+                        format: a.out.format.clone(),
+                    },
+                    &reference,
+                )?;
+            }
+            Ok(())
+        }
+        GenerateCommand::Prism(a) => save(&a.out, &generate::prism_mesh(a.distorted, a.seed)),
+        GenerateCommand::Mixed(a) => {
+            positive(&[a.cells, a.layers], "--cells and --layers")?;
+            let mut mesh = generate::mixed_block(a.cells, a.layers);
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+        GenerateCommand::Graded(a) => {
+            positive(&[a.cells], "--cells")?;
+            if !(a.ratio >= 1.0 && a.ratio.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "--ratio must be at least 1, got {}",
+                    a.ratio
+                )));
+            }
+            let mut mesh = generate::graded_tet_box(a.cells, a.ratio);
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
+    }
+}
