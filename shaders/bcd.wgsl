@@ -4,7 +4,8 @@
 // CPU twin: `solve::bcd::newton_step` (same arithmetic, same order).
 
 #import layout
-#import mean_ratio
+#import corners
+#import corner_model
 
 struct Color {
     offset: u32,
@@ -13,53 +14,44 @@ struct Color {
     pad: u32,
 }
 
-@group(0) @binding(0) var<uniform> shape: Shape;
-@group(0) @binding(1) var<uniform> color: Color;
-@group(0) @binding(2) var<storage, read_write> x: array<real>;
-@group(0) @binding(3) var<storage, read> tets: array<u32>;
-@group(0) @binding(4) var<storage, read> inc_offsets: array<u32>;
-@group(0) @binding(5) var<storage, read> inc_items: array<u32>;
-@group(0) @binding(6) var<storage, read> colors: array<u32>;
+@group(0) @binding(0) var<uniform> model: Model;
+// x = beta, y = sigma
+@group(0) @binding(1) var<uniform> ls: vec4<real>;
+@group(0) @binding(2) var<uniform> color: Color;
+@group(0) @binding(3) var<storage, read_write> x: array<real>;
+@group(0) @binding(4) var<storage, read> corners: array<u32>;
+@group(0) @binding(5) var<storage, read> shapes: array<vec4<real>>;
+@group(0) @binding(6) var<storage, read> inc_offsets: array<u32>;
+@group(0) @binding(7) var<storage, read> inc_items: array<u32>;
+@group(0) @binding(8) var<storage, read> colors: array<u32>;
 // squared displacement of each vertex in this sweep (0 when it stayed)
-@group(0) @binding(7) var<storage, read_write> disp: array<real>;
+@group(0) @binding(9) var<storage, read_write> disp: array<real>;
 
-// The vertex's S-without-its-term per element, as the CPU's `Patch` keeps
-// them; vertices with more elements than this recompute them per trial.
+// The vertex's S-without-its-term per corner, as the CPU's `Patch` keeps
+// them; vertices with more corners than this recompute them per trial.
 const CACHE: u32 = 32u;
 var<private> rest_cache: array<mat3x3<real>, CACHE>;
 
-fn point(v: u32) -> vec3<real> {
-    return vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]);
-}
-
-// S of element `e` without its corner `k`'s term (`TetShape::s_rest`).
-fn rest_of(e: u32, k: u32, b: array<vec3<real>, 4>) -> mat3x3<real> {
-    var pts: array<vec3<real>, 4>;
-    for (var j = 0u; j < 4u; j++) {
-        pts[j] = point(tets[4u * e + j]);
-    }
-    return s_rest(pts, b, k);
-}
-
-// `Patch::value`: the sum of eta over the vertex's elements with it at `at`.
-fn patch_value(v: u32, at: vec3<real>, b: array<vec3<real>, 4>) -> Eta {
+// `Patch::value`: the weighted terms of the vertex's corners with it at `at`.
+fn patch_value(v: u32, at: vec3<real>) -> Eta {
     var sum = real(0.0);
     let first = inc_offsets[v];
     let cached = inc_offsets[v + 1u] - first <= CACHE;
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items[it];
         let k = packed & 3u;
+        let cr = corner_ref(packed >> 2u);
         var rest: mat3x3<real>;
         if cached {
             rest = rest_cache[it - first];
         } else {
-            rest = rest_of(packed >> 2u, k, b);
+            rest = s_rest(corner_points(packed >> 2u), cr.b, k);
         }
-        let r = value_of_s(s_with(rest, b[k], at));
+        let r = model_value_of_s(model, s_with(rest, cr.b[k], at));
         if !r.ok {
             return Eta(real(0.0), false);
         }
-        sum += r.eta;
+        sum += cr.w * r.eta;
     }
     return Eta(sum, true);
 }
@@ -76,8 +68,7 @@ fn main(
     }
     let v = colors[color.offset + t];
     disp[v] = real(0.0);
-    let b = shape_b(shape);
-    let xv = point(v);
+    let xv = corner_point(v);
 
     // `Patch::gradient_hessian`
     var f0 = real(0.0);
@@ -87,19 +78,21 @@ fn main(
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items[it];
         let k = packed & 3u;
-        let rest = rest_of(packed >> 2u, k, b);
+        let cr = corner_ref(packed >> 2u);
+        let rest = s_rest(corner_points(packed >> 2u), cr.b, k);
         if it - first < CACHE {
             rest_cache[it - first] = rest;
         }
-        let r = vertex_gradient_hessian_of_s(s_with(rest, b[k], xv), b[k]);
+        let r = model_vertex_gh(model, s_with(rest, cr.b[k], xv), cr.b[k]);
         if !r.ok {
             return;
         }
-        f0 += r.eta;
+        let w = cr.w;
+        f0 += w * r.eta;
         for (var i = 0; i < 3; i++) {
-            g[i] += r.grad[i];
+            g[i] += w * r.grad[i];
             for (var j = 0; j < 3; j++) {
-                h[i][j] += r.hess[i][j];
+                h[i][j] += w * r.hess[i][j];
             }
         }
     }
@@ -120,12 +113,12 @@ fn main(
     if !(slope < real(0.0)) {
         return;
     }
-    let beta = shape.ls.x;
-    let sigma = shape.ls.y;
+    let beta = ls.x;
+    let sigma = ls.y;
     var alpha = real(1.0);
     for (var n = 0u; n <= color.max_backtracks; n++) {
         let trial = vec3<real>(xv[0] + alpha * d[0], xv[1] + alpha * d[1], xv[2] + alpha * d[2]);
-        let f = patch_value(v, trial, b);
+        let f = patch_value(v, trial);
         if f.ok && f.eta <= f0 + sigma * alpha * slope {
             x[3u * v] = trial[0];
             x[3u * v + 1u] = trial[1];

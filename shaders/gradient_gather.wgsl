@@ -1,17 +1,17 @@
 // One thread per free vertex: its gradient of F summed over its incident
-// elements in ascending element order, and the Newton right-hand side -g.
+// corners in ascending corner order, and the Newton right-hand side -g.
 // CPU twin: `HessianPattern::assemble` (gradient part).
 
 #import layout
 
-@group(0) @binding(0) var<uniform> shape: Shape;
-@group(0) @binding(1) var<uniform> sizes: Sizes;
-@group(0) @binding(2) var<storage, read> free_vertices: array<u32>;
-@group(0) @binding(3) var<storage, read> inc_offsets: array<u32>;
-@group(0) @binding(4) var<storage, read> inc_items: array<u32>;
-@group(0) @binding(5) var<storage, read> elem: array<real>;
-@group(0) @binding(6) var<storage, read_write> grad: array<real>;
-@group(0) @binding(7) var<storage, read_write> rhs: array<real>;
+@group(0) @binding(0) var<uniform> sizes: Sizes;
+@group(0) @binding(1) var<storage, read> free_vertices: array<u32>;
+@group(0) @binding(2) var<storage, read> inc_offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> inc_items: array<u32>;
+// weighted per corner (`hessian_assemble.wgsl`)
+@group(0) @binding(4) var<storage, read> elem: array<real>;
+@group(0) @binding(5) var<storage, read_write> grad: array<real>;
+@group(0) @binding(6) var<storage, read_write> rhs: array<real>;
 
 @compute @workgroup_size(64)
 fn main(
@@ -23,14 +23,13 @@ fn main(
     if i >= sizes.n_free {
         return;
     }
-    let scale = shape.ls.z;
     let v = free_vertices[i];
     var acc = vec3<real>(real(0.0));
     for (var it = inc_offsets[v]; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items[it];
         let at = ELEM_STRIDE * (packed >> 2u) + 3u * (packed & 3u);
         for (var c = 0u; c < 3u; c++) {
-            acc[c] += elem[at + c] * scale;
+            acc[c] += elem[at + c];
         }
     }
     for (var c = 0u; c < 3u; c++) {

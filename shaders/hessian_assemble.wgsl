@@ -1,16 +1,82 @@
-// Per element: the gradient and the upper 4x4 blocks (3x3 each) of the
-// Hessian of eta, for `hessian_gather` and `gradient_gather` to sum without
-// float atomics; a lower block is the transpose of its upper one.
-// CPU twin: `TetShape::hessian_blocks` (same formula, same sum order).
+// Per corner: the weighted gradient and upper 4x4 blocks (3x3 each) of the
+// Hessian of its term, for `hessian_gather` and `gradient_gather` to sum
+// without float atomics; a lower block is the transpose of its upper one.
+// CPU twin: `Model::blocks` (the tetrahedral closed form of
+// `TetShape::hessian_blocks`, or the dense S-Hessian contracted with B), each
+// entry times the corner weight as `HessianPattern::assemble` does.
 
 #import layout
-#import mean_ratio
+#import corners
+#import corner_model
 
-@group(0) @binding(0) var<uniform> shape: Shape;
+@group(0) @binding(0) var<uniform> model: Model;
 @group(0) @binding(1) var<uniform> sizes: Sizes;
 @group(0) @binding(2) var<storage, read> x: array<real>;
-@group(0) @binding(3) var<storage, read> tets: array<u32>;
-@group(0) @binding(4) var<storage, read_write> elem: array<real>;
+@group(0) @binding(3) var<storage, read> corners: array<u32>;
+@group(0) @binding(4) var<storage, read> shapes: array<vec4<real>>;
+@group(0) @binding(5) var<storage, read_write> elem: array<real>;
+
+fn store_block(base: u32, k: u32, l: u32, blk: mat3x3<real>, w: real) {
+    let at = base + 12u + 9u * upper_block(k, l);
+    for (var i = 0u; i < 3u; i++) {
+        for (var q = 0u; q < 3u; q++) {
+            elem[at + 3u * i + q] = blk[i][q] * w;
+        }
+    }
+}
+
+// `Model::blocks` through the dense S-Hessian.
+fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) -> bool {
+    let n = model.dim;
+    let m = model_eval(model, s, true);
+    if !m.ok {
+        return false;
+    }
+    let nv = n + 1u;
+    // t[l][(i,j)][q] = sum_m H[(i,j),(q,m)] b_l[m]
+    var t: array<array<vec3<real>, 9>, 4>;
+    for (var l = 0u; l < nv; l++) {
+        let bl = b[l];
+        for (var ij = 0u; ij < 9u; ij++) {
+            if ij / 3u >= n || ij % 3u >= n {
+                continue;
+            }
+            for (var q = 0u; q < n; q++) {
+                var acc = real(0.0);
+                for (var mm = 0u; mm < n; mm++) {
+                    acc += m.h[ij][3u * q + mm] * bl[mm];
+                }
+                t[l][ij][q] = acc;
+            }
+        }
+        let g = contract_g(m.g, bl, n);
+        for (var i = 0u; i < 3u; i++) {
+            elem[base + 3u * l + i] = g[i] * w;
+        }
+    }
+    for (var k = 0u; k < 4u; k++) {
+        for (var l = k; l < 4u; l++) {
+            var blk = mat3x3<real>();
+            if l < nv {
+                let bk = b[k];
+                for (var i = 0u; i < n; i++) {
+                    for (var q = 0u; q < n; q++) {
+                        var acc = real(0.0);
+                        for (var j = 0u; j < n; j++) {
+                            acc += bk[j] * t[l][3u * i + j][q];
+                        }
+                        blk[i][q] = acc;
+                    }
+                }
+                if n == 2u && k == l {
+                    blk[2][2] = real(1.0);
+                }
+            }
+            store_block(base, k, l, blk, w);
+        }
+    }
+    return true;
+}
 
 @compute @workgroup_size(64)
 fn main(
@@ -22,15 +88,20 @@ fn main(
     if e >= sizes.n_elements {
         return;
     }
-    let b = shape_b(shape);
-    var pts: array<vec3<real>, 4>;
-    for (var k = 0u; k < 4u; k++) {
-        let v = tets[4u * e + k];
-        pts[k] = vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]);
-    }
-    let p = parts_of_s(s_of(pts, b));
+    let cr = corner_ref(e);
+    let b = cr.b;
+    let w = cr.w;
+    let s = s_of(corner_points(e), b);
     let base = ELEM_STRIDE * e;
-    if !p.ok {
+    var ok = true;
+    if model.fast == 0u {
+        ok = general_blocks(base, s, b, w);
+        if ok {
+            return;
+        }
+    }
+    let p = parts_of_s(s);
+    if !p.ok || !ok {
         // assembly runs at accepted (feasible) points only; zeros keep the sums finite
         for (var i = 0u; i < ELEM_STRIDE; i++) {
             elem[base + i] = real(0.0);
@@ -42,7 +113,7 @@ fn main(
     for (var k = 0u; k < 4u; k++) {
         let g = mul_vec(p.grad_s, b[k]);
         for (var i = 0u; i < 3u; i++) {
-            elem[base + 3u * k + i] = g[i];
+            elem[base + 3u * k + i] = g[i] * w;
         }
         sv[k] = mul_vec(p.s, b[k]);
         cv[k] = mul_vec(p.cof, b[k]);
@@ -80,12 +151,7 @@ fn main(
                 blk[2][0] += w[1];
                 blk[0][2] -= w[1];
             }
-            let at = base + 12u + 9u * upper_block(k, l);
-            for (var i = 0u; i < 3u; i++) {
-                for (var q = 0u; q < 3u; q++) {
-                    elem[at + 3u * i + q] = blk[i][q];
-                }
-            }
+            store_block(base, k, l, blk, w);
         }
     }
 }

@@ -7,11 +7,11 @@
 
 // n = number of blocks
 @group(0) @binding(0) var<uniform> dims: Dims;
-@group(0) @binding(1) var<uniform> shape: Shape;
-@group(0) @binding(2) var<storage, read> contrib_offsets: array<u32>;
-@group(0) @binding(3) var<storage, read> contrib_items: array<u32>;
-@group(0) @binding(4) var<storage, read> elem: array<real>;
-@group(0) @binding(5) var<storage, read_write> blocks: array<real>;
+@group(0) @binding(1) var<storage, read> contrib_offsets: array<u32>;
+@group(0) @binding(2) var<storage, read> contrib_items: array<u32>;
+// weighted per corner (`hessian_assemble.wgsl`)
+@group(0) @binding(3) var<storage, read> elem: array<real>;
+@group(0) @binding(4) var<storage, read_write> blocks: array<real>;
 
 @compute @workgroup_size(64)
 fn main(
@@ -23,7 +23,6 @@ fn main(
     if s >= dims.n {
         return;
     }
-    let scale = shape.ls.z;
     var acc: array<real, 9>;
     for (var i = 0u; i < 9u; i++) {
         acc[i] = real(0.0);
@@ -37,13 +36,13 @@ fn main(
         if a <= b {
             let at = base + 9u * upper_block(a, b);
             for (var i = 0u; i < 9u; i++) {
-                acc[i] += elem[at + i] * scale;
+                acc[i] += elem[at + i];
             }
         } else {
             let at = base + 9u * upper_block(b, a);
             for (var i = 0u; i < 3u; i++) {
                 for (var q = 0u; q < 3u; q++) {
-                    acc[3u * i + q] += elem[at + 3u * q + i] * scale;
+                    acc[3u * i + q] += elem[at + 3u * q + i];
                 }
             }
         }

@@ -1,17 +1,19 @@
-// Per element: eta and its gradient (kept on the device for the vertex
-// gather); per workgroup: a tree sum of eta, the smallest det(S) and the
-// infeasible count. CPU twin: `objective::gradient` (value part).
+// Per corner: its weighted term and gradient (kept on the device for the
+// vertex gather); per workgroup: a tree sum of the terms, the smallest
+// det(S) and the infeasible count. CPU twin: `objective::gradient` (value part).
 
 #import layout
-#import mean_ratio
+#import corners
+#import corner_model
 
-@group(0) @binding(0) var<uniform> shape: Shape;
+@group(0) @binding(0) var<uniform> model: Model;
 @group(0) @binding(1) var<uniform> sizes: Sizes;
 @group(0) @binding(2) var<storage, read> x: array<real>;
-@group(0) @binding(3) var<storage, read> tets: array<u32>;
-@group(0) @binding(4) var<storage, read_write> grad: array<real>;
-// per workgroup: (sum of eta, min det S, infeasible count)
-@group(0) @binding(5) var<storage, read_write> partials: array<real>;
+@group(0) @binding(3) var<storage, read> corners: array<u32>;
+@group(0) @binding(4) var<storage, read> shapes: array<vec4<real>>;
+@group(0) @binding(5) var<storage, read_write> grad: array<real>;
+// per workgroup: (sum of terms, min det S, infeasible count)
+@group(0) @binding(6) var<storage, read_write> partials: array<real>;
 
 var<workgroup> sum_wg: array<real, 64>;
 var<workgroup> min_wg: array<real, 64>;
@@ -24,36 +26,48 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let group = linear_group(wid, nwg);
-    let e = group * 64u + lid;
-    var eta = real(0.0);
+    let c = group * 64u + lid;
+    var term = real(0.0);
     var dmin = REAL_MAX;
     var bad = 0u;
-    if e < sizes.n_elements {
-        let b = shape_b(shape);
-        var pts: array<vec3<real>, 4>;
-        for (var k = 0u; k < 4u; k++) {
-            let v = tets[4u * e + k];
-            pts[k] = vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]);
-        }
-        let s = s_of(pts, b);
-        dmin = det3(s);
-        let p = parts_of_s(s);
-        if p.ok {
-            eta = p.eta;
+    if c < sizes.n_elements {
+        let cr = corner_ref(c);
+        let s = s_of(corner_points(c), cr.b);
+        dmin = det_n(s, model.dim);
+        var ok = false;
+        var g_s = mat3x3<real>();
+        if model.fast != 0u {
+            let p = parts_of_s(s);
+            ok = p.ok;
+            term = p.eta;
+            g_s = p.grad_s;
         } else {
+            let m = model_eval(model, s, false);
+            ok = m.ok;
+            term = m.v;
+            g_s = m.g;
+        }
+        if ok {
+            term = cr.w * term;
+        } else {
+            term = real(0.0);
             bad = 1u;
         }
         for (var k = 0u; k < 4u; k++) {
             var g = vec3<real>(real(0.0));
-            if p.ok {
-                g = mul_vec(p.grad_s, b[k]);
+            if ok {
+                if model.fast != 0u {
+                    g = mul_vec(g_s, cr.b[k]);
+                } else {
+                    g = contract_g(g_s, cr.b[k], model.dim);
+                }
             }
             for (var i = 0u; i < 3u; i++) {
-                grad[12u * e + 3u * k + i] = g[i];
+                grad[12u * c + 3u * k + i] = g[i] * cr.w;
             }
         }
     }
-    sum_wg[lid] = eta;
+    sum_wg[lid] = term;
     min_wg[lid] = dmin;
     bad_wg[lid] = bad;
     for (var stride = 32u; stride > 0u; stride >>= 1u) {

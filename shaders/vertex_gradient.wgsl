@@ -1,19 +1,19 @@
-// Per free vertex: its gradient of F gathered over its incident elements (a
+// Per free vertex: its gradient of F gathered over its incident corners (a
 // gather, so the sum order is fixed), squared; per workgroup: the tree sum of
 // those squares and the largest squared displacement of the last sweep.
 // CPU twin: `objective::gradient` (gather part) and `objective::norm`.
 
 #import layout
 
-@group(0) @binding(0) var<uniform> shape: Shape;
-@group(0) @binding(1) var<uniform> sizes: Sizes;
-@group(0) @binding(2) var<storage, read> free_vertices: array<u32>;
-@group(0) @binding(3) var<storage, read> inc_offsets: array<u32>;
-@group(0) @binding(4) var<storage, read> inc_items: array<u32>;
-@group(0) @binding(5) var<storage, read> grad: array<real>;
-@group(0) @binding(6) var<storage, read> disp: array<real>;
+@group(0) @binding(0) var<uniform> sizes: Sizes;
+@group(0) @binding(1) var<storage, read> free_vertices: array<u32>;
+@group(0) @binding(2) var<storage, read> inc_offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> inc_items: array<u32>;
+// per corner, weighted (`objective.wgsl`)
+@group(0) @binding(4) var<storage, read> grad: array<real>;
+@group(0) @binding(5) var<storage, read> disp: array<real>;
 // per workgroup: (sum of squared gradient components, max squared displacement)
-@group(0) @binding(7) var<storage, read_write> partials: array<real>;
+@group(0) @binding(6) var<storage, read_write> partials: array<real>;
 
 var<workgroup> sq_wg: array<real, 64>;
 var<workgroup> disp_wg: array<real, 64>;
@@ -36,7 +36,6 @@ fn main(
             let base = 12u * (packed >> 2u) + 3u * (packed & 3u);
             acc = vec3<real>(acc[0] + grad[base], acc[1] + grad[base + 1u], acc[2] + grad[base + 2u]);
         }
-        acc = acc * shape.ls.z;
         sq = acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2];
         moved = disp[v];
     }

@@ -286,8 +286,9 @@ impl Problem {
         self.corners.len()
     }
 
-    /// One shape, tetrahedra, inverse mean ratio, harmonic template: the case
-    /// the GPU kernels implement.
+    /// One shape, tetrahedra, inverse mean ratio, harmonic template: the
+    /// papers' main case (both backends take closed forms for it; the GPU
+    /// backend handles every problem).
     pub fn is_uniform_tet_mean_ratio(&self) -> bool {
         self.dim == 3
             && self.shapes.len() == 1

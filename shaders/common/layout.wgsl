@@ -10,6 +10,7 @@ struct Shape {
 }
 
 struct Sizes {
+    // elements (test kernels) or corners (solver kernels)
     n_elements: u32,
     n_free: u32,
     n_obj_partials: u32,
@@ -34,7 +35,21 @@ struct Dims {
     aux: u32,
 }
 
-// Per element in the Newton assembly buffer: the gradient (12 reals, vertex
+// Metric dimension and what turns a corner's S into its term; `fast` marks
+// the tetrahedral inverse mean ratio under the harmonic template, which takes
+// the closed forms of `mean_ratio.wgsl`. Rust mirror: `layout::ModelUniform`.
+struct Model {
+    dim: u32,
+    metric: u32,
+    tmpl: u32,
+    fast: u32,
+}
+
+// Reals per corner in `shapes`-indexed B tables: rows b_k in .xyz (k = 0..3),
+// the corner's weight in F in b_0.w. Corners hold 4 vertex ids then that index.
+const CORNER_STRIDE: u32 = 5u;
+
+// Per corner in the Newton assembly buffer: the gradient (12 reals, vertex
 // k at 3 k) then the upper Hessian blocks (k, l), k <= l, 9 reals each, row-major.
 const ELEM_STRIDE: u32 = 102u;
 

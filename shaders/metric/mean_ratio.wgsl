@@ -1,8 +1,11 @@
-// Inverse mean ratio of a tetrahedron, eta = |S|_F^2 / (3 det(S)^(2/3)) with
-// S = X B. CPU twin: src/metric/mean_ratio.rs (same names, same sum orders).
+// Inverse mean ratio eta = |S|_F^2 / (n det(S)^(2/n)) with S = X B: the
+// closed forms of a tetrahedron (CPU twin src/metric/mean_ratio.rs) and the
+// dense S-Hessian for n = 2 or 3 (CPU twin `smetric::imr`); same names, same
+// sum orders.
 
 #import mat3
 #import cbrt
+#import smetric
 
 // S = sum_k x_k b_k^T
 fn s_of(x: array<vec3<real>, 4>, b: array<vec3<real>, 4>) -> mat3x3<real> {
@@ -177,6 +180,47 @@ fn hess_s(p: SParts) -> array<array<real, 9>, 9> {
                     out[a][b] = v;
                 }
             }
+        }
+    }
+    return out;
+}
+
+// eta = f h / n with f = |S|^2, h = d^(-2/n), through the dense 9x9 Hessian.
+fn imr(n: u32, s: mat3x3<real>, d: real, hess: bool) -> MetricEval {
+    var out: MetricEval;
+    let nf = real(n);
+    var h = real(1.0) / d;
+    if n == 3u {
+        h = real(1.0) / cbrt_sq(d);
+    }
+    let f = frob_n(s, n);
+    out.v = f * h / nf;
+    let c = cof_n(s, n);
+    // d h / d det = -p h / d
+    let p = real(2.0) / nf;
+    for (var i = 0u; i < n; i++) {
+        for (var j = 0u; j < n; j++) {
+            out.g[i][j] = (real(2.0) * h * s[i][j] - f * p * h / d * c[i][j]) / nf;
+        }
+    }
+    if hess {
+        let d2 = d2det(s, n);
+        let sf = flat9(s);
+        let cf = flat9(c);
+        let cross = real(-2.0) * p * h / d / nf;
+        let cc = f * p * (p + real(1.0)) * h / (d * d) / nf;
+        let dd = -f * p * h / d / nf;
+        for (var a = 0u; a < 9u; a++) {
+            if a % 3u >= n || a / 3u >= n {
+                continue;
+            }
+            for (var b = 0u; b < 9u; b++) {
+                if b % 3u >= n || b / 3u >= n {
+                    continue;
+                }
+                out.h[a][b] = cross * (sf[a] * cf[b] + cf[a] * sf[b]) + cc * cf[a] * cf[b] + dd * d2[a][b];
+            }
+            out.h[a][a] += real(2.0) * h / nf;
         }
     }
     return out;

@@ -4,7 +4,7 @@
 
 use super::buffers::{BindingLimits, check_bindings, grid};
 use super::context::GpuContext;
-use super::layout::{Color, Sizes, shape_values};
+use super::layout::{Color, ModelUniform, Sizes, corner_tables};
 use super::shader::Kernel;
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
@@ -18,7 +18,7 @@ pub struct Scalars {
     pub objective: Option<f64>,
     /// 2-norm of the free-vertex gradient of F.
     pub grad_norm: f64,
-    /// Smallest det(S) over the elements.
+    /// Smallest det(S) over the corners.
     pub min_det: f64,
     /// Largest squared vertex displacement of the last sweep.
     pub max_move_sq: f64,
@@ -27,7 +27,7 @@ pub struct Scalars {
 pub struct GpuBcd<'c> {
     ctx: &'c GpuContext,
     n_vertices: usize,
-    n_elements: usize,
+    n_corners: usize,
     n_free: usize,
     x: wgpu::Buffer,
     /// One bind group per non-empty colour, with its vertex count.
@@ -50,14 +50,7 @@ impl<'c> GpuBcd<'c> {
     }
 
     pub fn with_line_search(ctx: &'c GpuContext, p: &Problem, x: &[Vec3], ls: &LineSearch) -> Result<Self> {
-        if !p.is_uniform_tet_mean_ratio() {
-            return Err(Error::InvalidArgument(
-                "the GPU backend handles tetrahedral meshes with the inverse mean ratio, the harmonic template and \
-                 ideal references so far; use --device cpu"
-                    .into(),
-            ));
-        }
-        let (nv, ne, nf) = (p.num_vertices(), p.num_elements(), p.free_vertices.len());
+        let (nv, ne, nf) = (p.num_vertices(), p.num_corners(), p.free_vertices.len());
         if x.len() != nv {
             return Err(Error::InvalidArgument(format!(
                 "{} positions for a problem with {nv} vertices",
@@ -71,10 +64,10 @@ impl<'c> GpuBcd<'c> {
             &BindingLimits::of(&ctx.limits),
             &[
                 ("positions", 3 * nv as u64 * r),
-                ("tets", 16 * ne as u64),
+                ("corners", 20 * ne as u64),
                 ("incidence", 4 * p.incidence.items.len() as u64),
                 ("incidence offsets", 4 * p.incidence.offsets.len() as u64),
-                ("element gradients", 12 * ne as u64 * r),
+                ("corner gradients", 12 * ne as u64 * r),
                 ("displacements", nv as u64 * r),
             ],
         )?;
@@ -88,16 +81,19 @@ impl<'c> GpuBcd<'c> {
                 n_vert_partials: n_vert as u32,
             },
         );
-        let shape = ctx.uniform_real("shape", &shape_values(&p.shapes[0].tet, ls, ne));
+        let model = ctx.uniform("model", &ModelUniform::of(p));
+        let ls_buf = ctx.uniform_real("line search", &[ls.beta, ls.sigma, 0.0, 0.0]);
+        let (corner_items, table) = corner_tables(p);
+        let shapes = ctx.storage_real("corner shapes", &table);
         let flat: Vec<f64> = x.iter().flatten().copied().collect();
         let xb = ctx.storage_real("positions", &flat);
-        let tets = ctx.storage_u32("tets", bytemuck::cast_slice(&p.corners));
+        let tets = ctx.storage_u32("corners", &corner_items);
         let inc_off = ctx.storage_u32("incidence offsets", &p.incidence.offsets);
         let inc = ctx.storage_u32("incidence", &p.incidence.items);
         let free = ctx.storage_u32("free vertices", &p.free_vertices);
         let color_items = ctx.storage_u32("colours", &p.colors.items);
         let disp = ctx.zeros_real("displacements", nv);
-        let grad = ctx.zeros_real("element gradients", 12 * ne);
+        let grad = ctx.zeros_real("corner gradients", 12 * ne);
         let obj_partials = ctx.zeros_real("objective partials", 3 * n_obj);
         let vert_partials = ctx.zeros_real("vertex partials", 2 * n_vert);
         let out = ctx.zeros_real("scalars", OUT_LEN);
@@ -124,20 +120,36 @@ impl<'c> GpuBcd<'c> {
             );
             let group = ctx.bind(
                 Kernel::Bcd,
-                &[&shape, &params, &xb, &tets, &inc_off, &inc, &color_items, &disp],
+                &[
+                    &model,
+                    &ls_buf,
+                    &params,
+                    &xb,
+                    &tets,
+                    &shapes,
+                    &inc_off,
+                    &inc,
+                    &color_items,
+                    &disp,
+                ],
             );
             colors.push((group, count));
         }
-        let objective = ctx.bind(Kernel::Objective, &[&shape, &sizes, &xb, &tets, &grad, &obj_partials]);
+        let objective = ctx.bind(
+            Kernel::Objective,
+            &[&model, &sizes, &xb, &tets, &shapes, &grad, &obj_partials],
+        );
         let vertex_gradient = ctx.bind(
             Kernel::VertexGradient,
-            &[&shape, &sizes, &free, &inc_off, &inc, &grad, &disp, &vert_partials],
+            &[&sizes, &free, &inc_off, &inc, &grad, &disp, &vert_partials],
         );
         let reduce = ctx.bind(Kernel::Reduce, &[&sizes, &obj_partials, &vert_partials, &out]);
         ctx.check()?;
         let device_bytes = [
             &sizes,
-            &shape,
+            &model,
+            &ls_buf,
+            &shapes,
             &xb,
             &tets,
             &inc_off,
@@ -158,7 +170,7 @@ impl<'c> GpuBcd<'c> {
         Ok(GpuBcd {
             ctx,
             n_vertices: nv,
-            n_elements: ne,
+            n_corners: ne,
             n_free: nf,
             x: xb,
             colors,
@@ -197,7 +209,7 @@ impl<'c> GpuBcd<'c> {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            ctx.dispatch(&mut pass, Kernel::Objective, &self.objective, self.n_elements)?;
+            ctx.dispatch(&mut pass, Kernel::Objective, &self.objective, self.n_corners)?;
             ctx.dispatch(&mut pass, Kernel::VertexGradient, &self.vertex_gradient, self.n_free)?;
             ctx.dispatch(&mut pass, Kernel::Reduce, &self.reduce, 1)?;
         }
@@ -205,7 +217,7 @@ impl<'c> GpuBcd<'c> {
         ctx.queue.submit([enc.finish()]);
         let v = ctx.map_read(&self.staging, OUT_LEN)?;
         Ok(Scalars {
-            objective: (v[2] == 0.0).then(|| v[0] / self.n_elements as f64),
+            objective: (v[2] == 0.0).then_some(v[0]),
             grad_norm: v[3].sqrt(),
             min_det: v[1],
             max_move_sq: v[4],

@@ -4,8 +4,11 @@
 use super::context::GpuContext;
 use super::shader::Kernel;
 use crate::metric::TetShape;
-use crate::solve::bcd::LineSearch;
+use crate::metric::corner_model::Template;
+use crate::metric::smetric::MetricKind;
+use crate::problem::Problem;
 use bytemuck::{Pod, Zeroable};
+use std::collections::HashMap;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -38,15 +41,71 @@ pub(crate) struct Dims {
 }
 const _: () = assert!(std::mem::size_of::<Dims>() == 16);
 
-/// `struct Shape { b: array<vec4<real>, 4>, ls: vec4<real> }` as 20 reals.
-pub(crate) fn shape_values(shape: &TetShape, ls: &LineSearch, n_elements: usize) -> [f64; 20] {
+/// `struct Model` of `layout.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub(crate) struct ModelUniform {
+    pub dim: u32,
+    pub metric: u32,
+    pub tmpl: u32,
+    pub fast: u32,
+}
+const _: () = assert!(std::mem::size_of::<ModelUniform>() == 16);
+
+impl ModelUniform {
+    pub fn of(p: &Problem) -> ModelUniform {
+        let m = p.model;
+        ModelUniform {
+            dim: p.dim as u32,
+            metric: match m.metric {
+                MetricKind::InverseMeanRatio => 0,
+                MetricKind::ConditionNumber => 1,
+                MetricKind::TargetShapeSize => 2,
+            },
+            tmpl: match m.template {
+                Template::Harmonic => 0,
+                Template::Average => 1,
+            },
+            // the closed forms `Model::blocks` and friends take on the CPU
+            fast: (p.dim == 3 && m.metric == MetricKind::InverseMeanRatio && m.template == Template::Harmonic) as u32,
+        }
+    }
+}
+
+/// Reals per `shapes` table entry: four `vec4` rows, b_k in .xyz, the weight in row 0's w.
+const TABLE_ENTRY: usize = 16;
+
+/// The corners as the solver kernels read them (`CORNER_STRIDE` = 5 u32 each:
+/// the 4 vertex ids, then an index into the table) and the table of distinct
+/// (B, weight) pairs: weights differ by element kind, so the table stays a
+/// few entries long however many corners share it.
+pub(crate) fn corner_tables(p: &Problem) -> (Vec<u32>, Vec<f64>) {
+    let mut ids: HashMap<(u32, u64), u32> = HashMap::new();
+    let mut table = Vec::new();
+    let mut corners = Vec::with_capacity(5 * p.num_corners());
+    for (c, vs) in p.corners.iter().enumerate() {
+        let (shape, w) = (p.corner_shape[c], p.corner_weight[c]);
+        let id = *ids.entry((shape, w.to_bits())).or_insert_with(|| {
+            let tet = &p.shapes[shape as usize].tet;
+            for k in 0..4 {
+                table.extend_from_slice(tet.b(k));
+                table.push(if k == 0 { w } else { 0.0 });
+            }
+            (table.len() / TABLE_ENTRY - 1) as u32
+        });
+        corners.extend_from_slice(vs);
+        corners.push(id);
+    }
+    (corners, table)
+}
+
+/// `struct Shape { b: array<vec4<real>, 4>, ls: vec4<real> }` as 20 reals
+/// (the per-element test kernels; `ls` is unused there).
+pub(crate) fn shape_values(shape: &TetShape) -> [f64; 20] {
     let mut v = [0.0; 20];
     for k in 0..4 {
         v[4 * k..4 * k + 3].copy_from_slice(shape.b(k));
     }
-    v[16] = ls.beta;
-    v[17] = ls.sigma;
-    v[18] = 1.0 / n_elements.max(1) as f64;
     v
 }
 

@@ -28,7 +28,7 @@ pub fn mean_ratio_eval(ctx: &GpuContext, shape: &TetShape, tets: &[[u32; 4]], x:
         ],
     )?;
     grid(n)?;
-    let shape_buf = ctx.uniform_real("shape", &shape_values(shape, &Default::default(), n));
+    let shape_buf = ctx.uniform_real("shape", &shape_values(shape));
     let sizes = ctx.uniform(
         "sizes",
         &Sizes {

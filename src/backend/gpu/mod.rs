@@ -15,4 +15,7 @@ pub use buffers::{BindingLimits, check_bindings};
 pub use context::{AdapterSummary, GpuContext, GpuOptions, Precision, list_adapters};
 pub use mean_ratio_eval::{ElementEval, cbrt_eval, mean_ratio_eval};
 pub use newton::GpuNewton;
-pub use solve::{GpuRunOptions, smooth_mesh_gpu, smooth_mesh_gpu_method, solve_gpu, solve_gpu_with, solve_newton_gpu};
+pub use solve::{
+    GpuRunOptions, smooth_mesh_gpu, smooth_mesh_gpu_method, smooth_mesh_gpu_with, solve_gpu, solve_gpu_with,
+    solve_newton_gpu,
+};

@@ -5,7 +5,7 @@
 
 use super::buffers::{BindingLimits, check_bindings, grid};
 use super::context::GpuContext;
-use super::layout::{Dims, Sizes, shape_values};
+use super::layout::{Dims, ModelUniform, Sizes, corner_tables};
 use super::shader::Kernel;
 use crate::error::{Error, Result};
 use crate::metric::mat3::{Mat3, Vec3};
@@ -116,7 +116,7 @@ pub struct GpuNewton<'c> {
     pub params: NewtonParams,
     ls: LineSearch,
     n_vertices: usize,
-    n_elements: usize,
+    n_corners: usize,
     n_free: usize,
     n_blocks: usize,
     x: wgpu::Buffer,
@@ -149,14 +149,7 @@ impl<'c> GpuNewton<'c> {
         ls: &LineSearch,
     ) -> Result<GpuNewton<'c>> {
         let start = Instant::now();
-        if !p.is_uniform_tet_mean_ratio() {
-            return Err(Error::InvalidArgument(
-                "the GPU backend handles tetrahedral meshes with the inverse mean ratio, the harmonic template and \
-                 ideal references so far; use --device cpu"
-                    .into(),
-            ));
-        }
-        let (nv, ne, nf) = (p.num_vertices(), p.num_elements(), p.free_vertices.len());
+        let (nv, ne, nf) = (p.num_vertices(), p.num_corners(), p.free_vertices.len());
         if x.len() != nv {
             return Err(Error::InvalidArgument(format!(
                 "{} positions for a problem with {nv} vertices",
@@ -171,12 +164,12 @@ impl<'c> GpuNewton<'c> {
             &BindingLimits::of(&ctx.limits),
             &[
                 ("positions", 3 * nv as u64 * r),
-                ("tets", 16 * ne as u64),
-                ("element gradients and Hessian blocks", ELEM_STRIDE * ne as u64 * r),
+                ("corners", 20 * ne as u64),
+                ("corner gradients and Hessian blocks", ELEM_STRIDE * ne as u64 * r),
                 ("Hessian blocks", 9 * nb as u64 * r),
                 ("Hessian contributions", 4 * contrib_items.len() as u64),
                 ("incidence", 4 * p.incidence.items.len() as u64),
-                ("element gradients", 12 * ne as u64 * r),
+                ("corner gradients", 12 * ne as u64 * r),
             ],
         )?;
         grid(ne)?;
@@ -202,11 +195,13 @@ impl<'c> GpuNewton<'c> {
                 },
             )
         };
-        let shape = ctx.uniform_real("shape", &shape_values(&p.shapes[0].tet, ls, ne));
+        let model = ctx.uniform("model", &ModelUniform::of(p));
+        let (corner_items, table) = corner_tables(p);
+        let shapes = ctx.storage_real("corner shapes", &table);
         let flat: Vec<f64> = x.iter().flatten().copied().collect();
         let xb = ctx.storage_real("positions", &flat);
         let trial = ctx.storage_real("trial positions", &flat);
-        let tets = ctx.storage_u32("tets", bytemuck::cast_slice(&p.corners));
+        let tets = ctx.storage_u32("corners", &corner_items);
         let inc_off = ctx.storage_u32("incidence offsets", &p.incidence.offsets);
         let inc = ctx.storage_u32("incidence", &p.incidence.items);
         let free = ctx.storage_u32("free vertices", &pattern.free_vertex);
@@ -216,8 +211,8 @@ impl<'c> GpuNewton<'c> {
         let diag = ctx.storage_u32("diagonal blocks", &m.diag);
         let c_off = ctx.storage_u32("contribution offsets", &contrib_offsets);
         let c_items = ctx.storage_u32("contributions", &contrib_items);
-        let elem = ctx.zeros_real("element gradients and Hessian blocks", ELEM_STRIDE as usize * ne);
-        let elem_grad = ctx.zeros_real("element gradients", 12 * ne);
+        let elem = ctx.zeros_real("corner gradients and Hessian blocks", ELEM_STRIDE as usize * ne);
+        let elem_grad = ctx.zeros_real("corner gradients", 12 * ne);
         let blocks = ctx.zeros_real("Hessian blocks", 9 * nb);
         let factors = ctx.zeros_real("block-Jacobi factors", 6 * nf);
         let vec = |label: &str| ctx.zeros_real(label, 3 * nf);
@@ -263,14 +258,14 @@ impl<'c> GpuNewton<'c> {
         };
         let cg_bufs = [&v.p, &v.q, &v.d, &v.r];
         let groups = Groups {
-            assemble: ctx.bind(Kernel::HessianAssemble, &[&shape, &sizes, &xb, &tets, &elem]),
+            assemble: ctx.bind(Kernel::HessianAssemble, &[&model, &sizes, &xb, &tets, &shapes, &elem]),
             gather: ctx.bind(
                 Kernel::HessianGather,
-                &[&dims("blocks", nb, 0, 0, 0), &shape, &c_off, &c_items, &elem, &blocks],
+                &[&dims("blocks", nb, 0, 0, 0), &c_off, &c_items, &elem, &blocks],
             ),
             gradient: ctx.bind(
                 Kernel::GradientGather,
-                &[&shape, &sizes, &free, &inc_off, &inc, &elem, &v.g, &v.rhs],
+                &[&sizes, &free, &inc_off, &inc, &elem, &v.g, &v.rhs],
             ),
             spmv: ctx.bind(
                 Kernel::BsrSpmv,
@@ -295,11 +290,11 @@ impl<'c> GpuNewton<'c> {
             trial: ctx.bind(Kernel::LineSearch, &[&step_alpha, &sizes, &free, &xb, &v.d, &trial]),
             objective_trial: ctx.bind(
                 Kernel::Objective,
-                &[&shape, &sizes, &trial, &tets, &elem_grad, &obj_partials],
+                &[&model, &sizes, &trial, &tets, &shapes, &elem_grad, &obj_partials],
             ),
             objective_x: ctx.bind(
                 Kernel::Objective,
-                &[&shape, &sizes, &xb, &tets, &elem_grad, &obj_partials],
+                &[&model, &sizes, &xb, &tets, &shapes, &elem_grad, &obj_partials],
             ),
             reduce: ctx.bind(Kernel::Reduce, &[&sizes, &obj_partials, &vert_partials, &out]),
             dot_bb: dot(&v.rhs, &v.rhs, SLOT_BB, NO_SLOT),
@@ -315,7 +310,8 @@ impl<'c> GpuNewton<'c> {
         ctx.check()?;
         // uniforms are 16 bytes each; counted in bulk
         let device_bytes = [
-            &shape,
+            &model,
+            &shapes,
             &sizes,
             &xb,
             &trial,
@@ -356,7 +352,7 @@ impl<'c> GpuNewton<'c> {
             params,
             ls: *ls,
             n_vertices: nv,
-            n_elements: ne,
+            n_corners: ne,
             n_free: nf,
             n_blocks: nb,
             x: xb,
@@ -417,7 +413,7 @@ impl<'c> GpuNewton<'c> {
     /// Gradient, right-hand side -g, Hessian blocks and |g|^2 at the current positions.
     fn record_assembly(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
         let g = &self.groups;
-        self.dispatch(pass, Kernel::HessianAssemble, &g.assemble, self.n_elements)?;
+        self.dispatch(pass, Kernel::HessianAssemble, &g.assemble, self.n_corners)?;
         self.dispatch(pass, Kernel::HessianGather, &g.gather, self.n_blocks)?;
         self.dispatch(pass, Kernel::GradientGather, &g.gradient, self.n_free)?;
         self.dot(pass, &g.dot_gg)
@@ -426,7 +422,7 @@ impl<'c> GpuNewton<'c> {
     /// F from `reduce`'s output, `None` when some element is infeasible.
     fn objective_of(&self, v: &[f64]) -> Option<f64> {
         let out = &v[N_SLOTS..];
-        (out[2] == 0.0 && out[0].is_finite()).then(|| out[0] / self.n_elements as f64)
+        (out[2] == 0.0 && out[0].is_finite()).then_some(out[0])
     }
 
     /// Assembles gradient and Hessian at the current positions; returns
@@ -434,7 +430,7 @@ impl<'c> GpuNewton<'c> {
     pub fn assemble(&mut self) -> Result<(f64, f64)> {
         let v = self.run(&[], |s, pass| {
             s.record_assembly(pass)?;
-            s.dispatch(pass, Kernel::Objective, &s.groups.objective_x, s.n_elements)?;
+            s.dispatch(pass, Kernel::Objective, &s.groups.objective_x, s.n_corners)?;
             s.dispatch(pass, Kernel::Reduce, &s.groups.reduce, 1)
         })?;
         let f = self.objective_of(&v).ok_or_else(|| {
@@ -555,7 +551,7 @@ impl<'c> GpuNewton<'c> {
             self.ctx.write_real(&self.step_alpha, &[alpha, 0.0, 0.0, 0.0]);
             let v = self.run(&[], |me, pass| {
                 me.dispatch(pass, Kernel::LineSearch, &g.trial, me.n_free)?;
-                me.dispatch(pass, Kernel::Objective, &g.objective_trial, me.n_elements)?;
+                me.dispatch(pass, Kernel::Objective, &g.objective_trial, me.n_corners)?;
                 me.dispatch(pass, Kernel::Reduce, &g.reduce, 1)
             })?;
             if let Some(ft) = self.objective_of(&v)

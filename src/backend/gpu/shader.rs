@@ -32,7 +32,15 @@ const SHARED: &[(&str, &str)] = &[
     ("cbrt", include_str!("../../../shaders/common/cbrt.wgsl")),
     ("mat3", include_str!("../../../shaders/common/mat3.wgsl")),
     ("layout", include_str!("../../../shaders/common/layout.wgsl")),
+    ("corners", include_str!("../../../shaders/common/corners.wgsl")),
     ("mean_ratio", include_str!("../../../shaders/metric/mean_ratio.wgsl")),
+    ("condition", include_str!("../../../shaders/metric/condition.wgsl")),
+    ("target", include_str!("../../../shaders/metric/target.wgsl")),
+    ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
+    (
+        "corner_model",
+        include_str!("../../../shaders/metric/corner_model.wgsl"),
+    ),
 ];
 
 /// The compute kernels, one per file, entry point `main`.

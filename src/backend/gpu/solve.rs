@@ -6,7 +6,7 @@ use super::context::GpuContext;
 use super::newton::GpuNewton;
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
-use crate::problem::Problem;
+use crate::problem::{Problem, ProblemOptions};
 use crate::solve::{self, Info, Method, Params, Record, Sweep};
 use std::time::Instant;
 
@@ -212,6 +212,20 @@ pub fn smooth_mesh_gpu_method(
     opts: &GpuRunOptions,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
+    smooth_mesh_gpu_with(ctx, mesh, &ProblemOptions::default(), method, params, opts, progress)
+}
+
+/// `smooth_mesh_gpu_method` with a metric, template and reference mesh, the
+/// device twin of `solve::smooth_mesh_with`.
+pub fn smooth_mesh_gpu_with(
+    ctx: &GpuContext,
+    mesh: &mut crate::Mesh,
+    options: &ProblemOptions,
+    method: Method,
+    params: &Params,
+    opts: &GpuRunOptions,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
     let run = match method {
         Method::Bcd | Method::BcdColored => solve_gpu_with,
         Method::Newton => solve_newton_gpu,
@@ -221,7 +235,7 @@ pub fn smooth_mesh_gpu_method(
             )));
         }
     };
-    let p = Problem::new(mesh)?;
+    let p = Problem::with_options(mesh, options)?;
     let mut x = p.gather(&mesh.points);
     let result = run(ctx, &p, &mut x, params, opts, progress);
     mesh.points = p.scatter(&x);

@@ -1,0 +1,29 @@
+// Per-corner data of the solver kernels. A kernel importing this declares
+// `corners: array<u32>` (CORNER_STRIDE per corner) and `shapes:
+// array<vec4<real>>` (4 rows per table entry) and `x: array<real>`.
+
+#import layout
+
+struct CornerRef {
+    b: array<vec3<real>, 4>,
+    // the corner's weight in F
+    w: real,
+}
+
+fn corner_ref(c: u32) -> CornerRef {
+    let t = 4u * corners[CORNER_STRIDE * c + 4u];
+    let r0 = shapes[t];
+    return CornerRef(array<vec3<real>, 4>(r0.xyz, shapes[t + 1u].xyz, shapes[t + 2u].xyz, shapes[t + 3u].xyz), r0.w);
+}
+
+fn corner_point(v: u32) -> vec3<real> {
+    return vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]);
+}
+
+fn corner_points(c: u32) -> array<vec3<real>, 4> {
+    var pts: array<vec3<real>, 4>;
+    for (var k = 0u; k < 4u; k++) {
+        pts[k] = corner_point(corners[CORNER_STRIDE * c + k]);
+    }
+    return pts;
+}

@@ -1,0 +1,264 @@
+//! Every metric x element kind x template on the device against the CPU:
+//! objective and gradient norm, one coloured BCD sweep, full BCD solves and
+//! the first Newton iterates. Without an adapter these tests print why and
+//! pass — except under `CI`, where they fail.
+
+use meshsmooth::backend::gpu::{self, GpuBcd, GpuContext, GpuOptions, GpuRunOptions, Precision};
+use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::metric::corner_model::Template;
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::problem::{Problem, ProblemOptions};
+use meshsmooth::solve::bcd::{LineSearch, sweep_colored};
+use meshsmooth::solve::{self, Method, Params};
+use meshsmooth::{ElementKind, Mesh, objective};
+
+type Vec3 = [f64; 3];
+
+fn context(precision: Precision) -> Option<GpuContext> {
+    match GpuContext::new(&GpuOptions {
+        adapter: None,
+        precision,
+    }) {
+        Ok(ctx) => {
+            eprintln!("GPU tests on {}", ctx.adapter_name());
+            Some(ctx)
+        }
+        Err(e) if std::env::var_os("CI").is_some() => panic!("no GPU for the GPU tests in CI: {e}"),
+        Err(e) => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+    }
+}
+
+const KINDS: [ElementKind; 5] = [
+    ElementKind::Triangle,
+    ElementKind::Quadrilateral,
+    ElementKind::Tetrahedron,
+    ElementKind::Hexahedron,
+    ElementKind::Prism,
+];
+
+/// Triangles of a `n x n` grid extruded through `n` layers.
+fn prism_stack(n: usize) -> Mesh {
+    let tris = generate::tri_grid(n, n, [n as f64; 2]);
+    let layer = tris.num_points() as u32;
+    let points = (0..=n)
+        .flat_map(|k| tris.points.iter().map(move |p| [p[0], p[1], k as f64]))
+        .collect();
+    let mut mesh = Mesh::new(points);
+    for k in 0..n as u32 {
+        for e in 0..tris.num_elements() {
+            let t = tris.element(e);
+            let (lo, hi) = (layer * k, layer * (k + 1));
+            mesh.push_element(
+                ElementKind::Prism,
+                &[t[0] + lo, t[1] + lo, t[2] + lo, t[0] + hi, t[1] + hi, t[2] + hi],
+            );
+        }
+    }
+    mesh
+}
+
+/// A small regular mesh of `kind` (the reference) and a seeded perturbation of it.
+fn meshes(kind: ElementKind, seed: u64) -> (Mesh, Mesh) {
+    let reference = match kind {
+        ElementKind::Triangle => generate::tri_grid(6, 6, [6.0, 6.0]),
+        ElementKind::Quadrilateral => generate::quad_grid(6, 6, [6.0, 6.0]),
+        ElementKind::Tetrahedron => generate::tet_box(3, 3, 3, [3.0; 3]),
+        ElementKind::Hexahedron => generate::hex_box(3, 3, 3, [3.0; 3]),
+        ElementKind::Prism => prism_stack(3),
+    };
+    let mut mesh = reference.clone();
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.25 },
+        fraction: 1.0,
+        seed,
+    };
+    generate::perturb(&mut mesh, &opts).unwrap();
+    (mesh, reference)
+}
+
+/// Every metric with each template it allows; tmp targets the unperturbed mesh.
+fn models() -> Vec<(MetricKind, Template)> {
+    vec![
+        (MetricKind::InverseMeanRatio, Template::Harmonic),
+        (MetricKind::InverseMeanRatio, Template::Average),
+        (MetricKind::ConditionNumber, Template::Harmonic),
+        (MetricKind::ConditionNumber, Template::Average),
+        (MetricKind::TargetShapeSize, Template::Harmonic),
+    ]
+}
+
+fn problem(mesh: &Mesh, reference: &Mesh, metric: MetricKind, template: Template) -> Problem {
+    let opts = ProblemOptions {
+        metric,
+        template,
+        reference: (metric == MetricKind::TargetShapeSize).then_some(reference),
+    };
+    Problem::with_options(mesh, &opts).unwrap()
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
+}
+
+fn worst_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Objective, gradient norm and (in f64) one coloured sweep of every case.
+fn every_case(precision: Precision, tol_rel: f64, tol_edge: Option<f64>) {
+    let Some(ctx) = context(precision) else {
+        return;
+    };
+    for kind in KINDS {
+        let (mesh, reference) = meshes(kind, 7);
+        for (metric, template) in models() {
+            let case = format!("{kind} {metric} {template:?} {precision:?}");
+            let p = problem(&mesh, &reference, metric, template);
+            let x0 = p.gather(&mesh.points);
+            let mut gpu = GpuBcd::new(&ctx, &p, &x0).unwrap();
+            let (cf, cg) = objective::gradient(&p, &x0).unwrap();
+            let cg = objective::norm(&cg);
+            let (f, g) = gpu.objective_and_grad_norm().unwrap().expect("feasible start");
+            eprintln!(
+                "{case}: F {:.1e} |g| {:.1e} relative differences",
+                rel(f, cf),
+                rel(g, cg)
+            );
+            assert!(rel(f, cf) <= tol_rel, "{case}: F GPU {f} CPU {cf}");
+            assert!(rel(g, cg) <= tol_rel, "{case}: |g| GPU {g} CPU {cg}");
+            let Some(tol_edge) = tol_edge else {
+                continue;
+            };
+            let mut cx = x0.clone();
+            sweep_colored(&p, &mut cx, &LineSearch::default(), None);
+            gpu.sweep().unwrap();
+            let gx = gpu.download().unwrap();
+            let edge = p.mean_edge_length(&x0);
+            let worst = worst_diff(&gx, &cx) / edge;
+            eprintln!("{case}: sweep differs by {worst:.1e} mean edges");
+            assert!(worst <= tol_edge, "{case}: sweep differs by {worst:.1e} mean edges");
+            assert!(worst_diff(&cx, &x0) > 1e-3 * edge, "{case}: the sweep moved nothing");
+            if p.dim == 2 {
+                assert!(
+                    gx.iter().zip(&x0).all(|(a, b)| a[2].to_bits() == b[2].to_bits()),
+                    "{case}: z moved"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn every_metric_kind_template_matches_cpu_f64() {
+    every_case(Precision::F64, 1e-10, Some(1e-9));
+}
+
+#[test]
+fn every_metric_kind_template_matches_cpu_f32() {
+    every_case(Precision::F32, 1e-4, None);
+}
+
+fn full_solve(kind: ElementKind, metric: MetricKind) {
+    let Some(ctx) = context(Precision::F64) else {
+        return;
+    };
+    let (mesh, reference) = if kind == ElementKind::Hexahedron {
+        // a distorted boundary, so that the optimum is not the regular grid
+        let m = generate::distorted_hex_box(4, 3);
+        (m.clone(), m)
+    } else {
+        meshes(kind, 3)
+    };
+    let p = problem(&mesh, &reference, metric, Template::Harmonic);
+    let x0 = p.gather(&mesh.points);
+    let params = Params {
+        tol: 1e-8,
+        ..Params::default()
+    };
+    let mut cx = x0.clone();
+    let cpu = solve::solve(&p, &mut cx, Method::BcdColored, &params, &mut |_| true).unwrap();
+    let mut gx = x0.clone();
+    let info = gpu::solve_gpu(&ctx, &p, &mut gx, &params, &mut |_| true).unwrap();
+    eprintln!(
+        "{kind} {metric}: GPU {} sweeps F = {:.12} ({:?}), CPU {} sweeps F = {:.12}",
+        info.iterations, info.objective, info.stop, cpu.iterations, cpu.objective
+    );
+    assert!(rel(info.objective, cpu.objective) <= 1e-6);
+    assert!(p.check_feasible(&gx).is_ok());
+    if p.dim == 2 {
+        assert!(gx.iter().zip(&x0).all(|(a, b)| a[2].to_bits() == b[2].to_bits()));
+    }
+}
+
+#[test]
+fn full_solve_quad_grid_matches_cpu_f64() {
+    full_solve(ElementKind::Quadrilateral, MetricKind::InverseMeanRatio);
+}
+
+#[test]
+fn full_solve_hex_box_condition_number_matches_cpu_f64() {
+    full_solve(ElementKind::Hexahedron, MetricKind::ConditionNumber);
+}
+
+fn newton_first_iterates(kind: ElementKind, metric: MetricKind, template: Template) {
+    let Some(ctx) = context(Precision::F64) else {
+        return;
+    };
+    let (mesh, reference) = meshes(kind, 5);
+    let p = problem(&mesh, &reference, metric, template);
+    let x0 = p.gather(&mesh.points);
+    let params = Params {
+        max_iter: 3,
+        ..Params::default()
+    };
+    let mut cx = x0.clone();
+    let cpu = solve::solve(&p, &mut cx, Method::Newton, &params, &mut |_| true).unwrap();
+    let mut gx = x0.clone();
+    let info = gpu::solve_newton_gpu(&ctx, &p, &mut gx, &params, &GpuRunOptions::default(), &mut |_| true).unwrap();
+    assert_eq!(info.iterations, cpu.iterations);
+    for (c, g) in cpu.history.records.iter().zip(&info.history.records) {
+        eprintln!(
+            "{kind} {metric} {template:?} iteration {}: F CPU {:.15} GPU {:.15}",
+            c.iteration, c.objective, g.objective
+        );
+        assert!(rel(g.objective, c.objective) <= 1e-9);
+        assert!(rel(g.grad_norm, c.grad_norm) <= 1e-9);
+    }
+    let worst = worst_diff(&gx, &cx) / p.mean_edge_length(&x0);
+    eprintln!("{kind} {metric} {template:?}: iterates differ by {worst:.1e} mean edges");
+    assert!(worst <= 1e-9);
+    if p.dim == 2 {
+        assert!(gx.iter().zip(&x0).all(|(a, b)| a[2].to_bits() == b[2].to_bits()));
+    }
+}
+
+#[test]
+fn newton_first_iterates_hex_condition_number_match_cpu_f64() {
+    newton_first_iterates(ElementKind::Hexahedron, MetricKind::ConditionNumber, Template::Harmonic);
+}
+
+#[test]
+fn newton_first_iterates_prism_average_match_cpu_f64() {
+    newton_first_iterates(ElementKind::Prism, MetricKind::InverseMeanRatio, Template::Average);
+}
+
+#[test]
+fn newton_first_iterates_quad_target_match_cpu_f64() {
+    newton_first_iterates(
+        ElementKind::Quadrilateral,
+        MetricKind::TargetShapeSize,
+        Template::Harmonic,
+    );
+}
+
+#[test]
+fn newton_first_iterates_tri_condition_number_average_match_cpu_f64() {
+    newton_first_iterates(ElementKind::Triangle, MetricKind::ConditionNumber, Template::Average);
+}
