@@ -36,17 +36,17 @@ fn main(
         dmin = det_n(s, model.dim);
         var ok = false;
         var g_s = mat3x3<real>();
-        if model.fast != 0u {
-            let p = parts_of_s(s);
-            ok = p.ok;
-            term = p.eta;
-            g_s = p.grad_s;
-        } else {
-            let m = model_eval(model, s, false);
-            ok = m.ok;
-            term = m.v;
-            g_s = m.g;
-        }
+#if FAST
+        let p = parts_of_s(s);
+        ok = p.ok;
+        term = p.eta;
+        g_s = p.grad_s;
+#else
+        let m = model_eval(model, s, false);
+        ok = m.ok;
+        term = m.v;
+        g_s = m.g;
+#endif
         if ok {
             term = cr.w * term;
         } else {
@@ -56,11 +56,11 @@ fn main(
         for (var k = 0u; k < 4u; k++) {
             var g = vec3<real>(real(0.0));
             if ok {
-                if model.fast != 0u {
-                    g = mul_vec(g_s, cr.b[k]);
-                } else {
-                    g = contract_g(g_s, cr.b[k], model.dim);
-                }
+#if FAST
+                g = mul_vec(g_s, cr.b[k]);
+#else
+                g = contract_g(g_s, cr.b[k], model.dim);
+#endif
             }
             for (var i = 0u; i < 3u; i++) {
                 grad[12u * c + 3u * k + i] = g[i] * cr.w;

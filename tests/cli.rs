@@ -259,9 +259,13 @@ fn devices_lists_adapters_and_gpu_smoothing_names_the_device() {
     let o = gpu(&["--method", "laplace"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(text(&o).contains("CPU only"), "{}", text(&o));
-    let o = gpu(&["--metric", "cn"]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(text(&o).contains("--device cpu"), "{}", text(&o));
+    let o = gpu(&["--metric", "cn", "--method", "newton", "-q"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("newton on gpu") && text(&o).contains("converged"),
+        "{}",
+        text(&o)
+    );
     let o = meshsmooth(&[
         "smooth",
         s(&input),

@@ -43,19 +43,20 @@ fn model_eval(model: Model, s: mat3x3<real>, hess: bool) -> MetricEval {
 
 // `Model::value_of_s`
 fn model_value_of_s(model: Model, s: mat3x3<real>) -> Eta {
-    if model.fast != 0u {
-        return value_of_s(s);
-    }
+#if FAST
+    return value_of_s(s);
+#else
     let m = model_eval(model, s, false);
     return Eta(m.v, m.ok);
+#endif
 }
 
 // `Model::vertex_gradient_hessian_of_s`: in 2D the z diagonal is 1 so the
 // block stays invertible, and the z gradient is 0, so z never moves.
 fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>) -> VertexGH {
-    if model.fast != 0u {
-        return vertex_gradient_hessian_of_s(s, b);
-    }
+#if FAST
+    return vertex_gradient_hessian_of_s(s, b);
+#else
     var out: VertexGH;
     let n = model.dim;
     let m = model_eval(model, s, true);
@@ -84,6 +85,7 @@ fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>) -> VertexGH {
         out.hess[2][2] = real(1.0);
     }
     return out;
+#endif
 }
 
 // sum_j g[i][j] b[j] over the leading n columns (`Model::gradient`).

@@ -3,7 +3,7 @@
 use super::device::{self, Backend};
 use super::progress::Progress;
 use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs};
-use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_method};
+use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_with};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::metric::smetric::MetricKind;
@@ -66,10 +66,6 @@ impl ObjectiveArgs {
             template: self.template.parse()?,
             reference,
         })
-    }
-
-    pub(super) fn is_default(&self) -> bool {
-        self.metric == "imr" && self.template == "harmonic" && self.reference.is_none()
     }
 }
 
@@ -167,13 +163,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
     let params = solver.params()?;
     let reference = solver.objective.reference()?;
     let options = solver.objective.options(reference.as_ref())?;
-    let backend = device::choose(
-        &solver.device,
-        &solver.precision,
-        solver.adapter.as_deref(),
-        method,
-        solver.objective.is_default() && mesh.kinds.iter().all(|&k| k == meshsmooth::ElementKind::Tetrahedron),
-    )?;
+    let backend = device::choose(&solver.device, &solver.precision, solver.adapter.as_deref(), method)?;
     let before = quality_report(mesh, &mesh.points);
     if !quiet {
         println!("== initial mesh ==\n{before}");
@@ -191,7 +181,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
                 checkpoint_every: save_partial.then_some(10),
                 fail_after: None,
             };
-            smooth_mesh_gpu_method(ctx, mesh, method, &params, &opts, &mut |r| progress.update(r))
+            smooth_mesh_gpu_with(ctx, mesh, &options, method, &params, &opts, &mut |r| progress.update(r))
         }
     };
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));

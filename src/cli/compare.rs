@@ -6,7 +6,7 @@ use super::commands::{params, refuse_overwrite};
 use super::device::{self, Backend};
 use meshsmooth::backend::gpu::{GpuRunOptions, solve_gpu_with, solve_newton_gpu};
 use meshsmooth::solve::Method;
-use meshsmooth::{ElementKind, Error, Result, io};
+use meshsmooth::{Error, Result, io};
 
 fn opt_secs(t: Option<f64>) -> String {
     t.map_or("-".into(), |t| format!("{t:.3}"))
@@ -28,14 +28,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let mesh = io::read(&a.input)?;
     let reference = a.objective.reference()?;
     let options = a.objective.options(reference.as_ref())?;
-    let tets = mesh.kinds.iter().all(|&k| k == ElementKind::Tetrahedron);
     let mut where_ = format!("cpu (f64), {} threads", rayon::current_num_threads());
     let (cmp, infos) = if a.device == "gpu" {
         // every method needs a device version: check them all before running any
         for &m in &methods {
-            device::gpu_allowed(m, a.objective.is_default() && tets)?;
+            device::gpu_allowed(m)?;
         }
-        let backend = device::choose("gpu", &a.precision, a.adapter.as_deref(), methods[0], true)?;
+        let backend = device::choose("gpu", &a.precision, a.adapter.as_deref(), methods[0])?;
         where_ = backend.describe();
         let Backend::Gpu(ctx) = backend else {
             unreachable!("--device gpu gives a GPU backend")

@@ -40,7 +40,7 @@ fn runs_on_gpu(method: Method) -> bool {
 /// method runs there; software adapters (lavapipe, llvmpipe) emulate a GPU on
 /// the CPU and are slower than the CPU backend, so `auto` passes them over
 /// unless `--adapter` names one.
-pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, gpu_case: bool) -> Result<Backend> {
+pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method) -> Result<Backend> {
     let opts = GpuOptions {
         adapter: adapter.map(str::to_string),
         precision: precision(prec),
@@ -55,11 +55,11 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, g
             Ok(Backend::Cpu)
         }
         "gpu" => {
-            gpu_allowed(method, gpu_case)?;
+            gpu_allowed(method)?;
             Ok(Backend::Gpu(Box::new(GpuContext::new(&opts)?)))
         }
         _ => {
-            if !runs_on_gpu(method) || !gpu_case {
+            if !runs_on_gpu(method) {
                 return Ok(Backend::Cpu);
             }
             let adapters = gpu::list_adapters();
@@ -84,15 +84,8 @@ pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method, g
     }
 }
 
-/// Why `method` cannot run on the GPU for this problem, if it cannot.
-pub fn gpu_allowed(method: Method, gpu_case: bool) -> Result<()> {
-    if !gpu_case {
-        return Err(Error::InvalidArgument(
-            "the GPU runs tetrahedral meshes with the inverse mean ratio, the harmonic template and ideal \
-             references so far; use --device cpu for other element kinds, metrics, templates or a reference mesh"
-                .into(),
-        ));
-    }
+/// Why `method` cannot run on the GPU, if it cannot.
+pub fn gpu_allowed(method: Method) -> Result<()> {
     if !runs_on_gpu(method) {
         return Err(Error::InvalidArgument(format!(
             "{method} runs on the CPU only (the GPU runs bcd, colour by colour, and newton); use --device cpu"

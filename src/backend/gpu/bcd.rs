@@ -39,6 +39,8 @@ pub struct GpuBcd<'c> {
     staging: wgpu::Buffer,
     /// Bytes of every buffer this solver allocated on the device.
     device_bytes: u64,
+    /// Closed-form (tetrahedral mean ratio) kernels or the general ones.
+    fast: bool,
 }
 
 const OUT_LEN: usize = 5;
@@ -81,7 +83,9 @@ impl<'c> GpuBcd<'c> {
                 n_vert_partials: n_vert as u32,
             },
         );
-        let model = ctx.uniform("model", &ModelUniform::of(p));
+        let model_u = ModelUniform::of(p);
+        let fast = model_u.fast != 0;
+        let model = ctx.uniform("model", &model_u);
         let ls_buf = ctx.uniform_real("line search", &[ls.beta, ls.sigma, 0.0, 0.0]);
         let (corner_items, table) = corner_tables(p);
         let shapes = ctx.storage_real("corner shapes", &table);
@@ -119,7 +123,7 @@ impl<'c> GpuBcd<'c> {
                 },
             );
             let group = ctx.bind(
-                Kernel::Bcd,
+                Kernel::Bcd.for_model(fast),
                 &[
                     &model,
                     &ls_buf,
@@ -136,7 +140,7 @@ impl<'c> GpuBcd<'c> {
             colors.push((group, count));
         }
         let objective = ctx.bind(
-            Kernel::Objective,
+            Kernel::Objective.for_model(fast),
             &[&model, &sizes, &xb, &tets, &shapes, &grad, &obj_partials],
         );
         let vertex_gradient = ctx.bind(
@@ -180,6 +184,7 @@ impl<'c> GpuBcd<'c> {
             out,
             staging,
             device_bytes,
+            fast,
         })
     }
 
@@ -191,7 +196,7 @@ impl<'c> GpuBcd<'c> {
             // wgpu orders the dispatches of one pass on the storage they share
             let mut pass = enc.begin_compute_pass(&Default::default());
             for (group, count) in &self.colors {
-                ctx.dispatch(&mut pass, Kernel::Bcd, group, *count)?;
+                ctx.dispatch(&mut pass, Kernel::Bcd.for_model(self.fast), group, *count)?;
             }
         }
         ctx.queue.submit([enc.finish()]);
@@ -209,7 +214,12 @@ impl<'c> GpuBcd<'c> {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            ctx.dispatch(&mut pass, Kernel::Objective, &self.objective, self.n_corners)?;
+            ctx.dispatch(
+                &mut pass,
+                Kernel::Objective.for_model(self.fast),
+                &self.objective,
+                self.n_corners,
+            )?;
             ctx.dispatch(&mut pass, Kernel::VertexGradient, &self.vertex_gradient, self.n_free)?;
             ctx.dispatch(&mut pass, Kernel::Reduce, &self.reduce, 1)?;
         }

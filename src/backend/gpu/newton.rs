@@ -119,6 +119,8 @@ pub struct GpuNewton<'c> {
     n_corners: usize,
     n_free: usize,
     n_blocks: usize,
+    /// Closed-form (tetrahedral mean ratio) kernels or the general ones.
+    fast: bool,
     x: wgpu::Buffer,
     trial: wgpu::Buffer,
     blocks: wgpu::Buffer,
@@ -195,7 +197,9 @@ impl<'c> GpuNewton<'c> {
                 },
             )
         };
-        let model = ctx.uniform("model", &ModelUniform::of(p));
+        let model_u = ModelUniform::of(p);
+        let fast = model_u.fast != 0;
+        let model = ctx.uniform("model", &model_u);
         let (corner_items, table) = corner_tables(p);
         let shapes = ctx.storage_real("corner shapes", &table);
         let flat: Vec<f64> = x.iter().flatten().copied().collect();
@@ -258,7 +262,10 @@ impl<'c> GpuNewton<'c> {
         };
         let cg_bufs = [&v.p, &v.q, &v.d, &v.r];
         let groups = Groups {
-            assemble: ctx.bind(Kernel::HessianAssemble, &[&model, &sizes, &xb, &tets, &shapes, &elem]),
+            assemble: ctx.bind(
+                Kernel::HessianAssemble.for_model(fast),
+                &[&model, &sizes, &xb, &tets, &shapes, &elem],
+            ),
             gather: ctx.bind(
                 Kernel::HessianGather,
                 &[&dims("blocks", nb, 0, 0, 0), &c_off, &c_items, &elem, &blocks],
@@ -289,11 +296,11 @@ impl<'c> GpuNewton<'c> {
             negative_curvature: vector(OP_NEGATIVE_CURVATURE, cg_bufs),
             trial: ctx.bind(Kernel::LineSearch, &[&step_alpha, &sizes, &free, &xb, &v.d, &trial]),
             objective_trial: ctx.bind(
-                Kernel::Objective,
+                Kernel::Objective.for_model(fast),
                 &[&model, &sizes, &trial, &tets, &shapes, &elem_grad, &obj_partials],
             ),
             objective_x: ctx.bind(
-                Kernel::Objective,
+                Kernel::Objective.for_model(fast),
                 &[&model, &sizes, &xb, &tets, &shapes, &elem_grad, &obj_partials],
             ),
             reduce: ctx.bind(Kernel::Reduce, &[&sizes, &obj_partials, &vert_partials, &out]),
@@ -355,6 +362,7 @@ impl<'c> GpuNewton<'c> {
             n_corners: ne,
             n_free: nf,
             n_blocks: nb,
+            fast,
             x: xb,
             trial,
             blocks,
@@ -413,7 +421,12 @@ impl<'c> GpuNewton<'c> {
     /// Gradient, right-hand side -g, Hessian blocks and |g|^2 at the current positions.
     fn record_assembly(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
         let g = &self.groups;
-        self.dispatch(pass, Kernel::HessianAssemble, &g.assemble, self.n_corners)?;
+        self.dispatch(
+            pass,
+            Kernel::HessianAssemble.for_model(self.fast),
+            &g.assemble,
+            self.n_corners,
+        )?;
         self.dispatch(pass, Kernel::HessianGather, &g.gather, self.n_blocks)?;
         self.dispatch(pass, Kernel::GradientGather, &g.gradient, self.n_free)?;
         self.dot(pass, &g.dot_gg)
@@ -430,7 +443,12 @@ impl<'c> GpuNewton<'c> {
     pub fn assemble(&mut self) -> Result<(f64, f64)> {
         let v = self.run(&[], |s, pass| {
             s.record_assembly(pass)?;
-            s.dispatch(pass, Kernel::Objective, &s.groups.objective_x, s.n_corners)?;
+            s.dispatch(
+                pass,
+                Kernel::Objective.for_model(s.fast),
+                &s.groups.objective_x,
+                s.n_corners,
+            )?;
             s.dispatch(pass, Kernel::Reduce, &s.groups.reduce, 1)
         })?;
         let f = self.objective_of(&v).ok_or_else(|| {
@@ -551,7 +569,12 @@ impl<'c> GpuNewton<'c> {
             self.ctx.write_real(&self.step_alpha, &[alpha, 0.0, 0.0, 0.0]);
             let v = self.run(&[], |me, pass| {
                 me.dispatch(pass, Kernel::LineSearch, &g.trial, me.n_free)?;
-                me.dispatch(pass, Kernel::Objective, &g.objective_trial, me.n_corners)?;
+                me.dispatch(
+                    pass,
+                    Kernel::Objective.for_model(me.fast),
+                    &g.objective_trial,
+                    me.n_corners,
+                )?;
                 me.dispatch(pass, Kernel::Reduce, &g.reduce, 1)
             })?;
             if let Some(ft) = self.objective_of(&v)

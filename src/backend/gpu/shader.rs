@@ -61,10 +61,17 @@ pub enum Kernel {
     Dot,
     DotFinal,
     LineSearch,
+    /// The corner kernels again, for any metric, template and dimension: the
+    /// plain ones are the tetrahedral inverse mean ratio's closed forms only,
+    /// because lavapipe runs a kernel carrying the general path hundreds of
+    /// times slower even when a uniform branch skips it.
+    BcdGeneral,
+    ObjectiveGeneral,
+    HessianAssembleGeneral,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 15] = [
+    pub const ALL: [Kernel; 18] = [
         Kernel::MeanRatioEval,
         Kernel::Objective,
         Kernel::VertexGradient,
@@ -80,6 +87,9 @@ impl Kernel {
         Kernel::Dot,
         Kernel::DotFinal,
         Kernel::LineSearch,
+        Kernel::BcdGeneral,
+        Kernel::ObjectiveGeneral,
+        Kernel::HessianAssembleGeneral,
     ];
 
     pub fn name(self) -> &'static str {
@@ -99,18 +109,23 @@ impl Kernel {
             Kernel::Dot => "dot",
             Kernel::DotFinal => "dot_final",
             Kernel::LineSearch => "line_search",
+            Kernel::BcdGeneral => "bcd_general",
+            Kernel::ObjectiveGeneral => "objective_general",
+            Kernel::HessianAssembleGeneral => "hessian_assemble_general",
         }
     }
 
     fn source(self) -> &'static str {
         match self {
             Kernel::MeanRatioEval => include_str!("../../../shaders/mean_ratio_eval.wgsl"),
-            Kernel::Objective => include_str!("../../../shaders/objective.wgsl"),
+            Kernel::Objective | Kernel::ObjectiveGeneral => include_str!("../../../shaders/objective.wgsl"),
             Kernel::VertexGradient => include_str!("../../../shaders/vertex_gradient.wgsl"),
             Kernel::Reduce => include_str!("../../../shaders/reduce.wgsl"),
-            Kernel::Bcd => include_str!("../../../shaders/bcd.wgsl"),
+            Kernel::Bcd | Kernel::BcdGeneral => include_str!("../../../shaders/bcd.wgsl"),
             Kernel::CbrtEval => include_str!("../../../shaders/cbrt_eval.wgsl"),
-            Kernel::HessianAssemble => include_str!("../../../shaders/hessian_assemble.wgsl"),
+            Kernel::HessianAssemble | Kernel::HessianAssembleGeneral => {
+                include_str!("../../../shaders/hessian_assemble.wgsl")
+            }
             Kernel::HessianGather => include_str!("../../../shaders/hessian_gather.wgsl"),
             Kernel::GradientGather => include_str!("../../../shaders/gradient_gather.wgsl"),
             Kernel::BsrSpmv => include_str!("../../../shaders/bsr_spmv.wgsl"),
@@ -122,27 +137,68 @@ impl Kernel {
         }
     }
 
+    /// Whether `#if FAST` blocks are kept (the tetrahedral closed forms).
+    pub fn fast(self) -> bool {
+        !matches!(
+            self,
+            Kernel::BcdGeneral | Kernel::ObjectiveGeneral | Kernel::HessianAssembleGeneral
+        )
+    }
+
+    /// The variant of a corner kernel for a problem's model.
+    pub fn for_model(self, fast: bool) -> Kernel {
+        match (self, fast) {
+            (Kernel::Bcd, false) => Kernel::BcdGeneral,
+            (Kernel::Objective, false) => Kernel::ObjectiveGeneral,
+            (Kernel::HessianAssemble, false) => Kernel::HessianAssembleGeneral,
+            (k, _) => k,
+        }
+    }
+
     /// The full WGSL source of this kernel in precision `real`.
     pub fn compose(self, real: Real) -> String {
         let mut out = String::from(real.prelude());
         let mut seen = HashSet::new();
-        preprocess(self.source(), &mut seen, &mut out);
+        preprocess(self.source(), self.fast(), &mut seen, &mut out);
         out
     }
 }
 
 /// Appends `src` to `out` with every `#import name` replaced by that shared
-/// file (once per kernel, imports first).
-fn preprocess(src: &str, seen: &mut HashSet<&'static str>, out: &mut String) {
+/// file (once per kernel, imports first), keeping `#if FAST` / `#if !FAST`
+/// ... `#else` ... `#endif` blocks according to `fast`.
+fn preprocess(src: &str, fast: bool, seen: &mut HashSet<&'static str>, out: &mut String) {
+    // one entry per open #if: is its current branch kept?
+    let mut keep: Vec<bool> = Vec::new();
     for line in src.lines() {
-        if let Some(name) = line.trim().strip_prefix("#import ") {
+        let t = line.trim();
+        match t {
+            "#if FAST" | "#if !FAST" => {
+                keep.push((t == "#if FAST") == fast);
+                continue;
+            }
+            "#else" => {
+                let k = keep.last_mut().expect("#else without #if");
+                *k = !*k;
+                continue;
+            }
+            "#endif" => {
+                keep.pop().expect("#endif without #if");
+                continue;
+            }
+            _ => {}
+        }
+        if keep.iter().any(|k| !k) {
+            continue;
+        }
+        if let Some(name) = t.strip_prefix("#import ") {
             let name = name.trim();
             let (key, text) = SHARED
                 .iter()
                 .find(|(n, _)| *n == name)
                 .unwrap_or_else(|| panic!("unknown WGSL import '{name}'"));
             if seen.insert(key) {
-                preprocess(text, seen, out);
+                preprocess(text, fast, seen, out);
             }
         } else {
             out.push_str(line);
