@@ -2,6 +2,9 @@
 //! coloured sweep, a full solve. Without an adapter these tests print why and
 //! pass — except under `CI`, where they fail.
 
+mod common;
+use common::context;
+
 use meshsmooth::backend::gpu::{self, GpuBcd, GpuContext, GpuOptions, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::metric::{self, TetShape, tet_det};
@@ -10,23 +13,6 @@ use meshsmooth::solve::{self, Method, Params, bcd};
 use meshsmooth::{Mesh, objective};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-fn context(precision: Precision) -> Option<GpuContext> {
-    match GpuContext::new(&GpuOptions {
-        adapter: None,
-        precision,
-    }) {
-        Ok(ctx) => {
-            eprintln!("GPU tests on {}", ctx.adapter_name());
-            Some(ctx)
-        }
-        Err(e) if std::env::var_os("CI").is_some() => panic!("no GPU for the GPU tests in CI: {e}"),
-        Err(e) => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-    }
-}
 
 type Tet = [[f64; 3]; 4];
 

@@ -3,7 +3,10 @@
 //! the first Newton iterates. Without an adapter these tests print why and
 //! pass — except under `CI`, where they fail.
 
-use meshsmooth::backend::gpu::{self, GpuBcd, GpuContext, GpuOptions, GpuRunOptions, Precision};
+mod common;
+use common::context;
+
+use meshsmooth::backend::gpu::{self, GpuBcd, GpuRunOptions, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
@@ -13,23 +16,6 @@ use meshsmooth::solve::{self, Method, Params};
 use meshsmooth::{ElementKind, Mesh, objective};
 
 type Vec3 = [f64; 3];
-
-fn context(precision: Precision) -> Option<GpuContext> {
-    match GpuContext::new(&GpuOptions {
-        adapter: None,
-        precision,
-    }) {
-        Ok(ctx) => {
-            eprintln!("GPU tests on {}", ctx.adapter_name());
-            Some(ctx)
-        }
-        Err(e) if std::env::var_os("CI").is_some() => panic!("no GPU for the GPU tests in CI: {e}"),
-        Err(e) => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-    }
-}
 
 const KINDS: [ElementKind; 5] = [
     ElementKind::Triangle,

@@ -2,7 +2,10 @@
 //! Newton iterates and the converged result. Without an adapter these tests
 //! print why and pass — except under `CI`, where they fail.
 
-use meshsmooth::backend::gpu::{self, GpuContext, GpuNewton, GpuOptions, GpuRunOptions, Precision};
+mod common;
+use common::context;
+
+use meshsmooth::backend::gpu::{self, GpuNewton, GpuRunOptions, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::metric::{self, mat3::Mat3};
 use meshsmooth::problem::Problem;
@@ -16,23 +19,6 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 type Vec3 = [f64; 3];
-
-fn context(precision: Precision) -> Option<GpuContext> {
-    match GpuContext::new(&GpuOptions {
-        adapter: None,
-        precision,
-    }) {
-        Ok(ctx) => {
-            eprintln!("GPU tests on {}", ctx.adapter_name());
-            Some(ctx)
-        }
-        Err(e) if std::env::var_os("CI").is_some() => panic!("no GPU for the GPU tests in CI: {e}"),
-        Err(e) => {
-            eprintln!("skipping GPU test: {e}");
-            None
-        }
-    }
-}
 
 fn perturbed_box(n: usize, seed: u64) -> Mesh {
     let mut m = generate::tet_box(n, n, n, [n as f64; 3]);

@@ -2,7 +2,7 @@
 
 use super::device::{self, Backend};
 use super::progress::Progress;
-use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs};
+use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs, StopArgs};
 use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_with};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, CellData, Format};
@@ -22,7 +22,7 @@ impl SolverArgs {
     }
 
     fn params(&self) -> Result<Params> {
-        let mut p = params(self.tol, self.max_iter, self.time_limit)?;
+        let mut p = self.stop.params()?;
         p.newton.negative_curvature = match self.negative_curvature.as_str() {
             "direction" => NegativeCurvature::Direction,
             _ => NegativeCurvature::Iterate,
@@ -31,27 +31,30 @@ impl SolverArgs {
     }
 }
 
-pub(super) fn params(tol: f64, max_iter: usize, time_limit: Option<f64>) -> Result<Params> {
-    if !(tol.is_finite() && tol >= 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "--tol must be a non-negative number, got {tol}"
-        )));
-    }
-    let time_limit = match time_limit {
-        None => None,
-        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
-        Some(t) => {
+impl StopArgs {
+    pub(super) fn params(&self) -> Result<Params> {
+        let (tol, max_iter, time_limit) = (self.tol, self.max_iter, self.time_limit);
+        if !(tol.is_finite() && tol >= 0.0) {
             return Err(Error::InvalidArgument(format!(
-                "--time-limit must be a positive number of seconds, got {t}"
+                "--tol must be a non-negative number, got {tol}"
             )));
         }
-    };
-    Ok(Params {
-        tol,
-        max_iter,
-        time_limit,
-        ..Params::default()
-    })
+        let time_limit = match time_limit {
+            None => None,
+            Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
+            Some(t) => {
+                return Err(Error::InvalidArgument(format!(
+                    "--time-limit must be a positive number of seconds, got {t}"
+                )));
+            }
+        };
+        Ok(Params {
+            tol,
+            max_iter,
+            time_limit,
+            ..Params::default()
+        })
+    }
 }
 
 impl ObjectiveArgs {
@@ -163,7 +166,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
     let params = solver.params()?;
     let reference = solver.objective.reference()?;
     let options = solver.objective.options(reference.as_ref())?;
-    let backend = device::choose(&solver.device, &solver.precision, solver.adapter.as_deref(), method)?;
+    let backend = device::choose(&solver.device, &solver.gpu, method)?;
     let before = quality_report(mesh, &mesh.points);
     if !quiet {
         println!("== initial mesh ==\n{before}");

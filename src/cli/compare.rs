@@ -2,7 +2,7 @@
 //! comparison figures.
 
 use super::CompareArgs;
-use super::commands::{params, refuse_overwrite};
+use super::commands::refuse_overwrite;
 use super::device::{self, Backend};
 use meshsmooth::backend::gpu::{GpuRunOptions, solve_gpu_with, solve_newton_gpu};
 use meshsmooth::solve::Method;
@@ -24,7 +24,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     for out in [&a.csv, &a.plot].into_iter().flatten() {
         refuse_overwrite(&a.input, out)?;
     }
-    let params = params(a.tol, a.max_iter, a.time_limit)?;
+    let params = a.stop.params()?;
     let mesh = io::read(&a.input)?;
     let reference = a.objective.reference()?;
     let options = a.objective.options(reference.as_ref())?;
@@ -34,7 +34,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         for &m in &methods {
             device::gpu_allowed(m)?;
         }
-        let backend = device::choose("gpu", &a.precision, a.adapter.as_deref(), methods[0])?;
+        let backend = device::choose("gpu", &a.gpu, methods[0])?;
         where_ = backend.describe();
         let Backend::Gpu(ctx) = backend else {
             unreachable!("--device gpu gives a GPU backend")

@@ -1,5 +1,6 @@
 //! Choosing where a solve runs: `--device cpu|gpu|auto`, `--precision`, `--adapter`.
 
+use super::GpuArgs;
 use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
 use meshsmooth::solve::Method;
 use meshsmooth::{Error, Result};
@@ -40,7 +41,8 @@ fn runs_on_gpu(method: Method) -> bool {
 /// method runs there; software adapters (lavapipe, llvmpipe) emulate a GPU on
 /// the CPU and are slower than the CPU backend, so `auto` passes them over
 /// unless `--adapter` names one.
-pub fn choose(device: &str, prec: &str, adapter: Option<&str>, method: Method) -> Result<Backend> {
+pub fn choose(device: &str, gpu: &GpuArgs, method: Method) -> Result<Backend> {
+    let (prec, adapter) = (gpu.precision.as_str(), gpu.adapter.as_deref());
     let opts = GpuOptions {
         adapter: adapter.map(str::to_string),
         precision: precision(prec),

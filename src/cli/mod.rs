@@ -77,27 +77,41 @@ pub struct SolverArgs {
     /// there is one, else the CPU.
     #[arg(long, default_value = "auto", value_parser = ["cpu", "gpu", "auto"])]
     pub device: String,
-    /// GPU arithmetic: f64 needs the adapter's SHADER_F64; auto takes f64 where available.
-    #[arg(long, default_value = "auto", value_parser = ["f32", "f64", "auto"])]
-    pub precision: String,
-    /// Use the GPU adapter whose name contains this (also: MESHSMOOTH_ADAPTER).
-    #[arg(long)]
-    pub adapter: Option<String>,
-    /// Stop when the 2-norm of the objective's gradient falls below this.
-    #[arg(long, default_value_t = 1e-6)]
-    pub tol: f64,
-    /// Most sweeps over the free vertices.
-    #[arg(long, default_value_t = 1000)]
-    pub max_iter: usize,
-    /// Stop after this many seconds (the mesh so far is kept; it is always valid).
-    #[arg(long, value_name = "SECONDS")]
-    pub time_limit: Option<f64>,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    #[command(flatten)]
+    pub stop: StopArgs,
     #[command(flatten)]
     pub objective: ObjectiveArgs,
     /// Newton: what CG returns on negative curvature: the CG iterate so far (truncated
     /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
     #[arg(long, default_value = "iterate", value_parser = ["direction", "iterate"])]
     pub negative_curvature: String,
+}
+
+/// Which GPU and what arithmetic.
+#[derive(Args, Debug, Clone)]
+pub struct GpuArgs {
+    /// GPU arithmetic: f64 needs the adapter's SHADER_F64; auto takes f64 where available.
+    #[arg(long, default_value = "auto", value_parser = ["f32", "f64", "auto"])]
+    pub precision: String,
+    /// Use the GPU adapter whose name contains this (also: MESHSMOOTH_ADAPTER).
+    #[arg(long)]
+    pub adapter: Option<String>,
+}
+
+/// When a solver stops.
+#[derive(Args, Debug, Clone)]
+pub struct StopArgs {
+    /// Stop when the 2-norm of the objective's gradient falls below this.
+    #[arg(long, default_value_t = 1e-6)]
+    pub tol: f64,
+    /// Most sweeps (bcd, laplace) or iterations (newton).
+    #[arg(long, default_value_t = 1000)]
+    pub max_iter: usize,
+    /// Stop after this many seconds, per method (the mesh so far is kept; it is always valid).
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
 }
 
 /// What is optimised.
@@ -127,17 +141,10 @@ pub struct CompareArgs {
     /// cpu, or gpu (bcd runs as the coloured sweep there; newton too).
     #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
     pub device: String,
-    #[arg(long, default_value = "auto", value_parser = ["f32", "f64", "auto"])]
-    pub precision: String,
-    #[arg(long)]
-    pub adapter: Option<String>,
-    #[arg(long, default_value_t = 1e-6)]
-    pub tol: f64,
-    #[arg(long, default_value_t = 1000)]
-    pub max_iter: usize,
-    /// Per method, in seconds.
-    #[arg(long, value_name = "SECONDS")]
-    pub time_limit: Option<f64>,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    #[command(flatten)]
+    pub stop: StopArgs,
     /// Write the merged histories as CSV.
     #[arg(long, value_name = "FILE.csv")]
     pub csv: Option<PathBuf>,

@@ -79,8 +79,10 @@ pub struct Model {
 }
 
 impl Model {
-    fn fast(&self, shape: &CornerShape) -> bool {
-        shape.n == 3 && self.metric == MetricKind::InverseMeanRatio && self.template == Template::Harmonic
+    /// The closed forms apply: the inverse mean ratio in 3D under the harmonic template.
+    #[inline]
+    pub fn fast(&self, n: usize) -> bool {
+        n == 3 && self.metric == MetricKind::InverseMeanRatio && self.template == Template::Harmonic
     }
 
     /// The template applied to a metric value, gradient and Hessian in S.
@@ -105,11 +107,11 @@ impl Model {
 
     /// Objective term of a corner from its S.
     #[inline]
-    pub fn value_of_s(&self, shape: &CornerShape, s: &Mat3) -> Option<f64> {
-        if self.fast(shape) {
+    pub fn value_of_s(&self, n: usize, s: &Mat3) -> Option<f64> {
+        if self.fast(n) {
             return TetShape::value_of_s(s);
         }
-        let m = smetric::eval(self.metric, shape.n, s, false)?.0;
+        let m = smetric::eval(self.metric, n, s, false)?.0;
         Some(match self.template {
             Template::Harmonic => m,
             Template::Average => 1.0 - 1.0 / m,
@@ -118,20 +120,18 @@ impl Model {
 
     #[inline]
     pub fn value(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<f64> {
-        self.value_of_s(shape, &shape.tet.s_rest(x, usize::MAX))
+        self.value_of_s(shape.n, &shape.tet.s_rest(x, usize::MAX))
     }
 
     /// Term, gradient and 3x3 Hessian with respect to vertex `k`, from S. In
     /// 2D the z row and column carry 1 on the diagonal so the blocks stay
     /// invertible; the z gradient is 0, so z never moves.
     #[inline]
-    pub fn vertex_gradient_hessian_of_s(&self, shape: &CornerShape, s: Mat3, k: usize) -> Option<(f64, Vec3, Mat3)> {
-        if self.fast(shape) {
-            return shape.tet.vertex_gradient_hessian_of_s(s, k);
+    pub fn vertex_gradient_hessian_of_s(&self, n: usize, s: Mat3, b: &Vec3) -> Option<(f64, Vec3, Mat3)> {
+        if self.fast(n) {
+            return TetShape::vertex_gradient_hessian_at(s, b);
         }
-        let n = shape.n;
         let (v, g, h) = self.templated(smetric::eval(self.metric, n, &s, true)?, true);
-        let b = shape.tet.b(k);
         let mut gv = [0.0; 3];
         let mut hv = [[0.0; 3]; 3];
         for i in 0..n {
@@ -154,7 +154,7 @@ impl Model {
 
     /// Term and gradient with respect to the corner's vertices.
     pub fn gradient(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<(f64, [Vec3; 4])> {
-        if self.fast(shape) {
+        if self.fast(shape.n) {
             return shape.tet.gradient(x);
         }
         let n = shape.n;
@@ -172,7 +172,7 @@ impl Model {
 
     /// Term, gradient and the 4x4 vertex blocks of the Hessian (into `out`).
     pub fn blocks(&self, shape: &CornerShape, x: &[Vec3; 4], out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
-        if self.fast(shape) {
+        if self.fast(shape.n) {
             return shape.tet.hessian_blocks(x, out);
         }
         let n = shape.n;

@@ -280,8 +280,13 @@ impl TetShape {
     /// As `vertex_gradient_hessian`, from S = rest + x_k b_k^T.
     #[inline]
     pub fn vertex_gradient_hessian_of_s(&self, s: Mat3, k: usize) -> Option<(f64, Vec3, Mat3)> {
+        Self::vertex_gradient_hessian_at(s, &self.b[k])
+    }
+
+    /// As `vertex_gradient_hessian_of_s`, for the vertex whose B row is `b`.
+    #[inline]
+    pub fn vertex_gradient_hessian_at(s: Mat3, b: &Vec3) -> Option<(f64, Vec3, Mat3)> {
         let p = Self::parts_of_s(s)?;
-        let b = &self.b[k];
         let grad = mul_vec(&p.grad_s, b);
         let sb = mul_vec(&p.s, b);
         let cb = mul_vec(&p.cof, b);

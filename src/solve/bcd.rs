@@ -29,11 +29,11 @@ impl Default for LineSearch {
 }
 
 /// The corners around one vertex, each as S without the vertex's term
-/// (`TetShape::s_rest`), the vertex's slot and the corner: trial points then
-/// cost one rank-one update per corner instead of a gather.
+/// (`TetShape::s_rest`), the vertex's B row and the corner's weight: trial
+/// points then cost one rank-one update per corner instead of a gather.
 #[derive(Default)]
 pub struct Patch {
-    rest: Vec<(Mat3, usize, usize)>,
+    rest: Vec<(Mat3, Vec3, f64)>,
 }
 
 impl Patch {
@@ -41,7 +41,12 @@ impl Patch {
         self.rest.clear();
         for &packed in p.incidence.of(v) {
             let (c, k) = ((packed >> 2) as usize, (packed & 3) as usize);
-            self.rest.push((p.shape(c).tet.s_rest(&p.corner_points(x, c), k), k, c));
+            let shape = p.shape(c);
+            self.rest.push((
+                shape.tet.s_rest(&p.corner_points(x, c), k),
+                *shape.tet.b(k),
+                p.corner_weight[c],
+            ));
         }
     }
 
@@ -50,9 +55,8 @@ impl Patch {
     #[inline]
     pub fn value(&self, p: &Problem, at: &Vec3) -> Option<f64> {
         let mut sum = 0.0;
-        for &(ref rest, k, c) in &self.rest {
-            let shape = p.shape(c);
-            sum += p.corner_weight[c] * p.model.value_of_s(shape, &shape.tet.s_with(rest, k, at))?;
+        for (rest, b, w) in &self.rest {
+            sum += w * p.model.value_of_s(p.dim, &s_with(rest, b, at))?;
         }
         Some(sum)
     }
@@ -63,12 +67,8 @@ impl Patch {
         let mut f = 0.0;
         let mut g = [0.0; 3];
         let mut h = [[0.0; 3]; 3];
-        for &(ref rest, k, c) in &self.rest {
-            let shape = p.shape(c);
-            let w = p.corner_weight[c];
-            let (eta, ge, he) = p
-                .model
-                .vertex_gradient_hessian_of_s(shape, shape.tet.s_with(rest, k, at), k)?;
+        for (rest, b, w) in &self.rest {
+            let (eta, ge, he) = p.model.vertex_gradient_hessian_of_s(p.dim, s_with(rest, b, at), b)?;
             f += w * eta;
             for i in 0..3 {
                 g[i] += w * ge[i];
@@ -79,6 +79,18 @@ impl Patch {
         }
         Some((f, g, h))
     }
+}
+
+/// rest + y b^T
+#[inline]
+fn s_with(rest: &Mat3, b: &Vec3, y: &Vec3) -> Mat3 {
+    let mut s = *rest;
+    for i in 0..3 {
+        for c in 0..3 {
+            s[i][c] += y[i] * b[c];
+        }
+    }
+    s
 }
 
 /// One safeguarded Newton step for vertex `v`: the accepted new position, or
