@@ -2,6 +2,7 @@
 //! step per free vertex on its 3x3 block, Armijo backtracking on the elements
 //! around it, vertices in the problem's locality order.
 
+use crate::metric::TetShape;
 use crate::metric::mat3::{Mat3, Vec3, cholesky_solve, dot};
 use crate::problem::Problem;
 use rayon::prelude::*;
@@ -55,8 +56,15 @@ impl Patch {
     #[inline]
     pub fn value(&self, p: &Problem, at: &Vec3) -> Option<f64> {
         let mut sum = 0.0;
-        for (rest, b, w) in &self.rest {
-            sum += w * p.model.value_of_s(p.dim, &s_with(rest, b, at))?;
+        // the branch hoisted out of the loop keeps the common case tight
+        if p.model.fast(p.dim) {
+            for (rest, b, w) in &self.rest {
+                sum += w * TetShape::value_of_s(&s_with(rest, b, at))?;
+            }
+        } else {
+            for (rest, b, w) in &self.rest {
+                sum += w * p.model.value_of_s(p.dim, &s_with(rest, b, at))?;
+            }
         }
         Some(sum)
     }
@@ -67,8 +75,14 @@ impl Patch {
         let mut f = 0.0;
         let mut g = [0.0; 3];
         let mut h = [[0.0; 3]; 3];
+        let fast = p.model.fast(p.dim);
         for (rest, b, w) in &self.rest {
-            let (eta, ge, he) = p.model.vertex_gradient_hessian_of_s(p.dim, s_with(rest, b, at), b)?;
+            let s = s_with(rest, b, at);
+            let (eta, ge, he) = if fast {
+                TetShape::vertex_gradient_hessian_at(s, b)?
+            } else {
+                p.model.vertex_gradient_hessian_of_s(p.dim, s, b)?
+            };
             f += w * eta;
             for i in 0..3 {
                 g[i] += w * ge[i];
