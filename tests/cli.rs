@@ -23,6 +23,37 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `meshsmooth generate box` with a random perturbation, asserting success.
+fn generate_box(out: &Path, cells: [usize; 3], perturb: &str, seed: u64) {
+    let (c, seed) = (cells.map(|n| n.to_string()), seed.to_string());
+    let args = [
+        "generate",
+        "box",
+        "--cells",
+        &c[0],
+        &c[1],
+        &c[2],
+        "--perturb",
+        perturb,
+        "--seed",
+        &seed,
+        "-o",
+        s(out),
+    ];
+    let o = meshsmooth(&args);
+    assert!(o.status.success(), "{}", text(&o));
+}
+
+/// The rows of a `--history` CSV.
+fn history_rows(path: &Path) -> Vec<Vec<f64>> {
+    let csv = std::fs::read_to_string(path).unwrap();
+    assert_eq!(csv.lines().next().unwrap(), "iteration,seconds,objective,grad_norm");
+    csv.lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
 #[test]
 fn demo_runs_without_arguments() {
     let o = meshsmooth(&["demo", "--cells", "6"]);
@@ -38,21 +69,7 @@ fn generate_smooth_and_quality_work_together() {
     let input = dir.path().join("box.vtk");
     let output = dir.path().join("box-smooth.vtu");
     let history = dir.path().join("history.csv");
-    let o = meshsmooth(&[
-        "generate",
-        "box",
-        "--cells",
-        "6",
-        "5",
-        "4",
-        "--perturb",
-        "random:0.3",
-        "--seed",
-        "3",
-        "-o",
-        s(&input),
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
+    generate_box(&input, [6, 5, 4], "random:0.3", 3);
     let original = std::fs::read(&input).unwrap();
 
     let o = meshsmooth(&[
@@ -67,14 +84,8 @@ fn generate_smooth_and_quality_work_together() {
     ]);
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(std::fs::read(&input).unwrap(), original, "input modified");
-    let csv = std::fs::read_to_string(&history).unwrap();
-    let rows: Vec<Vec<f64>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    let rows = history_rows(&history);
     assert!(rows.len() > 2);
-    assert_eq!(csv.lines().next().unwrap(), "iteration,seconds,objective,grad_norm");
     for w in rows.windows(2) {
         assert_eq!(w[1][0], w[0][0] + 1.0);
         assert!(w[1][2] <= w[0][2], "objective rose");
@@ -98,22 +109,7 @@ fn generate_smooth_and_quality_work_together() {
 fn laplace_and_colored_methods_run() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.msh");
-    assert!(
-        meshsmooth(&[
-            "generate",
-            "box",
-            "--cells",
-            "4",
-            "4",
-            "4",
-            "--perturb",
-            "random:0.3",
-            "-o",
-            s(&input)
-        ])
-        .status
-        .success()
-    );
+    generate_box(&input, [4, 4, 4], "random:0.3", 1);
     for method in ["laplace", "bcd-colored"] {
         let out = dir.path().join(format!("{method}.mesh"));
         let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--method", method, "--quiet"]);
@@ -127,22 +123,7 @@ fn laplace_and_colored_methods_run() {
 fn refuses_to_overwrite_its_input() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.vtk");
-    assert!(
-        meshsmooth(&[
-            "generate",
-            "box",
-            "--cells",
-            "3",
-            "3",
-            "3",
-            "--perturb",
-            "random:0.2",
-            "-o",
-            s(&input)
-        ])
-        .status
-        .success()
-    );
+    generate_box(&input, [3, 3, 3], "random:0.2", 1);
     let original = std::fs::read(&input).unwrap();
     let o = meshsmooth(&["smooth", s(&input), "-o", s(&input)]);
     assert_eq!(o.status.code(), Some(1));
@@ -213,22 +194,7 @@ fn devices_lists_adapters_and_gpu_smoothing_names_the_device() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.vtk");
     let out = dir.path().join("out.vtk");
-    assert!(
-        meshsmooth(&[
-            "generate",
-            "box",
-            "--cells",
-            "4",
-            "4",
-            "4",
-            "--perturb",
-            "random:0.3",
-            "-o",
-            s(&input)
-        ])
-        .status
-        .success()
-    );
+    generate_box(&input, [4, 4, 4], "random:0.3", 1);
     let o = meshsmooth(&[
         "smooth",
         s(&input),
@@ -284,19 +250,7 @@ fn devices_lists_adapters_and_gpu_smoothing_names_the_device() {
 fn compare_reports_both_methods_and_writes_csv_and_svg() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.vtk");
-    let args = [
-        "generate",
-        "box",
-        "--cells",
-        "6",
-        "6",
-        "6",
-        "--perturb",
-        "random:0.3",
-        "-o",
-        s(&input),
-    ];
-    assert!(meshsmooth(&args).status.success());
+    generate_box(&input, [6, 6, 6], "random:0.3", 1);
     let (csv, svg) = (dir.path().join("h.csv"), dir.path().join("h.svg"));
     let o = meshsmooth(&["compare", s(&input), "--csv", s(&csv), "--plot", s(&svg)]);
     assert!(o.status.success(), "{}", text(&o));
@@ -322,21 +276,7 @@ fn smooth_converges_on_the_perturbed_20_box_keeping_the_boundary() {
     let input = dir.path().join("box.vtk");
     let output = dir.path().join("out.vtk");
     let history = dir.path().join("h.csv");
-    let args = [
-        "generate",
-        "box",
-        "--cells",
-        "20",
-        "20",
-        "20",
-        "--perturb",
-        "random:0.234",
-        "--seed",
-        "5",
-        "-o",
-        s(&input),
-    ];
-    assert!(meshsmooth(&args).status.success());
+    generate_box(&input, [20, 20, 20], "random:0.234", 5);
     let o = meshsmooth(&[
         "smooth",
         s(&input),
@@ -349,12 +289,7 @@ fn smooth_converges_on_the_perturbed_20_box_keeping_the_boundary() {
         "cpu",
     ]);
     assert!(o.status.success(), "{}", text(&o));
-    let rows: Vec<Vec<f64>> = std::fs::read_to_string(&history)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    let rows = history_rows(&history);
     assert!(rows.last().unwrap()[3] < 1e-6, "{:?}", rows.last());
     for w in rows.windows(2) {
         assert!(w[1][2] <= w[0][2], "objective rose: {:?} -> {:?}", w[0], w[1]);
