@@ -29,6 +29,27 @@ pub struct ProblemOptions<'a> {
     pub reference: Option<&'a Mesh>,
 }
 
+impl ProblemOptions<'_> {
+    /// The options' own consistency and the reference's fit to `mesh`, without
+    /// building anything: callers can refuse bad input before any work.
+    pub fn check(&self, mesh: &Mesh) -> Result<()> {
+        if self.metric == MetricKind::TargetShapeSize && self.reference.is_none() {
+            return Err(Error::InvalidArgument(
+                "the target-matrix metric (tmp) needs a reference mesh (--reference) for its targets W".into(),
+            ));
+        }
+        if self.metric == MetricKind::TargetShapeSize && self.template == Template::Average {
+            return Err(Error::InvalidArgument(
+                "the average template needs a quality in (0, 1] (imr, cn); use the harmonic template with tmp".into(),
+            ));
+        }
+        match self.reference {
+            Some(r) => check_same_connectivity(mesh, r),
+            None => Ok(()),
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Problem {
     /// Metric dimension: 2 (x and y move) or 3.
@@ -110,26 +131,9 @@ impl Problem {
                 )));
             }
         }
-        if opts.metric == MetricKind::TargetShapeSize && opts.reference.is_none() {
-            return Err(Error::InvalidArgument(
-                "the target-matrix metric (tmp) needs a reference mesh (--reference) for its targets W".into(),
-            ));
-        }
-        if opts.metric == MetricKind::TargetShapeSize && opts.template == Template::Average {
-            return Err(Error::InvalidArgument(
-                "the average template needs a quality in (0, 1] (imr, cn); use the harmonic template with tmp".into(),
-            ));
-        }
-        if let Some(r) = opts.reference {
-            check_same_connectivity(mesh, r)?;
-        }
+        opts.check(mesh)?;
         // planar meshes wound clockwise are optimised in mirrored order
-        let flip = dim == 2 && {
-            let negative = (0..mesh.num_elements())
-                .filter(|&e| crate::metric::element_min_det(mesh, &mesh.points, e) < 0.0)
-                .count();
-            2 * negative > mesh.num_elements()
-        };
+        let flip = crate::metric::is_clockwise(mesh, &mesh.points);
 
         let fixed_old = topology::fixed_vertices(mesh);
         let nb_old = topology::vertex_neighbours(mesh);

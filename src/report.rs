@@ -116,13 +116,15 @@ const INVERTED_IDS: usize = 10;
 pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
     assert_eq!(points.len(), mesh.num_points(), "one position per mesh vertex");
     let ne = mesh.num_elements();
+    // clockwise planar meshes are measured mirrored (centroids below use the real points)
+    let measured = crate::metric::oriented(mesh, points);
     // (eta, volume); eta None when any corner determinant is not positive
     let per_element: Vec<(Option<f64>, f64)> = (0..ne)
         .into_par_iter()
         .map(|e| {
-            let min_det = element_min_det(mesh, points, e);
-            let eta = element_eta(mesh, points, e).filter(|_| min_det > 0.0);
-            (eta, element_volume(mesh.kinds[e], &gather(mesh, points, e)))
+            let min_det = element_min_det(mesh, &measured, e);
+            let eta = element_eta(mesh, &measured, e).filter(|_| min_det > 0.0);
+            (eta, element_volume(mesh.kinds[e], &gather(mesh, &measured, e)))
         })
         .collect();
 

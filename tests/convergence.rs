@@ -229,3 +229,40 @@ fn mixed_tet_prism_hex_meshes_optimise_with_every_metric() {
         }
     }
 }
+
+#[test]
+fn clockwise_planar_meshes_are_smoothed_like_counter_clockwise_ones() {
+    let mut ccw = generate::quad_grid(6, 5, [6.0, 5.0]);
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.25 },
+        fraction: 1.0,
+        seed: 9,
+    };
+    generate::perturb(&mut ccw, &opts).unwrap();
+    // the same mesh wound the other way round
+    let mut cw = ccw.clone();
+    for e in 0..cw.num_elements() {
+        let o = cw.offsets[e];
+        cw.conn.swap(o + 1, o + 3);
+    }
+    assert_eq!(metric::inverted_elements(&cw, &cw.points), Vec::<usize>::new());
+    let report = meshsmooth::report::quality_report(&cw, &cw.points);
+    assert_eq!(report.inverted, 0);
+    let (mut a, mut b) = (ccw.clone(), cw.clone());
+    let ia = smooth(&mut a, Method::Newton, &Params::default());
+    let ib = smooth(&mut b, Method::Newton, &Params::default());
+    assert_eq!(ia.stop, StopReason::Converged);
+    assert!(
+        (ia.objective - ib.objective).abs() < 1e-12,
+        "{} vs {}",
+        ia.objective,
+        ib.objective
+    );
+    for (p, q) in a.points.iter().zip(&b.points) {
+        assert!((0..3).all(|i| (p[i] - q[i]).abs() < 1e-9), "{p:?} vs {q:?}");
+    }
+    // and the perturbation works on the clockwise mesh too
+    let mut cw2 = cw.clone();
+    generate::perturb(&mut cw2, &opts).unwrap();
+    assert!(metric::inverted_elements(&cw2, &cw2.points).is_empty());
+}

@@ -85,8 +85,9 @@ pub(super) fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
 
 /// Per-element inverse mean ratio, written as cell data so ParaView can colour by it.
 fn eta_field(mesh: &Mesh) -> Vec<f64> {
+    let points = metric::oriented(mesh, &mesh.points);
     (0..mesh.num_elements())
-        .map(|e| metric::element_eta(mesh, &mesh.points, e).unwrap_or(f64::INFINITY))
+        .map(|e| metric::element_eta(mesh, &points, e).unwrap_or(f64::INFINITY))
         .collect()
 }
 
@@ -166,6 +167,15 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
     let params = solver.params()?;
     let reference = solver.objective.reference()?;
     let options = solver.objective.options(reference.as_ref())?;
+    // refuse what cannot be smoothed before printing anything
+    options.check(mesh)?;
+    let bad = metric::inverted_elements(mesh, &mesh.points);
+    if !bad.is_empty() {
+        return Err(Error::Inverted {
+            count: bad.len(),
+            first: bad.into_iter().take(5).collect(),
+        });
+    }
     let backend = device::choose(&solver.device, &solver.gpu, method)?;
     let before = quality_report(mesh, &mesh.points);
     if !quiet {

@@ -167,6 +167,21 @@ pub fn perturb(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
         return Err(Error::InvalidArgument(format!("perturbation {p} has a bad parameter")));
     }
     mesh.validate()?;
+    // a clockwise planar mesh is perturbed mirrored (negation is exact) and mirrored back
+    let mirror = crate::metric::is_clockwise(mesh, &mesh.points);
+    let flip = |mesh: &mut Mesh| mesh.points.iter_mut().for_each(|p| p[1] = -p[1]);
+    if mirror {
+        flip(mesh);
+    }
+    let result = perturb_oriented(mesh, opts);
+    if mirror {
+        flip(mesh);
+    }
+    result
+}
+
+fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
+    let (f, p) = (opts.fraction, opts.perturbation);
     let inverted = inverted_elements(mesh, &mesh.points);
     if !inverted.is_empty() {
         return Err(Error::Inverted {

@@ -41,10 +41,35 @@ pub fn element_min_det(mesh: &Mesh, points: &[Vec3], e: usize) -> f64 {
     min_corner_det(mesh.kinds[e], &x[..vs.len()])
 }
 
-/// Ids of elements with a non-positive corner determinant.
+/// Whether a planar mesh is wound clockwise (most of its elements have
+/// negative corner determinants in the xy plane). Such meshes are fine: their
+/// orientation is simply mirrored, and every check reads them mirrored.
+pub fn is_clockwise(mesh: &Mesh, points: &[Vec3]) -> bool {
+    mesh.dim() == 2 && {
+        let negative = (0..mesh.num_elements())
+            .filter(|&e| element_min_det(mesh, points, e) < 0.0)
+            .count();
+        2 * negative > mesh.num_elements()
+    }
+}
+
+/// `points`, mirrored (y -> -y, exact) for clockwise planar meshes so that
+/// their well-shaped elements have positive corner determinants; shape
+/// metrics do not change under the mirror.
+pub fn oriented<'a>(mesh: &Mesh, points: &'a [Vec3]) -> std::borrow::Cow<'a, [Vec3]> {
+    if is_clockwise(mesh, points) {
+        std::borrow::Cow::Owned(points.iter().map(|p| [p[0], -p[1], p[2]]).collect())
+    } else {
+        std::borrow::Cow::Borrowed(points)
+    }
+}
+
+/// Ids of elements with a non-positive corner determinant (against the
+/// mesh's own orientation for planar meshes).
 pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {
+    let points = oriented(mesh, points);
     (0..mesh.num_elements())
-        .filter(|&e| !(element_min_det(mesh, points, e) > 0.0))
+        .filter(|&e| !(element_min_det(mesh, &points, e) > 0.0))
         .collect()
 }
 
