@@ -349,3 +349,40 @@ fn real_meshes_read_with_documented_counts() {
         assert_eq!(io::read(&out).unwrap(), m, "{file}");
     }
 }
+
+#[test]
+fn vtk_wedges_follow_vtk_orientation() {
+    // VTK: the base triangle (0,1,2) has its normal pointing away from (3,4,5);
+    // meshsmooth's own order points it toward them, so VTK files are permuted
+    let mesh = meshsmooth::generate::prism_mesh(false, 1);
+    let dir = tempfile::tempdir().unwrap();
+    for (name, format) in [("p.vtk", Format::VtkAscii), ("p.vtu", Format::VtuAscii)] {
+        let path = dir.path().join(name);
+        meshsmooth::io::write(&path, &mesh, format, &[]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        // the first cell's vertex ids as written
+        let ids: Vec<usize> = if name.ends_with(".vtk") {
+            let line = text.lines().skip_while(|l| !l.starts_with("CELLS")).nth(1).unwrap();
+            line.split_whitespace().skip(1).map(|t| t.parse().unwrap()).collect()
+        } else {
+            let start = text.find("Name=\"connectivity\"").unwrap();
+            let body = &text[text[start..].find('>').unwrap() + start + 1..];
+            body.split_whitespace().take(6).map(|t| t.parse().unwrap()).collect()
+        };
+        let p = |i: usize| mesh.points[ids[i]];
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let (u, v, w) = (sub(p(1), p(0)), sub(p(2), p(0)), sub(p(3), p(0)));
+        let normal = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let toward_top = normal[0] * w[0] + normal[1] * w[1] + normal[2] * w[2];
+        assert!(toward_top < 0.0, "{name}: base normal points toward the top triangle");
+        assert_eq!(
+            meshsmooth::io::read(&path).unwrap().conn,
+            mesh.conn,
+            "{name}: round trip"
+        );
+    }
+}

@@ -266,6 +266,13 @@ pub(crate) enum Shape {
 }
 
 impl Shape {
+    pub fn kind(self) -> Option<ElementKind> {
+        match self {
+            Shape::Elem(k) => Some(k),
+            _ => None,
+        }
+    }
+
     pub fn num_vertices(self) -> usize {
         match self {
             Shape::Vertex => 1,
@@ -363,4 +370,16 @@ pub(crate) fn fmt_f64(x: f64) -> String {
 /// Elements are 2D only when no element is 3D; used to pick 2D output.
 pub(crate) fn is_planar_z0(mesh: &Mesh) -> bool {
     mesh.dim() == 2 && mesh.points.iter().all(|p| p[2].to_bits() == 0)
+}
+
+/// VTK orders a wedge's base triangle (0,1,2) with its normal pointing away
+/// from (3,4,5); meshsmooth, Gmsh and Medit toward it. Swapping the second and
+/// third vertex of both triangles converts either way.
+pub(crate) fn vtk_order(kind: Option<crate::mesh::ElementKind>, vs: &[u32]) -> std::borrow::Cow<'_, [u32]> {
+    match kind {
+        Some(crate::mesh::ElementKind::Prism) if vs.len() == 6 => {
+            std::borrow::Cow::Owned(vec![vs[0], vs[2], vs[1], vs[3], vs[5], vs[4]])
+        }
+        _ => std::borrow::Cow::Borrowed(vs),
+    }
 }

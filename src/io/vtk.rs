@@ -383,7 +383,7 @@ impl Reader<'_> {
                     shape.num_vertices()
                 ));
             }
-            raw.push(shape, vs);
+            raw.push(shape, &super::vtk_order(shape.kind(), vs));
             Ok(())
         })?;
         self.raw = raw;
@@ -521,15 +521,15 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
     writeln!(w, "CELLS {ne} {}", ne + mesh.conn.len())?;
     let mut buf = Vec::new();
     for e in 0..ne {
-        let vs = mesh.element(e);
+        let vs = super::vtk_order(Some(mesh.kinds[e]), mesh.element(e));
         if binary {
             buf.extend_from_slice(&(vs.len() as i32).to_be_bytes());
-            for &v in vs {
+            for &v in vs.iter() {
                 buf.extend_from_slice(&(v as i32).to_be_bytes());
             }
         } else {
             write!(w, "{}", vs.len())?;
-            for v in vs {
+            for v in vs.iter() {
                 write!(w, " {v}")?;
             }
             writeln!(w)?;

@@ -400,7 +400,7 @@ fn assemble(ctx: &Ctx, counts: Option<(usize, usize)>, a: Arrays) -> Result<RawM
                 ),
             ));
         }
-        raw.push(shape, &ids);
+        raw.push(shape, &super::vtk_order(shape.kind(), &ids));
         start = end;
     }
     if let Some(f) = a.fixed {
@@ -505,10 +505,18 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
         "Int64",
         "connectivity",
         1,
-        || mesh.conn.iter().flat_map(|&v| (v as i64).to_le_bytes()).collect(),
+        || {
+            (0..ne)
+                .flat_map(|e| super::vtk_order(Some(mesh.kinds[e]), mesh.element(e)).into_owned())
+                .flat_map(|v| (v as i64).to_le_bytes())
+                .collect()
+        },
         |w| {
             for e in 0..ne {
-                let vs: Vec<String> = mesh.element(e).iter().map(|v| v.to_string()).collect();
+                let vs: Vec<String> = super::vtk_order(Some(mesh.kinds[e]), mesh.element(e))
+                    .iter()
+                    .map(|v| v.to_string())
+                    .collect();
                 writeln!(w, "{}", vs.join(" "))?;
             }
             Ok(())
