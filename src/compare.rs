@@ -84,10 +84,6 @@ fn paper_memory(method: Method, vertices: usize, elements: usize) -> Option<usiz
 pub fn summarise(vertices: usize, elements: usize, infos: &[Info], tol: f64) -> Comparison {
     let f0 = infos[0].history.records[0].objective;
     let best = infos.iter().map(|i| i.objective).fold(f64::INFINITY, f64::min);
-    let to_fraction = |h: &History, frac: f64| {
-        let target = f0 - frac * (f0 - best);
-        h.time_to_value(target)
-    };
     let runs = infos
         .iter()
         .map(|i| RunSummary {
@@ -96,8 +92,8 @@ pub fn summarise(vertices: usize, elements: usize, infos: &[Info], tol: f64) -> 
             stop: i.stop.to_string(),
             objective: i.objective,
             grad_norm: i.grad_norm,
-            t50: to_fraction(&i.history, 0.5),
-            t90: to_fraction(&i.history, 0.9),
+            t50: i.history.time_to_fraction(0.5, best),
+            t90: i.history.time_to_fraction(0.9, best),
             t100: i.history.records.iter().find(|r| r.grad_norm < tol).map(|r| r.seconds),
             seconds: i.seconds,
             setup_seconds: i.setup_seconds,

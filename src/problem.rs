@@ -290,16 +290,6 @@ impl Problem {
         self.corners.len()
     }
 
-    /// One shape, tetrahedra, inverse mean ratio, harmonic template: the
-    /// papers' main case (both backends take closed forms for it; the GPU
-    /// backend handles every problem).
-    pub fn is_uniform_tet_mean_ratio(&self) -> bool {
-        self.dim == 3
-            && self.shapes.len() == 1
-            && self.num_corners() == self.num_elements()
-            && self.model == Model::default()
-    }
-
     /// Mesh positions gathered into the problem's numbering.
     pub fn gather(&self, points: &[Vec3]) -> Vec<Vec3> {
         self.order.iter().map(|&o| points[o as usize]).collect()

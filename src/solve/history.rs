@@ -32,12 +32,12 @@ impl History {
         self.records.last()
     }
 
-    /// Time at which the objective first achieved `fraction` of the total
-    /// decrease seen in this history (T50 for 0.5).
-    pub fn time_to_fraction(&self, fraction: f64) -> Option<f64> {
-        let (f0, f1) = (self.first()?.objective, self.last()?.objective);
-        let target = f0 - fraction * (f0 - f1);
-        self.records.iter().find(|r| r.objective <= target).map(|r| r.seconds)
+    /// Time at which the objective first achieved `fraction` of the decrease
+    /// from the start to `best` (T50 for 0.5; `best` is the lowest objective
+    /// any compared method reached, so fractions mean the same for all).
+    pub fn time_to_fraction(&self, fraction: f64, best: f64) -> Option<f64> {
+        let f0 = self.first()?.objective;
+        self.time_to_value(f0 - fraction * (f0 - best))
     }
 
     /// Time at which the objective first reached `value` or better.
@@ -99,9 +99,11 @@ mod tests {
             });
         }
         // total decrease 8: 50% is F <= 6 (t = 1), 90% is F <= 2.8 (t = 3)
-        assert_eq!(h.time_to_fraction(0.5), Some(1.0));
-        assert_eq!(h.time_to_fraction(0.9), Some(3.0));
-        assert_eq!(h.time_to_fraction(1.0), Some(4.0));
+        assert_eq!(h.time_to_fraction(0.5, 2.0), Some(1.0));
+        assert_eq!(h.time_to_fraction(0.9, 2.0), Some(3.0));
+        assert_eq!(h.time_to_fraction(1.0, 2.0), Some(4.0));
+        // against a better optimum found elsewhere, 100% is never reached here
+        assert_eq!(h.time_to_fraction(1.0, 1.0), None);
         assert_eq!(h.time_to_value(3.0), Some(3.0));
         assert_eq!(h.time_to_value(1.0), None);
         assert!(h.to_csv().lines().count() == 6);
