@@ -1,31 +1,25 @@
 // One colour of a block coordinate descent sweep, one thread per vertex: a
 // safeguarded Newton step on the vertex's 3x3 block with Armijo backtracking.
 // The vertices of a colour share no element, so they move independently.
-// CPU twin: `solve::bcd::newton_step` (same arithmetic, same order).
+// CPU twin: backend/cpu/bcd.rs (`newton_step`, same arithmetic, same order).
 
 #import layout
 #import corners
 #import corner_model
 
-struct Color {
-    offset: u32,
-    count: u32,
-    max_backtracks: u32,
-    pad: u32,
-}
-
 @group(0) @binding(0) var<uniform> model: Model;
 // x = beta, y = sigma
 @group(0) @binding(1) var<uniform> ls: vec4<real>;
-@group(0) @binding(2) var<uniform> color: Color;
+// n = vertices of the colour, offset = its start in `colors`, aux = most backtracks
+@group(0) @binding(2) var<uniform> op: Op;
 @group(0) @binding(3) var<storage, read_write> x: array<real>;
 @group(0) @binding(4) var<storage, read> corners: array<u32>;
 @group(0) @binding(5) var<storage, read> shapes: array<vec4<real>>;
 @group(0) @binding(6) var<storage, read> inc_offsets: array<u32>;
 @group(0) @binding(7) var<storage, read> inc_items: array<u32>;
 @group(0) @binding(8) var<storage, read> colors: array<u32>;
-// squared displacement of each vertex in this sweep (0 when it stayed)
-@group(0) @binding(9) var<storage, read_write> disp: array<real>;
+// each vertex's move in this sweep (0 when it stayed), 3 reals per vertex
+@group(0) @binding(9) var<storage, read_write> moves: array<real>;
 
 // The vertex's S-without-its-term per corner, as the CPU's `Patch` keeps
 // them; vertices with more corners than this recompute them per trial.
@@ -63,11 +57,13 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let t = linear_group(wid, nwg) * 64u + lid;
-    if t >= color.count {
+    if t >= op.n {
         return;
     }
-    let v = colors[color.offset + t];
-    disp[v] = real(0.0);
+    let v = colors[op.offset + t];
+    for (var i = 0u; i < 3u; i++) {
+        moves[3u * v + i] = real(0.0);
+    }
     let xv = corner_point(v);
 
     // `Patch::gradient_hessian`
@@ -116,18 +112,16 @@ fn main(
     let beta = ls.x;
     let sigma = ls.y;
     var alpha = real(1.0);
-    for (var n = 0u; n <= color.max_backtracks; n++) {
+    for (var n = 0u; n <= op.aux; n++) {
         let trial = vec3<real>(xv[0] + alpha * d[0], xv[1] + alpha * d[1], xv[2] + alpha * d[2]);
         let f = patch_value(v, trial);
         if f.ok && f.eta <= f0 + sigma * alpha * slope {
             x[3u * v] = trial[0];
             x[3u * v + 1u] = trial[1];
             x[3u * v + 2u] = trial[2];
-            var sq = real(0.0);
-            for (var i = 0; i < 3; i++) {
-                sq += (xv[i] - trial[i]) * (xv[i] - trial[i]);
+            for (var i = 0u; i < 3u; i++) {
+                moves[3u * v + i] = trial[i] - xv[i];
             }
-            disp[v] = sq;
             return;
         }
         alpha *= beta;

@@ -1,11 +1,11 @@
 // y = A x for the symmetric block matrix stored with both triangles, one
 // thread per block row, so no two threads write one entry.
-// CPU twin: `BlockCsr::mul` (same sum order).
+// CPU twin: backend/cpu/bsr_spmv.rs (same sum order).
 
 #import layout
 
 // n = number of block rows
-@group(0) @binding(0) var<uniform> dims: Dims;
+@group(0) @binding(0) var<uniform> op: Op;
 @group(0) @binding(1) var<storage, read> row_offsets: array<u32>;
 @group(0) @binding(2) var<storage, read> cols: array<u32>;
 @group(0) @binding(3) var<storage, read> blocks: array<real>;
@@ -19,7 +19,7 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let i = linear_group(wid, nwg) * 64u + lid;
-    if i >= dims.n {
+    if i >= op.n {
         return;
     }
     var acc = vec3<real>(real(0.0));

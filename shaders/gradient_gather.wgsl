@@ -1,17 +1,18 @@
 // One thread per free vertex: its gradient of F summed over its incident
-// corners in ascending corner order, and the Newton right-hand side -g.
-// CPU twin: `HessianPattern::assemble` (gradient part).
+// corners in ascending corner order (a gather, so the sum order is fixed),
+// from per-corner gradients `aux` reals apart (12 from `objective`,
+// ELEM_STRIDE from `hessian_assemble`). CPU twin: backend/cpu/gradient_gather.rs.
 
 #import layout
 
-@group(0) @binding(0) var<uniform> sizes: Sizes;
+// n = number of free vertices, aux = stride of the per-corner data
+@group(0) @binding(0) var<uniform> op: Op;
 @group(0) @binding(1) var<storage, read> free_vertices: array<u32>;
 @group(0) @binding(2) var<storage, read> inc_offsets: array<u32>;
 @group(0) @binding(3) var<storage, read> inc_items: array<u32>;
-// weighted per corner (`hessian_assemble.wgsl`)
+// weighted per corner
 @group(0) @binding(4) var<storage, read> elem: array<real>;
 @group(0) @binding(5) var<storage, read_write> grad: array<real>;
-@group(0) @binding(6) var<storage, read_write> rhs: array<real>;
 
 @compute @workgroup_size(64)
 fn main(
@@ -20,20 +21,19 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let i = linear_group(wid, nwg) * 64u + lid;
-    if i >= sizes.n_free {
+    if i >= op.n {
         return;
     }
     let v = free_vertices[i];
     var acc = vec3<real>(real(0.0));
     for (var it = inc_offsets[v]; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items[it];
-        let at = ELEM_STRIDE * (packed >> 2u) + 3u * (packed & 3u);
+        let at = op.aux * (packed >> 2u) + 3u * (packed & 3u);
         for (var c = 0u; c < 3u; c++) {
             acc[c] += elem[at + c];
         }
     }
     for (var c = 0u; c < 3u; c++) {
         grad[3u * i + c] = acc[c];
-        rhs[3u * i + c] = -acc[c];
     }
 }

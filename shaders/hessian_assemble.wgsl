@@ -1,16 +1,17 @@
 // Per corner: the weighted gradient and upper 4x4 blocks (3x3 each) of the
 // Hessian of its term, for `hessian_gather` and `gradient_gather` to sum
 // without float atomics; a lower block is the transpose of its upper one.
-// CPU twin: `Model::blocks` (the tetrahedral closed form of
-// `TetShape::hessian_blocks`, or the dense S-Hessian contracted with B), each
-// entry times the corner weight as `HessianPattern::assemble` does.
+// CPU twin: backend/cpu/hessian_assemble.rs (`Model::blocks`: the folded
+// closed form of `TetShape::hessian_blocks`, or the dense S-Hessian
+// contracted with B), each entry times the corner weight.
 
 #import layout
 #import corners
 #import corner_model
 
 @group(0) @binding(0) var<uniform> model: Model;
-@group(0) @binding(1) var<uniform> sizes: Sizes;
+// n = number of corners
+@group(0) @binding(1) var<uniform> op: Op;
 @group(0) @binding(2) var<storage, read> x: array<real>;
 @group(0) @binding(3) var<storage, read> corners: array<u32>;
 @group(0) @binding(4) var<storage, read> shapes: array<vec4<real>>;
@@ -88,7 +89,7 @@ fn main(
     // one bind-group layout for the two
     _ = model;
     let e = linear_group(wid, nwg) * 64u + lid;
-    if e >= sizes.n_elements {
+    if e >= op.n {
         return;
     }
     let cr = corner_ref(e);
@@ -111,22 +112,30 @@ fn main(
         }
         return;
     }
-    var sv: array<vec3<real>, 4>;
-    var cv: array<vec3<real>, 4>;
-    for (var k = 0u; k < 4u; k++) {
-        let g = mul_vec(p.grad_s, b[k]);
-        for (var i = 0u; i < 3u; i++) {
-            elem[base + 3u * k + i] = g[i] * w;
-        }
-        sv[k] = mul_vec(p.s, b[k]);
-        cv[k] = mul_vec(p.cof, b[k]);
-    }
+    // the folded form of `TetShape::hessian_blocks`:
+    // block (k,l) = u_k c_l^T + c_k v_l^T + diag (b_k.b_l) I + skew [S (b_k x b_l)]_x
+    // with v = cross s and u = v + cc c
     let dm53 = p.h / p.d;
     let dm83 = dm53 / p.d;
     let diag = real(2.0) * p.h / real(3.0);
     let cross = real(-(4.0 / 9.0)) * dm53;
     let cc = real(10.0 / 27.0) * p.f * dm83;
     let skew = real(-(2.0 / 9.0)) * p.f * dm53;
+    var u: array<vec3<real>, 4>;
+    var v: array<vec3<real>, 4>;
+    var cv: array<vec3<real>, 4>;
+    for (var k = 0u; k < 4u; k++) {
+        let g = mul_vec(p.grad_s, b[k]);
+        for (var i = 0u; i < 3u; i++) {
+            elem[base + 3u * k + i] = g[i] * w;
+        }
+        let sk = mul_vec(p.s, b[k]);
+        cv[k] = mul_vec(p.cof, b[k]);
+        for (var i = 0u; i < 3u; i++) {
+            v[k][i] = cross * sk[i];
+            u[k][i] = v[k][i] + cc * cv[k][i];
+        }
+    }
     for (var k = 0u; k < 4u; k++) {
         for (var l = k; l < 4u; l++) {
             let bk = b[k];
@@ -135,7 +144,7 @@ fn main(
             var blk = mat3x3<real>();
             for (var i = 0u; i < 3u; i++) {
                 for (var q = 0u; q < 3u; q++) {
-                    blk[i][q] = cross * (sv[k][i] * cv[l][q] + cv[k][i] * sv[l][q]) + cc * cv[k][i] * cv[l][q];
+                    blk[i][q] = u[k][i] * cv[l][q] + cv[k][i] * v[l][q];
                 }
                 blk[i][i] += diag * bkl;
             }

@@ -1,12 +1,12 @@
 // One thread per block of the BSR Hessian: the sum of its element
 // contributions, each `element * 16 + 4 a + b` (local pair (a, b)), listed in
 // ascending element order so that the sum order is the CPU's.
-// CPU twin: `HessianPattern::assemble` (matrix part).
+// CPU twin: backend/cpu/hessian_gather.rs.
 
 #import layout
 
 // n = number of blocks
-@group(0) @binding(0) var<uniform> dims: Dims;
+@group(0) @binding(0) var<uniform> op: Op;
 @group(0) @binding(1) var<storage, read> contrib_offsets: array<u32>;
 @group(0) @binding(2) var<storage, read> contrib_items: array<u32>;
 // weighted per corner (`hessian_assemble.wgsl`)
@@ -20,7 +20,7 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let s = linear_group(wid, nwg) * 64u + lid;
-    if s >= dims.n {
+    if s >= op.n {
         return;
     }
     var acc: array<real, 9>;

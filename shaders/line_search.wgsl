@@ -1,21 +1,19 @@
-// A line-search trial point: trial = x + alpha d at the free vertices (the
-// fixed ones never move, so `trial` keeps them from its initial copy of x);
-// `objective` and `reduce` then evaluate it, an infeasible trial counting as
-// +inf. CPU twin: the trial loop of `Newton::step`.
+// A line-search trial point: trial = x + alpha d at the free vertices, alpha
+// a slot expression (the fixed vertices never move, so `trial` keeps them
+// from its initial copy of x); `objective` and `reduce` then evaluate it.
+// CPU twin: backend/cpu/line_search.rs.
 
 #import layout
 
-struct Step {
-    // x = alpha
-    alpha: vec4<real>,
-}
-
-@group(0) @binding(0) var<uniform> step: Step;
-@group(0) @binding(1) var<uniform> sizes: Sizes;
+// n = number of free vertices; alpha = coef.x * a_num / a_den
+@group(0) @binding(0) var<uniform> op: Op;
+@group(0) @binding(1) var<storage, read> scalars: array<real>;
 @group(0) @binding(2) var<storage, read> free_vertices: array<u32>;
 @group(0) @binding(3) var<storage, read> x: array<real>;
 @group(0) @binding(4) var<storage, read> d: array<real>;
 @group(0) @binding(5) var<storage, read_write> trial: array<real>;
+
+#import slots
 
 @compute @workgroup_size(64)
 fn main(
@@ -24,11 +22,11 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let i = linear_group(wid, nwg) * 64u + lid;
-    if i >= sizes.n_free {
+    if i >= op.n {
         return;
     }
     let v = free_vertices[i];
-    let alpha = step.alpha.x;
+    let alpha = coef(op.coef.x, op.a_num, op.a_den);
     for (var c = 0u; c < 3u; c++) {
         trial[3u * v + c] = x[3u * v + c] + alpha * d[3u * i + c];
     }

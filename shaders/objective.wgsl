@@ -1,23 +1,20 @@
-// Per corner: its weighted term and gradient (kept on the device for the
-// vertex gather); per workgroup: a tree sum of the terms, the smallest
-// det(S) and the infeasible count. CPU twin: `objective::gradient` (value part).
+// Per corner: its weighted term and gradient (kept on the device for
+// `gradient_gather`); per workgroup: (sum of the terms, smallest det(S), -,
+// infeasible count) for `reduce`. CPU twin: backend/cpu/objective.rs.
 
 #import layout
 #import corners
 #import corner_model
+#import tree
 
 @group(0) @binding(0) var<uniform> model: Model;
-@group(0) @binding(1) var<uniform> sizes: Sizes;
+// n = number of corners
+@group(0) @binding(1) var<uniform> op: Op;
 @group(0) @binding(2) var<storage, read> x: array<real>;
 @group(0) @binding(3) var<storage, read> corners: array<u32>;
 @group(0) @binding(4) var<storage, read> shapes: array<vec4<real>>;
 @group(0) @binding(5) var<storage, read_write> grad: array<real>;
-// per workgroup: (sum of terms, min det S, infeasible count)
-@group(0) @binding(6) var<storage, read_write> partials: array<real>;
-
-var<workgroup> sum_wg: array<real, 64>;
-var<workgroup> min_wg: array<real, 64>;
-var<workgroup> bad_wg: array<u32, 64>;
+@group(0) @binding(6) var<storage, read_write> partials: array<vec4<real>>;
 
 @compute @workgroup_size(64)
 fn main(
@@ -30,7 +27,7 @@ fn main(
     var term = real(0.0);
     var dmin = REAL_MAX;
     var bad = 0u;
-    if c < sizes.n_elements {
+    if c < op.n {
         let cr = corner_ref(c);
         let s = s_of(corner_points(c), cr.b);
         dmin = det_n(s, model.dim);
@@ -67,20 +64,8 @@ fn main(
             }
         }
     }
-    sum_wg[lid] = term;
-    min_wg[lid] = dmin;
-    bad_wg[lid] = bad;
-    for (var stride = 32u; stride > 0u; stride >>= 1u) {
-        workgroupBarrier();
-        if lid < stride {
-            sum_wg[lid] += sum_wg[lid + stride];
-            min_wg[lid] = min(min_wg[lid], min_wg[lid + stride]);
-            bad_wg[lid] += bad_wg[lid + stride];
-        }
-    }
-    if lid == 0u && group < sizes.n_obj_partials {
-        partials[3u * group] = sum_wg[0];
-        partials[3u * group + 1u] = min_wg[0];
-        partials[3u * group + 2u] = real(bad_wg[0]);
+    let total = tree_reduce(lid, vec4<real>(term, dmin, -REAL_MAX, real(bad)));
+    if lid == 0u && group < (op.n + 63u) / 64u {
+        partials[group] = total;
     }
 }

@@ -1,20 +1,17 @@
-// The final pass over the per-workgroup partials, in one workgroup: each
-// thread sums a fixed strided slice (compensated, for f32), then a tree.
-// The order never changes, so a run repeats bit for bit.
-// out = (sum of eta, min det S, infeasible count, |grad F|^2, max squared displacement)
+// The final pass over per-workgroup partials (sum, min, max, count) in one
+// workgroup: each thread folds a fixed strided slice (the sums compensated,
+// for f32), then the tree; the results go to the scalar slots `slot` (sum),
+// `aux` (min), `aux2` (max) and `aux3` (count), each unless NONE. The order
+// never changes, so a run repeats bit for bit.
+// CPU twin: backend/cpu/reduce.rs (the fixed-chunk sums of the CPU backend).
 
 #import layout
+#import tree
 
-@group(0) @binding(0) var<uniform> sizes: Sizes;
-@group(0) @binding(1) var<storage, read> obj_partials: array<real>;
-@group(0) @binding(2) var<storage, read> vert_partials: array<real>;
-@group(0) @binding(3) var<storage, read_write> out: array<real>;
-
-var<workgroup> sum_wg: array<real, 64>;
-var<workgroup> min_wg: array<real, 64>;
-var<workgroup> bad_wg: array<real, 64>;
-var<workgroup> sq_wg: array<real, 64>;
-var<workgroup> disp_wg: array<real, 64>;
+// n = number of partials
+@group(0) @binding(0) var<uniform> op: Op;
+@group(0) @binding(1) var<storage, read> partials: array<vec4<real>>;
+@group(0) @binding(2) var<storage, read_write> scalars: array<real>;
 
 struct Kahan {
     sum: real,
@@ -30,39 +27,27 @@ fn kahan_add(k: Kahan, v: real) -> Kahan {
 @compute @workgroup_size(64)
 fn main(@builtin(local_invocation_index) lid: u32) {
     var sum = Kahan(real(0.0), real(0.0));
-    var sq = Kahan(real(0.0), real(0.0));
-    var dmin = REAL_MAX;
-    var bad = real(0.0);
-    var moved = real(0.0);
-    for (var i = lid; i < sizes.n_obj_partials; i += 64u) {
-        sum = kahan_add(sum, obj_partials[3u * i]);
-        dmin = min(dmin, obj_partials[3u * i + 1u]);
-        bad += obj_partials[3u * i + 2u];
+    var count = Kahan(real(0.0), real(0.0));
+    var acc = tree_zero();
+    for (var i = lid; i < op.n; i += 64u) {
+        let p = partials[i];
+        sum = kahan_add(sum, p.x);
+        count = kahan_add(count, p.w);
+        acc = combine(acc, vec4<real>(real(0.0), p.y, p.z, real(0.0)));
     }
-    for (var i = lid; i < sizes.n_vert_partials; i += 64u) {
-        sq = kahan_add(sq, vert_partials[2u * i]);
-        moved = max(moved, vert_partials[2u * i + 1u]);
-    }
-    sum_wg[lid] = sum.sum;
-    min_wg[lid] = dmin;
-    bad_wg[lid] = bad;
-    sq_wg[lid] = sq.sum;
-    disp_wg[lid] = moved;
-    for (var stride = 32u; stride > 0u; stride >>= 1u) {
-        workgroupBarrier();
-        if lid < stride {
-            sum_wg[lid] += sum_wg[lid + stride];
-            min_wg[lid] = min(min_wg[lid], min_wg[lid + stride]);
-            bad_wg[lid] += bad_wg[lid + stride];
-            sq_wg[lid] += sq_wg[lid + stride];
-            disp_wg[lid] = max(disp_wg[lid], disp_wg[lid + stride]);
-        }
-    }
+    let total = tree_reduce(lid, vec4<real>(sum.sum, acc.y, acc.z, count.sum));
     if lid == 0u {
-        out[0] = sum_wg[0];
-        out[1] = min_wg[0];
-        out[2] = bad_wg[0];
-        out[3] = sq_wg[0];
-        out[4] = disp_wg[0];
+        if op.slot != NONE {
+            scalars[op.slot] = total.x;
+        }
+        if op.aux != NONE {
+            scalars[op.aux] = total.y;
+        }
+        if op.aux2 != NONE {
+            scalars[op.aux2] = total.z;
+        }
+        if op.aux3 != NONE {
+            scalars[op.aux3] = total.w;
+        }
     }
 }

@@ -6,7 +6,7 @@
 use crate::Mesh;
 use crate::error::Result;
 use crate::problem::{Problem, ProblemOptions};
-use crate::solve::{self, History, Info, Method, Params};
+use crate::solve::{self, History, Info, Method, Options};
 use serde::Serialize;
 
 #[derive(Clone, Debug, Serialize)]
@@ -134,44 +134,24 @@ pub fn summarise(vertices: usize, elements: usize, infos: &[Info], tol: f64) -> 
     }
 }
 
-/// Runs every method on a copy of `mesh` (same start) on the CPU.
-pub fn compare(mesh: &Mesh, methods: &[Method], params: &Params) -> Result<(Comparison, Vec<Info>)> {
-    compare_with(mesh, &ProblemOptions::default(), methods, params)
-}
-
-/// `compare` with a metric, template or reference mesh of choice.
-pub fn compare_with(
+/// Runs every method of `methods` from the same start (a copy of `mesh`),
+/// each with `opts` (device, settings) and its own method, and summarises.
+pub fn compare(
     mesh: &Mesh,
-    options: &ProblemOptions,
+    problem: &ProblemOptions,
     methods: &[Method],
-    params: &Params,
+    opts: &Options,
 ) -> Result<(Comparison, Vec<Info>)> {
-    compare_on(mesh, options, methods, params, &mut |p, x, m| {
-        solve::solve(p, x, m, params, &mut |_| true)
-    })
-}
-
-/// A backend's solve: problem, positions (updated), method.
-pub type Runner<'a> = dyn FnMut(&Problem, &mut [crate::metric::mat3::Vec3], Method) -> Result<Info> + 'a;
-
-/// Runs every method through `run` (a backend: the CPU's `solve::solve`, or a
-/// device's solvers) from the same start, and summarises.
-pub fn compare_on(
-    mesh: &Mesh,
-    options: &ProblemOptions,
-    methods: &[Method],
-    params: &Params,
-    run: &mut Runner,
-) -> Result<(Comparison, Vec<Info>)> {
-    let p = Problem::with_options(mesh, options)?;
+    let p = Problem::with_options(mesh, problem)?;
     let x0 = p.gather(&mesh.points);
     let mut infos = Vec::new();
-    for &m in methods {
+    for &method in methods {
         let mut x = x0.clone();
-        infos.push(run(&p, &mut x, m)?);
+        let run = Options { method, ..opts.clone() };
+        infos.push(solve::solve(&p, &mut x, &run, &mut |_| true)?);
     }
     Ok((
-        summarise(mesh.num_points(), mesh.num_elements(), &infos, params.tol),
+        summarise(mesh.num_points(), mesh.num_elements(), &infos, opts.params.tol),
         infos,
     ))
 }

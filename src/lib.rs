@@ -11,7 +11,7 @@ pub mod io;
 pub mod mesh;
 pub mod metric;
 pub mod metric_report;
-pub mod objective;
+pub use backend::cpu::objective;
 pub mod plot;
 pub mod problem;
 pub mod report;

@@ -26,13 +26,27 @@ fn shape_b(s: Shape) -> array<vec3<real>, 4> {
     return array<vec3<real>, 4>(s.b[0].xyz, s.b[1].xyz, s.b[2].xyz, s.b[3].xyz);
 }
 
-// Small per-dispatch parameters of the Newton kernels; what each field means
-// is stated in the kernel that reads it.
-struct Dims {
+// Per-dispatch parameters, one record per recorded operation in a uniform
+// buffer bound at a dynamic offset; what each field means is stated in the
+// kernel that reads it. A slot field equal to NONE means "no slot".
+// Rust mirror: `layout::Op` (the constants NONE, N_SLOTS, CORNER_STRIDE,
+// ELEM_STRIDE, METRIC_* and TEMPLATE_* come from Rust in the prelude).
+struct Op {
     n: u32,
-    op: u32,
     slot: u32,
     aux: u32,
+    aux2: u32,
+    aux3: u32,
+    guard: u32,
+    flags: u32,
+    offset: u32,
+    a_num: u32,
+    a_den: u32,
+    b_num: u32,
+    b_den: u32,
+    pad: vec4<u32>,
+    // x = scale of coefficient a, y = scale of coefficient b
+    coef: vec4<real>,
 }
 
 // Metric dimension and what turns a corner's S into its term; `fast` marks
@@ -45,13 +59,11 @@ struct Model {
     fast: u32,
 }
 
-// Reals per corner in `shapes`-indexed B tables: rows b_k in .xyz (k = 0..3),
-// the corner's weight in F in b_0.w. Corners hold 4 vertex ids then that index.
-const CORNER_STRIDE: u32 = 5u;
-
-// Per corner in the Newton assembly buffer: the gradient (12 reals, vertex
-// k at 3 k) then the upper Hessian blocks (k, l), k <= l, 9 reals each, row-major.
-const ELEM_STRIDE: u32 = 102u;
+// `shapes`-indexed B tables: rows b_k in .xyz (k = 0..3), the corner's weight
+// in F in b_0.w. Corners hold 4 vertex ids then that index (CORNER_STRIDE).
+// The Newton assembly buffer holds per corner the gradient (12 reals, vertex
+// k at 3 k) then the upper Hessian blocks (k, l), k <= l, 9 reals each,
+// row-major (ELEM_STRIDE).
 
 // Position of block (k, l), k <= l, among the 10 upper blocks.
 fn upper_block(k: u32, l: u32) -> u32 {

@@ -6,8 +6,6 @@
 #import mean_ratio
 #import smetric
 
-const TEMPLATE_AVERAGE: u32 = 1u;
-
 // `Model::templated`: Average is g(m) = 1 - 1/m, g' = 1/m^2, g'' = -2/m^3.
 fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
     if model.tmpl != TEMPLATE_AVERAGE {

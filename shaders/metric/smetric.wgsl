@@ -8,10 +8,6 @@
 #import condition
 #import target
 
-const METRIC_IMR: u32 = 0u;
-const METRIC_CN: u32 = 1u;
-const METRIC_TMP: u32 = 2u;
-
 alias Hess9 = array<array<real, 9>, 9>;
 
 struct MetricEval {

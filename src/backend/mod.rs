@@ -1,5 +1,210 @@
-//! Backends: where the numerics run. The CPU reference lives in `metric`,
-//! `objective` and `solve`; `gpu` is the wgpu/WGSL one, written to do the same
-//! arithmetic so that the two can be compared.
+//! The backend contract: the only door between the solvers and a device.
+//!
+//! Every solver (`solve::bcd`, `solve::newton` with `solve::pcg`) is written
+//! once over [`Backend`]; the CPU backend (`cpu`, f64, rayon) is the reference
+//! and the wgpu backend (`gpu`, WGSL, f32 or f64) the fast one. Tests run one
+//! solver on both from one start and compare the iterates.
+//!
+//! ```text
+//!   solver ──ops──▶ Backend ──▶ CPU: executes each call at once (Vec<Vec3>, f64)
+//!      ▲                    └─▶ GPU: records each call into a command buffer
+//!      └──── flush() ◀── scalar slots (one read-back per flush)
+//! ```
+//!
+//! - **Data lives on the backend.** Two position sets (`Points::Current`, the
+//!   state; `Points::Trial`, a line-search candidate) over all vertices, and
+//!   vectors over the free vertices (3 reals each) that the solver allocates
+//!   with [`Backend::vector`] and names by [`Vector`] handles.
+//! - **Reductions write scalar slots.** `dot`, `evaluate` and `max_move` write
+//!   into [`Slot`]s that stay on the backend; coefficients of the vector
+//!   updates ([`Coef`]) may be ratios of slots, and an update may be guarded by
+//!   a slot (skipped unless that slot is > 0), so a whole CG iteration runs
+//!   without the host seeing a number. [`Backend::flush`] runs what was
+//!   recorded and returns every slot: once per CG iteration, once per
+//!   line-search trial. On the CPU the same calls run immediately and `flush`
+//!   just copies the slots.
+//! - **Solvers own their slots**: each solver module names the slot indices it
+//!   uses (below [`N_SLOTS`]); the backend gives them no meaning.
+//! - **Problem data is uploaded once**, at construction; the Newton extras
+//!   (Hessian pattern, block-Jacobi factors) by [`Backend::prepare_hessian`], whose
+//!   time the solver reports as setup.
+//!
+//! A distributed backend would wrap another backend: its `flush` an allreduce
+//! of the slots, with halo exchanges after each colour and before each product.
 
+pub mod cpu;
 pub mod gpu;
+
+use crate::error::Result;
+use crate::metric::mat3::Vec3;
+use std::time::Instant;
+
+/// Scalar slots per backend.
+pub const N_SLOTS: usize = 32;
+
+/// A scalar slot on the backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Slot(pub u32);
+
+/// A vector over the free vertices (3 reals each), allocated by `Backend::vector`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Vector(pub u32);
+
+/// Which position set an operation reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Points {
+    /// The solver's state.
+    Current,
+    /// A line-search candidate (`Backend::trial`).
+    Trial,
+}
+
+/// A coefficient evaluated on the backend: `scale * slots[num] / slots[den]`,
+/// a missing slot counting as 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coef {
+    pub scale: f64,
+    pub num: Option<Slot>,
+    pub den: Option<Slot>,
+}
+
+impl Coef {
+    pub const fn value(v: f64) -> Coef {
+        Coef {
+            scale: v,
+            num: None,
+            den: None,
+        }
+    }
+
+    pub const fn slot(s: Slot) -> Coef {
+        Coef {
+            scale: 1.0,
+            num: Some(s),
+            den: None,
+        }
+    }
+
+    /// `sign * num / den`
+    pub const fn ratio(sign: f64, num: Slot, den: Slot) -> Coef {
+        Coef {
+            scale: sign,
+            num: Some(num),
+            den: Some(den),
+        }
+    }
+
+    /// The value from slot values, as every backend computes it.
+    pub fn eval(&self, slots: &[f64]) -> f64 {
+        let n = self.num.map_or(1.0, |s| slots[s.0 as usize]);
+        let d = self.den.map_or(1.0, |s| slots[s.0 as usize]);
+        self.scale * n / d
+    }
+}
+
+/// Where `evaluate` writes: F (the sum of the weighted corner terms, those of
+/// infeasible corners counted as 0), the number of infeasible corners and the
+/// smallest corner determinant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EvalSlots {
+    pub value: Slot,
+    pub infeasible: Slot,
+    pub min_det: Option<Slot>,
+}
+
+/// True when a guard slot lets an update run: NaN-safe, so a NaN guard skips.
+#[inline]
+pub fn guard_passes(slots: &[f64], guard: Option<Slot>) -> bool {
+    guard.is_none_or(|g| slots[g.0 as usize] > 0.0)
+}
+
+/// The operations the solvers need. See the module documentation for the
+/// model; every method records (GPU) or runs (CPU) one operation.
+pub trait Backend {
+    /// "cpu", or the adapter and precision.
+    fn describe(&self) -> String;
+    /// Free vertices: the length of every `Vector`.
+    fn num_free(&self) -> usize;
+    /// Colour classes of the coloured sweep.
+    fn num_colors(&self) -> usize;
+
+    /// A new zeroed vector.
+    fn vector(&mut self) -> Result<Vector>;
+    /// Reads a vector back (flushes first); for tests and checkpoints.
+    fn read_vector(&mut self, v: Vector) -> Result<Vec<Vec3>>;
+    /// Overwrites a vector (ordered after everything recorded so far).
+    fn write_vector(&mut self, v: Vector, data: &[Vec3]) -> Result<()>;
+    /// The current positions, in the problem's numbering (flushes first).
+    fn download(&mut self) -> Result<Vec<Vec3>>;
+
+    /// F, its infeasibility and optionally the free gradient at `at`.
+    fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()>;
+    /// Trial = Current + alpha d at the free vertices.
+    fn trial(&mut self, alpha: Coef, d: Vector) -> Result<()>;
+    /// Current = Trial.
+    fn accept_trial(&mut self) -> Result<()>;
+
+    /// One colour of a BCD sweep at the current positions: a safeguarded
+    /// Newton step per vertex of the colour (they share no element).
+    fn bcd_color(&mut self, color: usize) -> Result<()>;
+    /// The largest squared vertex move of the colours swept since the last call.
+    fn max_move(&mut self, out: Slot) -> Result<()>;
+    /// A sweep over the free vertices one at a time in locality order, if the
+    /// backend has one (`Ok(false)` otherwise: only the CPU has, the GPU runs
+    /// colours). Stops early, in a valid state, at `deadline`; the largest
+    /// squared move goes to `out`.
+    fn bcd_sequential(&mut self, _out: Slot, _deadline: Option<Instant>) -> Result<bool> {
+        Ok(false)
+    }
+
+    /// A smart-Laplace sweep, if the backend has one (`Ok(false)` otherwise:
+    /// only the CPU has, the baseline is sequential by nature).
+    fn laplace(&mut self, _out: Slot, _deadline: Option<Instant>) -> Result<bool> {
+        Ok(false)
+    }
+
+    /// Builds the Hessian's block pattern and the preconditioner's storage;
+    /// returns the bytes they hold. Called once, before `assemble`.
+    fn prepare_hessian(&mut self) -> Result<usize>;
+    /// Free gradient into `g` and the Hessian of F at the current positions
+    /// (which are feasible: they were accepted).
+    fn assemble(&mut self, g: Vector) -> Result<()>;
+    /// y = H x
+    fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()>;
+    /// Factors the diagonal blocks of the assembled Hessian.
+    fn factor_precond(&mut self) -> Result<()>;
+    /// y = M^-1 x (block Jacobi).
+    fn precond(&mut self, x: Vector, y: Vector) -> Result<()>;
+
+    /// slots[sum] = a . b; slots[max] = max_i |b_i|^2.
+    fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()>;
+    /// y = a x + b y, skipped unless `guard` passes. `b` = 0 overwrites y
+    /// without reading it; `x == y` is allowed.
+    fn axpby(&mut self, a: Coef, x: Vector, b: Coef, y: Vector, guard: Option<Slot>) -> Result<()>;
+    /// slots[dst] = value, skipped unless `guard` passes.
+    fn set_slot(&mut self, dst: Slot, value: Coef, guard: Option<Slot>) -> Result<()>;
+
+    /// Runs what was recorded and returns every slot.
+    fn flush(&mut self) -> Result<[f64; N_SLOTS]>;
+    /// Bytes the backend holds for the problem and the solver's data.
+    fn bytes(&self) -> usize;
+
+    // conveniences over `axpby`
+
+    /// y = x
+    fn copy(&mut self, x: Vector, y: Vector) -> Result<()> {
+        self.axpby(Coef::value(1.0), x, Coef::value(0.0), y, None)
+    }
+    /// y += a x
+    fn axpy(&mut self, a: Coef, x: Vector, y: Vector) -> Result<()> {
+        self.axpby(a, x, Coef::value(1.0), y, None)
+    }
+    /// y *= a
+    fn scale(&mut self, a: Coef, y: Vector) -> Result<()> {
+        self.axpby(a, y, Coef::value(0.0), y, None)
+    }
+    /// slots[out] = |a|^2
+    fn norm_sq(&mut self, a: Vector, out: Slot) -> Result<()> {
+        self.dot(a, a, out, None)
+    }
+}

@@ -1,32 +1,24 @@
 //! The subcommands.
 
-use super::device::{self, Backend};
+use super::device;
 use super::progress::Progress;
 use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs, StopArgs};
-use meshsmooth::backend::gpu::{GpuRunOptions, list_adapters, smooth_mesh_gpu_with};
+use meshsmooth::backend::gpu::list_adapters;
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
-use meshsmooth::io::{self, CellData, Format};
+use meshsmooth::io::{self, Format};
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report;
 use meshsmooth::problem::ProblemOptions;
 use meshsmooth::report::quality_report;
-use meshsmooth::solve::pcg::NegativeCurvature;
 use meshsmooth::solve::{self, Info, Method, Params};
 use meshsmooth::{Error, Mesh, Result, metric};
 use std::path::Path;
 use std::time::Duration;
 
 impl SolverArgs {
-    fn method(&self) -> Result<Method> {
-        self.method.parse()
-    }
-
     fn params(&self) -> Result<Params> {
         let mut p = self.stop.params()?;
-        p.newton.negative_curvature = match self.negative_curvature.as_str() {
-            "direction" => NegativeCurvature::Direction,
-            _ => NegativeCurvature::Iterate,
-        };
+        p.newton.negative_curvature = self.negative_curvature;
         Ok(p)
     }
 }
@@ -65,8 +57,8 @@ impl ObjectiveArgs {
 
     pub(super) fn options<'a>(&self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
         Ok(ProblemOptions {
-            metric: self.metric.parse()?,
-            template: self.template.parse()?,
+            metric: self.metric,
+            template: self.template,
             reference,
         })
     }
@@ -81,35 +73,6 @@ pub(super) fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
         }),
         None => Format::from_path(path),
     }
-}
-
-/// Per-element inverse mean ratio, written as cell data so ParaView can colour by it.
-fn eta_field(mesh: &Mesh) -> Vec<f64> {
-    let points = metric::oriented(mesh, &mesh.points);
-    (0..mesh.num_elements())
-        .map(|e| metric::element_eta(mesh, &points, e).unwrap_or(f64::INFINITY))
-        .collect()
-}
-
-pub(super) fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
-    // the last line of defence: an output mesh never holds an inverted element
-    let bad = metric::inverted_elements(mesh, &mesh.points);
-    if !bad.is_empty() {
-        return Err(Error::Inverted {
-            count: bad.len(),
-            first: bad.into_iter().take(5).collect(),
-        });
-    }
-    let eta = eta_field(mesh);
-    io::write(
-        path,
-        mesh,
-        format,
-        &[CellData {
-            name: "inverse_mean_ratio",
-            values: &eta,
-        }],
-    )
 }
 
 /// `out.vtk` -> `out.partial.vtk`
@@ -135,7 +98,7 @@ pub(super) fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
     Ok(())
 }
 
-fn summary(info: &Info, f0: f64, backend: &Backend) -> String {
+fn summary(info: &Info, f0: f64) -> String {
     let change = if f0 != 0.0 {
         100.0 * (info.objective - f0) / f0
     } else {
@@ -144,7 +107,7 @@ fn summary(info: &Info, f0: f64, backend: &Backend) -> String {
     format!(
         "{} on {}: {} after {} {} in {:.3} s (setup {:.3} s); F {:.8} -> {:.8} ({:+.2}%), |grad F| = {:.3e}",
         info.method,
-        backend.describe(),
+        info.device,
         info.stop,
         info.iterations,
         match info.method {
@@ -163,7 +126,7 @@ fn summary(info: &Info, f0: f64, backend: &Backend) -> String {
 
 /// Smooths `mesh` in place, printing reports and iterations unless `quiet`.
 fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: bool) -> Result<Info> {
-    let method = solver.method()?;
+    let method = solver.method;
     let params = solver.params()?;
     let reference = solver.objective.reference()?;
     let options = solver.objective.options(reference.as_ref())?;
@@ -176,7 +139,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
             first: bad.into_iter().take(5).collect(),
         });
     }
-    let backend = device::choose(&solver.device, &solver.gpu, method)?;
+    let choice = device::choose(solver.device, &solver.gpu, &[method])?;
     let before = quality_report(mesh, &mesh.points);
     if !quiet {
         println!("== initial mesh ==\n{before}");
@@ -187,16 +150,14 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
         .then(|| metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference))
         .transpose()?;
     let mut progress = Progress::new(params.max_iter, !quiet);
-    let result = match &backend {
-        Backend::Cpu => solve::smooth_mesh_with(mesh, &options, method, &params, &mut |r| progress.update(r)),
-        Backend::Gpu(ctx) => {
-            let opts = GpuRunOptions {
-                checkpoint_every: save_partial.then_some(10),
-                fail_after: None,
-            };
-            smooth_mesh_gpu_with(ctx, mesh, &options, method, &params, &opts, &mut |r| progress.update(r))
-        }
+    let opts = solve::Options {
+        method,
+        params,
+        device: choice.device(),
+        checkpoint_every: save_partial.then_some(10),
+        fail_after: None,
     };
+    let result = solve::smooth_mesh(mesh, &options, &opts, &mut |r| progress.update(r));
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
     let info = result?;
     if !quiet {
@@ -219,7 +180,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
         }
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
-    println!("{}", summary(&info, f0, &backend));
+    println!("{}", summary(&info, f0));
     Ok(info)
 }
 
@@ -236,7 +197,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         Err(e) => {
             if a.save_partial && mesh.points != start {
                 let partial = partial_path(&a.output);
-                match write_mesh(&partial, &mesh, format) {
+                match io::write_mesh(&partial, &mesh, format) {
                     Ok(()) => eprintln!("saved the last feasible positions to {}", partial.display()),
                     Err(w) => eprintln!("could not save partial positions: {w}"),
                 }
@@ -244,7 +205,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
             return Err(e);
         }
     };
-    write_mesh(&a.output, &mesh, format)?;
+    io::write_mesh(&a.output, &mesh, format)?;
     if let Some(h) = &a.history {
         io::write_atomic(h, |w| Ok(w.write_all(info.history.to_csv().as_bytes())?))?;
     }
@@ -280,7 +241,7 @@ pub fn demo(a: &DemoArgs) -> Result<()> {
     );
     run_solver(&mut mesh, &a.solver, false, false)?;
     if let Some(out) = &a.output {
-        write_mesh(out, &mesh, Format::from_path(out)?)?;
+        io::write_mesh(out, &mesh, Format::from_path(out)?)?;
         println!("wrote {}", out.display());
     }
     Ok(())

@@ -3,9 +3,8 @@
 
 use super::CompareArgs;
 use super::commands::refuse_overwrite;
-use super::device::{self, Backend};
-use meshsmooth::backend::gpu::{GpuRunOptions, solve_gpu_with, solve_newton_gpu};
-use meshsmooth::solve::Method;
+use super::device;
+use meshsmooth::solve::Options;
 use meshsmooth::{Error, Result, io};
 
 fn opt_secs(t: Option<f64>) -> String {
@@ -17,7 +16,7 @@ fn mib(bytes: usize) -> String {
 }
 
 pub fn compare(a: &CompareArgs) -> Result<()> {
-    let methods: Vec<Method> = a.methods.iter().map(|m| m.trim().parse()).collect::<Result<_>>()?;
+    let methods = &a.methods;
     if methods.is_empty() {
         return Err(Error::InvalidArgument("--methods needs at least one method".into()));
     }
@@ -28,25 +27,15 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let mesh = io::read(&a.input)?;
     let reference = a.objective.reference()?;
     let options = a.objective.options(reference.as_ref())?;
-    let mut where_ = format!("cpu (f64), {} threads", rayon::current_num_threads());
-    let (cmp, infos) = if a.device == "gpu" {
-        // every method needs a device version: check them all before running any
-        for &m in &methods {
-            device::gpu_allowed(m)?;
-        }
-        let backend = device::choose("gpu", &a.gpu, methods[0])?;
-        where_ = backend.describe();
-        let Backend::Gpu(ctx) = backend else {
-            unreachable!("--device gpu gives a GPU backend")
-        };
-        let opts = GpuRunOptions::default();
-        meshsmooth::compare::compare_on(&mesh, &options, &methods, &params, &mut |p, x, m| match m {
-            Method::Newton => solve_newton_gpu(&ctx, p, x, &params, &opts, &mut |_| true),
-            _ => solve_gpu_with(&ctx, p, x, &params, &opts, &mut |_| true),
-        })?
-    } else {
-        meshsmooth::compare::compare_with(&mesh, &options, &methods, &params)?
+    // every method needs a version on the device: checked before running any
+    let choice = device::choose(a.device, &a.gpu, methods)?;
+    let where_ = choice.describe();
+    let opts = Options {
+        params: params.clone(),
+        device: choice.device(),
+        ..Default::default()
     };
+    let (cmp, infos) = meshsmooth::compare::compare(&mesh, &options, methods, &opts)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&cmp).expect("comparison serialises"));
     } else {

@@ -1,73 +1,68 @@
 //! Choosing where a solve runs: `--device cpu|gpu|auto`, `--precision`, `--adapter`.
 
-use super::GpuArgs;
+use super::{DeviceArg, GpuArgs};
 use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
-use meshsmooth::solve::Method;
+use meshsmooth::solve::{Device, Method};
 use meshsmooth::{Error, Result};
 
-pub enum Backend {
+/// The backend picked: the CPU, or a GPU context kept alive for the run.
+pub enum Choice {
     Cpu,
     Gpu(Box<GpuContext>),
 }
 
-impl Backend {
+impl Choice {
+    pub fn device(&self) -> Device<'_> {
+        match self {
+            Choice::Cpu => Device::Cpu,
+            Choice::Gpu(ctx) => Device::Gpu(ctx),
+        }
+    }
+
     pub fn describe(&self) -> String {
         match self {
-            Backend::Cpu => format!("cpu (f64, {} threads)", rayon::current_num_threads()),
-            Backend::Gpu(ctx) => {
-                format!(
-                    "gpu {} ({})",
-                    ctx.adapter_name(),
-                    if ctx.is_f64() { "f64" } else { "f32" }
-                )
-            }
+            Choice::Cpu => format!("cpu (f64, {} threads)", rayon::current_num_threads()),
+            Choice::Gpu(ctx) => format!(
+                "gpu {} ({})",
+                ctx.adapter_name(),
+                if ctx.is_f64() { "f64" } else { "f32" }
+            ),
         }
     }
 }
 
-fn precision(p: &str) -> Precision {
-    match p {
-        "f32" => Precision::F32,
-        "f64" => Precision::F64,
-        _ => Precision::Auto,
-    }
-}
-
-fn runs_on_gpu(method: Method) -> bool {
-    matches!(method, Method::Bcd | Method::BcdColored | Method::Newton)
-}
-
-/// Picks the backend. `auto` takes a hardware GPU when there is one and the
-/// method runs there; software adapters (lavapipe, llvmpipe) emulate a GPU on
-/// the CPU and are slower than the CPU backend, so `auto` passes them over
-/// unless `--adapter` names one.
-pub fn choose(device: &str, gpu: &GpuArgs, method: Method) -> Result<Backend> {
-    let (prec, adapter) = (gpu.precision.as_str(), gpu.adapter.as_deref());
+/// Picks the backend for `methods`. `auto` takes a hardware GPU when there is
+/// one and every method runs there; software adapters (lavapipe, llvmpipe)
+/// emulate a GPU on the CPU and are slower than the CPU backend, so `auto`
+/// passes them over unless `--adapter` names one.
+pub fn choose(device: DeviceArg, gpu: &GpuArgs, methods: &[Method]) -> Result<Choice> {
     let opts = GpuOptions {
-        adapter: adapter.map(str::to_string),
-        precision: precision(prec),
+        adapter: gpu.adapter.clone(),
+        precision: gpu.precision,
     };
     match device {
-        "cpu" => {
-            if prec == "f32" {
+        DeviceArg::Cpu => {
+            if gpu.precision == Precision::F32 {
                 return Err(Error::InvalidArgument(
                     "the CPU backend computes in f64; --precision f32 needs --device gpu".into(),
                 ));
             }
-            Ok(Backend::Cpu)
+            Ok(Choice::Cpu)
         }
-        "gpu" => {
-            gpu_allowed(method)?;
-            Ok(Backend::Gpu(Box::new(GpuContext::new(&opts)?)))
+        DeviceArg::Gpu => {
+            for &m in methods {
+                gpu_allowed(m)?;
+            }
+            Ok(Choice::Gpu(Box::new(GpuContext::new(&opts)?)))
         }
-        _ => {
-            if !runs_on_gpu(method) {
-                return Ok(Backend::Cpu);
+        DeviceArg::Auto => {
+            if methods.iter().any(|&m| gpu_allowed(m).is_err()) {
+                return Ok(Choice::Cpu);
             }
             let adapters = gpu::list_adapters();
             let hardware = adapters.iter().any(|a| a.compute && a.device_type != "Cpu");
-            if hardware || adapter.is_some() {
-                return Ok(Backend::Gpu(Box::new(GpuContext::new(&opts)?)));
+            if hardware || gpu.adapter.is_some() {
+                return Ok(Choice::Gpu(Box::new(GpuContext::new(&opts)?)));
             }
             let found: Vec<String> = adapters
                 .iter()
@@ -81,14 +76,14 @@ pub fn choose(device: &str, gpu: &GpuArgs, method: Method) -> Result<Backend> {
                     format!(" (adapters: {})", found.join(", "))
                 }
             );
-            Ok(Backend::Cpu)
+            Ok(Choice::Cpu)
         }
     }
 }
 
 /// Why `method` cannot run on the GPU, if it cannot.
-pub fn gpu_allowed(method: Method) -> Result<()> {
-    if !runs_on_gpu(method) {
+fn gpu_allowed(method: Method) -> Result<()> {
+    if method == Method::Laplace {
         return Err(Error::InvalidArgument(format!(
             "{method} runs on the CPU only (the GPU runs bcd, colour by colour, and newton); use --device cpu"
         )));

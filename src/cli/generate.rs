@@ -1,8 +1,9 @@
 //! `meshsmooth generate`: the test meshes of the papers, written to a file.
 
-use super::commands::{output_format, write_mesh};
+use super::commands::output_format;
 use super::{GenerateCommand, OutputArgs, PerturbArgs};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::io::write_mesh;
 use meshsmooth::{ElementKind, Error, Mesh, Result};
 
 pub(super) fn perturb(mesh: &mut Mesh, a: &PerturbArgs) -> Result<()> {

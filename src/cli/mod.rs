@@ -7,7 +7,13 @@ mod device;
 mod generate;
 mod progress;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use meshsmooth::backend::gpu::Precision;
+use meshsmooth::metric::corner_model::Template;
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::solve::newton::NewtonParams;
+use meshsmooth::solve::pcg::NegativeCurvature;
+use meshsmooth::solve::{Method, Params};
 use std::ffi::OsString;
 use std::path::PathBuf;
 
@@ -70,13 +76,15 @@ pub struct SmoothArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct SolverArgs {
-    /// bcd: block coordinate descent (per-vertex Newton); bcd-colored: the same, colour by colour in parallel; newton: inexact Newton with block-Jacobi PCG; laplace: smart Laplacian smoothing.
-    #[arg(long, default_value = "bcd", value_parser = ["bcd", "bcd-colored", "newton", "laplace"])]
-    pub method: String,
+    /// newton: inexact Newton with block-Jacobi PCG (reaches the optimum first on every
+    /// mesh measured); bcd: block coordinate descent (per-vertex Newton); bcd-colored: the
+    /// same, colour by colour in parallel; laplace: smart Laplacian smoothing (CPU only).
+    #[arg(long, value_enum, default_value_t = Method::default())]
+    pub method: Method,
     /// cpu: f64 on all cores; gpu: wgpu (bcd runs colour by colour); auto: a hardware GPU if
     /// there is one, else the CPU.
-    #[arg(long, default_value = "auto", value_parser = ["cpu", "gpu", "auto"])]
-    pub device: String,
+    #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
+    pub device: DeviceArg,
     #[command(flatten)]
     pub gpu: GpuArgs,
     #[command(flatten)]
@@ -85,16 +93,24 @@ pub struct SolverArgs {
     pub objective: ObjectiveArgs,
     /// Newton: what CG returns on negative curvature: the CG iterate so far (truncated
     /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
-    #[arg(long, default_value = "iterate", value_parser = ["direction", "iterate"])]
-    pub negative_curvature: String,
+    #[arg(long, value_enum, default_value_t = NewtonParams::default().negative_curvature)]
+    pub negative_curvature: NegativeCurvature,
+}
+
+/// Where a solve runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DeviceArg {
+    Cpu,
+    Gpu,
+    Auto,
 }
 
 /// Which GPU and what arithmetic.
 #[derive(Args, Debug, Clone)]
 pub struct GpuArgs {
     /// GPU arithmetic: f64 needs the adapter's SHADER_F64; auto takes f64 where available.
-    #[arg(long, default_value = "auto", value_parser = ["f32", "f64", "auto"])]
-    pub precision: String,
+    #[arg(long, value_enum, default_value_t = Precision::default())]
+    pub precision: Precision,
     /// Use the GPU adapter whose name contains this (also: MESHSMOOTH_ADAPTER).
     #[arg(long)]
     pub adapter: Option<String>,
@@ -104,10 +120,10 @@ pub struct GpuArgs {
 #[derive(Args, Debug, Clone)]
 pub struct StopArgs {
     /// Stop when the 2-norm of the objective's gradient falls below this.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = Params::default().tol)]
     pub tol: f64,
     /// Most sweeps (bcd, laplace) or iterations (newton).
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = Params::default().max_iter)]
     pub max_iter: usize,
     /// Stop after this many seconds, per method (the mesh so far is kept; it is always valid).
     #[arg(long, value_name = "SECONDS")]
@@ -119,12 +135,12 @@ pub struct StopArgs {
 pub struct ObjectiveArgs {
     /// imr: inverse mean ratio |S|^2/(n det S^(2/n)); cn: condition number |S||S^-1|/n;
     /// tmp: target-matrix |S - I|^2 (needs --reference). S = A W^-1 at each element corner.
-    #[arg(long, default_value = "imr", value_parser = ["imr", "cn", "tmp"])]
-    pub metric: String,
+    #[arg(long, value_enum, default_value_t = MetricKind::default())]
+    pub metric: MetricKind,
     /// harmonic: minimise the mean metric (for imr: the harmonic mean of the mean ratios);
     /// average: maximise the mean quality 1/metric (imr, cn).
-    #[arg(long, default_value = "harmonic", value_parser = ["harmonic", "average"])]
-    pub template: String,
+    #[arg(long, value_enum, default_value_t = Template::default())]
+    pub template: Template,
     /// Reference mesh with the same connectivity: its corners are the targets W.
     #[arg(long, value_name = "MESH")]
     pub reference: Option<PathBuf>,
@@ -136,11 +152,11 @@ pub struct CompareArgs {
     #[command(flatten)]
     pub objective: ObjectiveArgs,
     /// Comma-separated methods to run.
-    #[arg(long, default_value = "bcd,newton", value_delimiter = ',')]
-    pub methods: Vec<String>,
+    #[arg(long, value_enum, default_values_t = [Method::Bcd, Method::Newton], value_delimiter = ',')]
+    pub methods: Vec<Method>,
     /// cpu, or gpu (bcd runs as the coloured sweep there; newton too).
-    #[arg(long, default_value = "cpu", value_parser = ["cpu", "gpu"])]
-    pub device: String,
+    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
+    pub device: DeviceArg,
     #[command(flatten)]
     pub gpu: GpuArgs,
     #[command(flatten)]

@@ -18,10 +18,12 @@ mod atomic;
 mod gmsh;
 mod lex;
 mod medit;
+mod smoothed;
 mod vtk;
 mod vtu;
 
 pub use atomic::{same_file, write_atomic};
+pub use smoothed::{eta_field, write_mesh};
 
 use std::fmt;
 use std::path::Path;

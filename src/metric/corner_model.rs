@@ -12,7 +12,7 @@ use super::mean_ratio::TetShape;
 use super::smetric::{self, Hess9, MetricKind};
 
 /// How corner values are combined into the objective.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Template {
     /// F = mean over elements of the mean corner metric (for the inverse mean
     /// ratio: the harmonic mean of the mean ratios, equation 2 of the Newton paper).
@@ -26,13 +26,7 @@ pub enum Template {
 impl std::str::FromStr for Template {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {
-        match s {
-            "harmonic" => Ok(Template::Harmonic),
-            "average" => Ok(Template::Average),
-            _ => Err(crate::Error::InvalidArgument(format!(
-                "unknown template '{s}' (expected harmonic or average)"
-            ))),
-        }
+        <Self as clap::ValueEnum>::from_str(s, true).map_err(crate::Error::InvalidArgument)
     }
 }
 

@@ -8,14 +8,17 @@
 use super::mat3::{Mat3, cofactor, det};
 
 /// The element metrics meshsmooth optimises (all: lower is better).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, clap::ValueEnum)]
 pub enum MetricKind {
     /// Inverse mean ratio |S|^2 / (n det(S)^(2/n)) >= 1, 1 only for S a scaled rotation.
     #[default]
+    #[value(name = "imr")]
     InverseMeanRatio,
     /// Frobenius condition number |S| |S^-1| / n >= 1 (equal to the inverse mean ratio in 2D).
+    #[value(name = "cn")]
     ConditionNumber,
     /// Target-matrix shape+size |S - I|^2 >= 0, 0 only when the corner equals its target.
+    #[value(name = "tmp")]
     TargetShapeSize,
 }
 
@@ -32,14 +35,7 @@ impl MetricKind {
 impl std::str::FromStr for MetricKind {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {
-        match s {
-            "imr" => Ok(MetricKind::InverseMeanRatio),
-            "cn" => Ok(MetricKind::ConditionNumber),
-            "tmp" => Ok(MetricKind::TargetShapeSize),
-            _ => Err(crate::Error::InvalidArgument(format!(
-                "unknown metric '{s}' (expected imr, cn or tmp)"
-            ))),
-        }
+        <Self as clap::ValueEnum>::from_str(s, true).map_err(crate::Error::InvalidArgument)
     }
 }
 

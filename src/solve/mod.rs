@@ -1,76 +1,98 @@
 //! Solvers: they own the iteration loop, line searches, termination and
-//! history; metrics and objective evaluation come from `metric` and `objective`.
+//! history, and reach the numerics only through `backend::Backend`. Each
+//! method is written once (`bcd`, `newton` with `pcg`); `solve` picks the
+//! backend from a `Device` and runs the one loop (`iterate`) over it.
 
 pub mod bcd;
-pub mod bsr;
 pub mod history;
 pub mod laplace;
+pub mod line_search;
 pub mod newton;
 pub mod pcg;
 
 pub use history::{History, Record, StopReason};
 
 use crate::Mesh;
+use crate::backend::Backend;
+use crate::backend::cpu::CpuBackend;
+use crate::backend::gpu::{GpuBackend, GpuContext};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
-use crate::objective;
 use crate::problem::{Problem, ProblemOptions};
-use std::fmt;
-use std::str::FromStr;
+use line_search::LineSearch;
+use newton::{Newton, NewtonParams};
 use std::time::{Duration, Instant};
 
 /// Which optimiser moves the vertices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Method {
-    /// Block coordinate descent: per-vertex Newton with Armijo backtracking.
-    #[default]
+    /// Block coordinate descent: per-vertex Newton with Armijo backtracking,
+    /// one vertex at a time in locality order (on a GPU: colour by colour).
     Bcd,
     /// Block coordinate descent colour by colour, the vertices of a colour in parallel.
     BcdColored,
     /// Inexact Newton: block-Jacobi PCG on the global Hessian, Armijo on F.
+    #[default]
     Newton,
-    /// Smart Laplacian smoothing (a baseline, not an optimiser).
+    /// Smart Laplacian smoothing (a baseline, not an optimiser; CPU only).
     Laplace,
 }
 
-impl FromStr for Method {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "bcd" => Ok(Method::Bcd),
-            "bcd-colored" => Ok(Method::BcdColored),
-            "newton" => Ok(Method::Newton),
-            "laplace" => Ok(Method::Laplace),
-            _ => Err(Error::InvalidArgument(format!(
-                "unknown method '{s}' (expected bcd, bcd-colored, newton or laplace)"
-            ))),
-        }
-    }
-}
-
-impl fmt::Display for Method {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
             Method::Bcd => "bcd",
             Method::BcdColored => "bcd-colored",
             Method::Newton => "newton",
             Method::Laplace => "laplace",
-        })
+        }
     }
 }
 
-/// Termination and line-search settings shared by the solvers.
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        <Method as clap::ValueEnum>::from_str(s, true).map_err(Error::InvalidArgument)
+    }
+}
+
+/// Block coordinate descent's settings.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BcdParams {
+    /// The per-vertex Armijo line search.
+    pub line_search: LineSearch,
+}
+
+/// Smart Laplace's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LaplaceParams {
+    /// Stop when no vertex moves farther than this fraction of the mean edge length.
+    pub min_move: f64,
+}
+
+impl Default for LaplaceParams {
+    fn default() -> Self {
+        LaplaceParams { min_move: 1e-9 }
+    }
+}
+
+/// Termination (shared by every method) and each method's own settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
     /// Stop when the 2-norm of the free-vertex gradient of F is below this.
     pub tol: f64,
-    /// Most sweeps (BCD, Laplace) or iterations.
+    /// Most sweeps (BCD, Laplace) or iterations (Newton).
     pub max_iter: usize,
     pub time_limit: Option<Duration>,
-    pub line_search: bcd::LineSearch,
-    /// Laplace stops when no vertex moves farther than this fraction of the mean edge length.
-    pub min_move: f64,
-    pub newton: newton::NewtonParams,
+    pub bcd: BcdParams,
+    pub newton: NewtonParams,
+    pub laplace: LaplaceParams,
 }
 
 impl Default for Params {
@@ -79,29 +101,60 @@ impl Default for Params {
             tol: 1e-6,
             max_iter: 1000,
             time_limit: None,
-            line_search: bcd::LineSearch::default(),
-            min_move: 1e-9,
-            newton: newton::NewtonParams::default(),
+            bcd: BcdParams::default(),
+            newton: NewtonParams::default(),
+            laplace: LaplaceParams::default(),
         }
     }
+}
+
+/// Where a solve runs.
+#[derive(Clone, Copy, Default)]
+pub enum Device<'a> {
+    /// The f64 reference backend.
+    #[default]
+    Cpu,
+    /// A wgpu device (`GpuContext::new` picks the adapter and precision).
+    Gpu(&'a GpuContext),
+}
+
+/// How a run is carried out: method, settings, device, and the guard against
+/// losing work on a device that fails midway.
+#[derive(Clone, Default)]
+pub struct Options<'a> {
+    pub method: Method,
+    pub params: Params,
+    pub device: Device<'a>,
+    /// Download the positions every this many iterations, so that a failure
+    /// mid-run (device lost, out of memory) leaves the last feasible
+    /// positions in `x`. `None`: positions come back only at the end.
+    pub checkpoint_every: Option<usize>,
+    /// Testing aid: fail as a lost device would, after this many iterations.
+    #[doc(hidden)]
+    pub fail_after: Option<usize>,
 }
 
 /// What a solve did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Info {
     pub method: Method,
+    /// "cpu", or the adapter and precision.
+    pub device: String,
     pub iterations: usize,
     pub stop: StopReason,
     pub history: History,
     pub objective: f64,
     pub grad_norm: f64,
-    /// Wall time of the iterations (problem setup excluded).
+    /// Wall time of the iterations (problem and solver setup excluded).
     pub seconds: f64,
+    /// Problem setup plus the solver's own (Newton's Hessian pattern).
     pub setup_seconds: f64,
-    /// Bytes the solver held: the problem, the positions and the method's own data.
+    /// Bytes the backend held: the problem, the positions and the method's data.
     pub memory_bytes: usize,
     /// Colour classes of the free vertices (the dispatches of a coloured sweep).
     pub colors: usize,
+    /// CG iterations over all Newton steps (Newton only).
+    pub cg_iterations: Option<usize>,
 }
 
 /// What every backend checks before its first step: usable settings and a
@@ -116,56 +169,108 @@ pub(crate) fn check_start(p: &Problem, x: &[Vec3], params: &Params) -> Result<()
     p.check_feasible(x)
 }
 
-/// Runs `method` from positions `x` (problem numbering), updating them in place.
-/// `progress` sees every history record and may return `false` to stop.
-pub fn solve(
+/// Runs `opts.method` on `opts.device` from positions `x` (problem
+/// numbering), updating them in place; on a failure after the start, `x`
+/// holds the last checkpoint. `progress` sees every history record and may
+/// return `false` to stop.
+pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnMut(&Record) -> bool) -> Result<Info> {
+    check_start(p, x, &opts.params)?;
+    let ls = match opts.method {
+        Method::Newton => opts.params.newton.line_search,
+        _ => opts.params.bcd.line_search,
+    };
+    match opts.device {
+        Device::Cpu => run(&mut CpuBackend::new(p, x, &ls)?, p, x, opts, progress),
+        Device::Gpu(ctx) => {
+            if opts.method == Method::Laplace {
+                return Err(Error::InvalidArgument(
+                    "method 'laplace' has no GPU version (use bcd, bcd-colored or newton)".into(),
+                ));
+            }
+            run(&mut GpuBackend::new(ctx, p, x, &ls)?, p, x, opts, progress)
+        }
+    }
+}
+
+/// The method's state between iterations.
+enum Solver {
+    Bcd(bcd::Bcd),
+    Newton(Box<Newton>),
+    Laplace(laplace::Laplace),
+}
+
+/// `solve` on a backend already holding the problem and the start.
+pub fn run<B: Backend + ?Sized>(
+    be: &mut B,
     p: &Problem,
     x: &mut [Vec3],
-    method: Method,
-    params: &Params,
+    opts: &Options,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    check_start(p, x, params)?;
-    let mut newton = (method == Method::Newton).then(|| newton::Newton::new(p, params.newton));
-    let setup_seconds = p.setup_time.as_secs_f64() + newton.as_ref().map_or(0.0, |n| n.setup_time.as_secs_f64());
+    let params = &opts.params;
+    let method = opts.method;
+    let mut solver = match method {
+        Method::Bcd | Method::BcdColored => Solver::Bcd(bcd::Bcd::new(be, method == Method::Bcd)?),
+        Method::Newton => Solver::Newton(Box::new(Newton::new(be, params.newton)?)),
+        Method::Laplace => Solver::Laplace(laplace::Laplace::new(be)?),
+    };
+    let solver_setup = match &solver {
+        Solver::Newton(n) => n.setup_time,
+        _ => Duration::ZERO,
+    };
     let start = Instant::now();
     let deadline = params.time_limit.map(|t| start + t);
     let edge = p.mean_edge_length(x);
-    let evaluate = |x: &[Vec3]| -> Result<(f64, f64)> {
-        let (f, g) = objective::gradient(p, x).ok_or_else(accepted_step_inverted)?;
-        Ok((f, objective::norm(&g)))
+    let first = match &mut solver {
+        Solver::Bcd(b) => b.start(be)?,
+        Solver::Newton(n) => n.start(be)?,
+        Solver::Laplace(l) => l.start(be)?,
+    }
+    .ok_or_else(|| {
+        Error::Gpu(format!(
+            "the device ({}) finds inverted elements the CPU does not (f32 rounding of a nearly flat element?)",
+            be.describe()
+        ))
+    })?;
+    let setup = Setup {
+        seconds: p.setup_time.as_secs_f64() + solver_setup.as_secs_f64(),
+        memory_bytes: be.bytes(),
+        colors: p.colors.len(),
+        device: be.describe(),
     };
-    let first = evaluate(x)?;
-    let mut info = {
-        let mut step = || -> Result<Sweep> {
-            let max_move_sq = match method {
-                Method::Bcd => bcd::sweep(p, x, &params.line_search, deadline),
-                Method::BcdColored => bcd::sweep_colored(p, x, &params.line_search, deadline),
-                Method::Laplace => laplace::sweep(p, x, deadline),
-                Method::Newton => {
-                    // Newton evaluates F and |grad F| at its new point itself
-                    let n = newton.as_mut().expect("built above");
-                    let (objective, grad_norm, max_move_sq) =
-                        n.step(p, x, &params.line_search).ok_or_else(accepted_step_inverted)?;
-                    return Ok(Sweep {
-                        objective,
-                        grad_norm,
-                        max_move_sq,
-                    });
-                }
+    let mut steps = 0;
+    let mut checkpoint: Option<Vec<Vec3>> = None;
+    let result = {
+        let mut step = |be: &mut B| -> Result<Sweep> {
+            if opts.fail_after.is_some_and(|n| steps >= n) {
+                return Err(Error::Gpu("device lost (simulated for testing)".into()));
+            }
+            let sweep = match &mut solver {
+                Solver::Bcd(b) => b.step(be, deadline)?,
+                Solver::Newton(n) => n.step(be)?,
+                Solver::Laplace(l) => l.step(be, deadline)?,
             };
-            let (objective, grad_norm) = evaluate(x)?;
-            Ok(Sweep {
-                objective,
-                grad_norm,
-                max_move_sq,
-            })
+            steps += 1;
+            if opts.checkpoint_every.is_some_and(|k| steps % k.max(1) == 0) {
+                checkpoint = Some(be.download()?);
+            }
+            Ok(sweep)
         };
-        iterate(method, params, start, edge, setup_seconds, first, &mut step, progress)?
+        let begin = Start { at: start, edge, first };
+        iterate(method, params, begin, setup, &mut || step(be), progress)
     };
-    info.memory_bytes = p.bytes() + std::mem::size_of_val(x) + newton.as_ref().map_or(0, |n| n.bytes());
-    info.colors = p.colors.len();
-    Ok(info)
+    match result {
+        Ok(info) => {
+            x.copy_from_slice(&be.download()?);
+            Ok(info)
+        }
+        Err(e) => {
+            if let Some(c) = checkpoint {
+                x.copy_from_slice(&c);
+            }
+            Err(e)
+        }
+    }
 }
 
 pub(crate) fn accepted_step_inverted() -> Error {
@@ -198,29 +303,46 @@ fn no_progress(h: &History, window: usize) -> bool {
 }
 
 /// What one sweep of any backend reports to the shared loop.
-pub(crate) struct Sweep {
+pub struct Sweep {
     pub objective: f64,
     pub grad_norm: f64,
     /// Largest squared vertex displacement of the sweep.
     pub max_move_sq: f64,
+    /// CG iterations of the step (Newton).
+    pub cg_iterations: usize,
 }
 
-/// The iteration loop shared by every backend: history, progress and the
-/// stop rules. `first` is (F, |grad F|) at the start; `step` runs one sweep.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn iterate(
+/// What the loop reports besides the iterations, known before they start.
+struct Setup {
+    seconds: f64,
+    memory_bytes: usize,
+    colors: usize,
+    device: String,
+}
+
+/// The state at the start of the loop.
+struct Start {
+    at: Instant,
+    /// Mean edge length: the scale of `LaplaceParams::min_move`.
+    edge: f64,
+    /// (F, |grad F|) at the start.
+    first: (f64, f64),
+}
+
+/// The iteration loop shared by every method and backend: history, progress
+/// and the stop rules; `step` runs one sweep or iteration.
+fn iterate(
     method: Method,
     params: &Params,
-    start: Instant,
-    edge: f64,
-    setup_seconds: f64,
-    first: (f64, f64),
+    begin: Start,
+    setup: Setup,
     step: &mut dyn FnMut() -> Result<Sweep>,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
+    let start = begin.at;
     let deadline = params.time_limit.map(|t| start + t);
     let mut history = History::default();
-    let (mut f, mut gnorm) = first;
+    let (mut f, mut gnorm) = begin.first;
     let mut record = Record {
         iteration: 0,
         seconds: 0.0,
@@ -234,6 +356,7 @@ pub(crate) fn iterate(
         Some(StopReason::Cancelled)
     };
     let mut iterations = 0;
+    let mut cg_iterations = 0;
     while stop.is_none() {
         if gnorm < params.tol {
             stop = Some(StopReason::Converged);
@@ -249,6 +372,7 @@ pub(crate) fn iterate(
         }
         let sweep = step()?;
         iterations += 1;
+        cg_iterations += sweep.cg_iterations;
         (f, gnorm) = (sweep.objective, sweep.grad_norm);
         record = Record {
             iteration: iterations,
@@ -260,48 +384,41 @@ pub(crate) fn iterate(
         if !progress(&record) {
             stop = Some(StopReason::Cancelled);
         } else if gnorm >= params.tol
-            && (no_move(method, sweep.max_move_sq, params.min_move * edge) || no_progress(&history, STALL_WINDOW))
+            && (no_move(method, sweep.max_move_sq, params.laplace.min_move * begin.edge)
+                || no_progress(&history, STALL_WINDOW))
         {
             stop = Some(StopReason::Stalled);
         }
     }
     Ok(Info {
         method,
+        device: setup.device,
         iterations,
         stop: stop.unwrap_or(StopReason::Converged),
         history,
         objective: f,
         grad_norm: gnorm,
         seconds: start.elapsed().as_secs_f64(),
-        setup_seconds,
-        memory_bytes: 0,
-        colors: 0,
+        setup_seconds: setup.seconds,
+        memory_bytes: setup.memory_bytes,
+        colors: setup.colors,
+        cg_iterations: (method == Method::Newton).then_some(cg_iterations),
     })
 }
 
 /// Smooths `mesh` in place (the library's one-call entry point): builds the
-/// problem, checks the start is feasible, runs `method` and writes the
-/// optimised positions back in the mesh's own vertex numbering.
+/// problem with `problem` (metric, template, reference), checks the start is
+/// feasible, runs `opts` and writes the optimised positions back in the
+/// mesh's own vertex numbering (on a failure midway, the last checkpoint).
 pub fn smooth_mesh(
     mesh: &mut Mesh,
-    method: Method,
-    params: &Params,
+    problem: &ProblemOptions,
+    opts: &Options,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    smooth_mesh_with(mesh, &ProblemOptions::default(), method, params, progress)
-}
-
-/// `smooth_mesh` with a metric, template or reference mesh of choice.
-pub fn smooth_mesh_with(
-    mesh: &mut Mesh,
-    options: &ProblemOptions,
-    method: Method,
-    params: &Params,
-    progress: &mut dyn FnMut(&Record) -> bool,
-) -> Result<Info> {
-    let p = Problem::with_options(mesh, options)?;
+    let p = Problem::with_options(mesh, problem)?;
     let mut x = p.gather(&mesh.points);
-    let info = solve(&p, &mut x, method, params, progress)?;
+    let result = solve(&p, &mut x, opts, progress);
     mesh.points = p.scatter(&x);
-    Ok(info)
+    result
 }

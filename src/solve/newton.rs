@@ -1,18 +1,17 @@
 //! Inexact Newton (section 3.2 of the Newton paper): the global Hessian over
 //! the free vertices, PCG with a block-Jacobi preconditioner for the
 //! direction (a direction of negative curvature when CG meets one), and an
-//! Armijo line search on the global objective with infeasible points rejected.
+//! Armijo line search on the global objective with infeasible points
+//! rejected. Written once over `Backend`.
 
-use super::bcd::LineSearch;
-use super::bsr::HessianPattern;
-use super::pcg::{BlockJacobi, NegativeCurvature, PcgInfo, PcgParams, pcg};
-use crate::metric::mat3::Vec3;
-use crate::objective;
-use crate::problem::Problem;
-use rayon::prelude::*;
+use super::line_search::LineSearch;
+use super::pcg::{FIRST_FREE_SLOT, NegativeCurvature, PcgInfo, PcgParams, PcgWork, pcg};
+use super::{Sweep, accepted_step_inverted};
+use crate::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
+use crate::error::Result;
 use std::time::{Duration, Instant};
 
-/// Newton's own settings (termination is in `Params`).
+/// Newton's own settings (termination is in `solve::Params`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NewtonParams {
     /// Most CG iterations per Newton step.
@@ -23,6 +22,8 @@ pub struct NewtonParams {
     /// On negative curvature: the CG iterate (default: on the test meshes it
     /// takes fewer Newton iterations) or the direction itself, as in the paper.
     pub negative_curvature: NegativeCurvature,
+    /// The global Armijo line search.
+    pub line_search: LineSearch,
 }
 
 impl Default for NewtonParams {
@@ -31,138 +32,154 @@ impl Default for NewtonParams {
             cg_max_iter: 100,
             forcing_max: 0.5,
             negative_curvature: NegativeCurvature::Iterate,
+            line_search: LineSearch::default(),
         }
     }
 }
 
-/// Buffers and pattern held across Newton iterations.
+// Newton's scalar slots, after PCG's
+const F: Slot = Slot(FIRST_FREE_SLOT);
+const INFEASIBLE: Slot = Slot(FIRST_FREE_SLOT + 1);
+const GG: Slot = Slot(FIRST_FREE_SLOT + 2);
+const SLOPE: Slot = Slot(FIRST_FREE_SLOT + 3);
+const DD: Slot = Slot(FIRST_FREE_SLOT + 4);
+const DMAX: Slot = Slot(FIRST_FREE_SLOT + 5);
+
+const EVAL: EvalSlots = EvalSlots {
+    value: F,
+    infeasible: INFEASIBLE,
+    min_det: None,
+};
+
+/// Newton's vectors on the backend and what it carries between iterations.
 pub struct Newton {
-    pub pattern: HessianPattern,
     pub params: NewtonParams,
-    grad: Vec<Vec3>,
-    rhs: Vec<Vec3>,
-    dir: Vec<Vec3>,
-    trial: Vec<Vec3>,
+    g: Vector,
+    rhs: Vector,
+    d: Vector,
+    work: PcgWork,
     g0: Option<f64>,
-    /// F at the current point when `grad` and the matrix are assembled there.
-    current: Option<f64>,
+    /// (F, |grad F|) at the current point, where gradient and Hessian are assembled.
+    current: (f64, f64),
     /// What the last PCG solve did.
     pub last_pcg: Option<PcgInfo>,
     pub cg_iterations: usize,
-    /// Time to build the sparsity pattern (reported apart from the iterations).
+    /// Time to build the Hessian pattern and the vectors (reported apart from the iterations).
     pub setup_time: Duration,
+    /// Bytes of the pattern, the matrix and the preconditioner.
+    pub hessian_bytes: usize,
 }
 
 impl Newton {
-    pub fn new(p: &Problem, params: NewtonParams) -> Newton {
+    /// Builds the Hessian pattern and Newton's vectors on `be`, then
+    /// assembles at the current positions. Fails if they are infeasible.
+    pub fn new<B: Backend + ?Sized>(be: &mut B, params: NewtonParams) -> Result<Newton> {
         let start = Instant::now();
-        let pattern = HessianPattern::new(p);
-        let m = pattern.free_vertex.len();
-        Newton {
-            pattern,
+        let hessian_bytes = be.prepare_hessian()?;
+        let (g, rhs, d) = (be.vector()?, be.vector()?, be.vector()?);
+        let work = PcgWork::new(be)?;
+        let setup_time = start.elapsed();
+        Ok(Newton {
             params,
-            grad: vec![[0.0; 3]; m],
-            rhs: vec![[0.0; 3]; m],
-            dir: vec![[0.0; 3]; m],
-            trial: Vec::new(),
+            g,
+            rhs,
+            d,
+            work,
             g0: None,
-            current: None,
+            current: (f64::NAN, f64::NAN),
             last_pcg: None,
             cg_iterations: 0,
-            setup_time: start.elapsed(),
+            setup_time,
+            hessian_bytes,
+        })
+    }
+
+    /// Assembles at the current positions: (F, |grad F|), or `None` when
+    /// they are infeasible on this backend.
+    pub fn start<B: Backend + ?Sized>(&mut self, be: &mut B) -> Result<Option<(f64, f64)>> {
+        be.evaluate(Points::Current, EVAL, None)?;
+        let s = be.flush()?;
+        if s[INFEASIBLE.0 as usize] != 0.0 {
+            return Ok(None);
         }
+        be.assemble(self.g)?;
+        be.norm_sq(self.g, GG)?;
+        let s = be.flush()?;
+        self.current = (s[F.0 as usize], s[GG.0 as usize].sqrt());
+        Ok(Some(self.current))
     }
 
-    /// Bytes held by the solver (pattern, matrix, preconditioner, vectors).
-    pub fn bytes(&self) -> usize {
-        let m = self.grad.len();
-        self.pattern.matrix.bytes()
-            + 4 * (self.pattern.free_index.len() + self.pattern.free_vertex.len())
-            + 64 * self.pattern.slots.len()
-            + 4 * self.pattern.ranges.iter().map(|r| r.elements.len() + 2).sum::<usize>()
-            + 48 * m // preconditioner factors
-            + 24 * (3 * m + 4 * m) // grad, rhs, dir; PCG's r, z, p, q
-            + 24 * self.pattern.free_index.len() // trial positions
+    /// The gradient and last direction vectors, for tests.
+    pub fn vectors(&self) -> (Vector, Vector) {
+        (self.g, self.d)
     }
 
-    /// Assembles gradient and Hessian at `x` unless the last step already did.
-    fn ensure_assembled(&mut self, p: &Problem, x: &[Vec3]) -> Option<f64> {
-        if self.current.is_none() {
-            if !self.pattern.assemble(p, x, &mut self.grad) {
-                return None;
-            }
-            self.current = Some(objective::value(p, x)?);
-        }
-        self.current
-    }
-
-    /// One Newton iteration. Returns F and |grad F| at the new point (the
-    /// assembly for the next iteration is done here, so nothing is evaluated
-    /// twice) and the largest squared vertex displacement, 0 when the line
-    /// search found no acceptable step.
-    pub fn step(&mut self, p: &Problem, x: &mut [Vec3], ls: &LineSearch) -> Option<(f64, f64, f64)> {
-        let f = self.ensure_assembled(p, x)?;
-        let gnorm = objective::norm(&self.grad);
+    /// One Newton iteration from an assembled point (`start` first): F and
+    /// |grad F| at the new point (assembled there for the next iteration)
+    /// and the largest squared vertex move, 0 when the line search found no
+    /// acceptable step.
+    pub fn step<B: Backend + ?Sized>(&mut self, be: &mut B) -> Result<Sweep> {
+        let (f, gnorm) = self.current;
+        let stay = Sweep {
+            objective: f,
+            grad_norm: gnorm,
+            max_move_sq: 0.0,
+            cg_iterations: 0,
+        };
         let g0 = *self.g0.get_or_insert(gnorm);
         let rtol = self.params.forcing_max.min((gnorm / g0).sqrt());
-        let m = &self.pattern.matrix;
-        let precond = BlockJacobi::new(m.diag.par_iter().map(|&s| m.blocks[s as usize]));
-        self.rhs
-            .par_iter_mut()
-            .zip(&self.grad)
-            .for_each(|(r, g)| *r = g.map(|c| -c));
+        be.factor_precond()?;
+        be.axpby(Coef::value(-1.0), self.g, Coef::value(0.0), self.rhs, None)?;
         let pcg_params = PcgParams {
             max_iter: self.params.cg_max_iter,
             rtol,
             negative_curvature: self.params.negative_curvature,
         };
-        let info = pcg(m, &precond, &self.rhs, &mut self.dir, &pcg_params);
+        let info = pcg(be, &self.work, self.rhs, self.d, &pcg_params)?;
         self.cg_iterations += info.iterations;
         self.last_pcg = Some(info);
-        let slope_of = |g: &[Vec3], d: &[Vec3]| -> f64 {
-            g.iter()
-                .zip(d)
-                .map(|(g, d)| g[0] * d[0] + g[1] * d[1] + g[2] * d[2])
-                .sum()
+        let stay = Sweep {
+            cg_iterations: info.iterations,
+            ..stay
         };
-        let mut slope = slope_of(&self.grad, &self.dir);
+        be.dot(self.g, self.d, SLOPE, None)?;
+        let mut slope = be.flush()?[SLOPE.0 as usize];
         if !(slope < 0.0) {
             // not downhill (rounding at a near-stationary point): preconditioned steepest descent
-            use super::pcg::Precond;
-            precond.apply(&self.rhs, &mut self.dir);
-            slope = slope_of(&self.grad, &self.dir);
+            be.precond(self.rhs, self.d)?;
+            be.dot(self.g, self.d, SLOPE, None)?;
+            slope = be.flush()?[SLOPE.0 as usize];
             if !(slope < 0.0) {
-                return Some((f, gnorm, 0.0));
+                return Ok(stay);
             }
         }
+        let ls = &self.params.line_search;
         let mut alpha = 1.0;
         for _ in 0..=ls.max_backtracks {
-            self.trial.clear();
-            self.trial.extend_from_slice(x);
-            for (d, &v) in self.dir.iter().zip(&self.pattern.free_vertex) {
-                let t = &mut self.trial[v as usize];
-                for c in 0..3 {
-                    t[c] += alpha * d[c];
-                }
-            }
-            if let Some(ft) = objective::value(p, &self.trial)
-                && ft <= f + ls.sigma * alpha * slope
-            {
-                x.copy_from_slice(&self.trial);
-                let dmax = self
-                    .dir
-                    .iter()
-                    .map(|d| d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-                    .fold(0.0, f64::max);
+            be.trial(Coef::value(alpha), self.d)?;
+            be.evaluate(Points::Trial, EVAL, None)?;
+            let s = be.flush()?;
+            let ft = s[F.0 as usize];
+            if s[INFEASIBLE.0 as usize] == 0.0 && ft <= f + ls.sigma * alpha * slope {
+                be.accept_trial()?;
                 // the next iteration's gradient and Hessian, and this one's |grad F|
-                if !self.pattern.assemble(p, x, &mut self.grad) {
-                    return None;
+                be.assemble(self.g)?;
+                be.norm_sq(self.g, GG)?;
+                be.dot(self.d, self.d, DD, Some(DMAX))?;
+                let s = be.flush()?;
+                if !s[GG.0 as usize].is_finite() {
+                    return Err(accepted_step_inverted());
                 }
-                self.current = Some(ft);
-                return Some((ft, objective::norm(&self.grad), alpha * alpha * dmax));
+                self.current = (ft, s[GG.0 as usize].sqrt());
+                return Ok(Sweep {
+                    objective: ft,
+                    grad_norm: self.current.1,
+                    max_move_sq: alpha * alpha * s[DMAX.0 as usize],
+                    cg_iterations: info.iterations,
+                });
             }
             alpha *= ls.beta;
         }
-        Some((f, gnorm, 0.0))
+        Ok(stay)
     }
 }

@@ -1,88 +1,11 @@
-//! Preconditioned conjugate gradients on H d = -g with a block-Jacobi
+//! Preconditioned conjugate gradients on H d = b with the block-Jacobi
 //! preconditioner, stopping on negative curvature (section 3.2 of the Newton
-//! paper). Written over an operator and a preconditioner so that the same
-//! loop runs a CPU or a GPU matrix.
+//! paper). Written once over `Backend`: alpha, beta and the curvature guard
+//! are slot expressions evaluated where the vectors live, so an iteration
+//! needs one flush (one read-back on a GPU).
 
-use crate::metric::mat3::{Mat3, Vec3};
-use rayon::prelude::*;
-
-/// y = A x
-pub trait LinOp {
-    fn apply(&self, x: &[Vec3], y: &mut [Vec3]);
-}
-
-/// y = M^-1 x
-pub trait Precond {
-    fn apply(&self, x: &[Vec3], y: &mut [Vec3]);
-}
-
-impl LinOp for super::bsr::BlockCsr {
-    fn apply(&self, x: &[Vec3], y: &mut [Vec3]) {
-        self.mul(x, y)
-    }
-}
-
-/// LDL^T of each 3x3 diagonal block, D^-1 stored so that applying it is
-/// multiplications only: y = L^-T (D^-1 (L^-1 x)).
-#[derive(Clone, Debug, Default)]
-pub struct BlockJacobi {
-    /// Per block: l10, l20, l21 and 1/d0, 1/d1, 1/d2.
-    factors: Vec<[f64; 6]>,
-}
-
-impl BlockJacobi {
-    /// Factors the diagonal blocks; a block that is not positive definite
-    /// (cannot happen for the mean ratio, but rounding is rounding) is
-    /// replaced by the identity scaled to its diagonal.
-    pub fn new(diag_blocks: impl IndexedParallelIterator<Item = Mat3>) -> BlockJacobi {
-        BlockJacobi {
-            factors: diag_blocks.map(|h| ldlt(&h)).collect(),
-        }
-    }
-
-    pub fn bytes(&self) -> usize {
-        self.factors.len() * std::mem::size_of::<[f64; 6]>()
-    }
-}
-
-fn ldlt(h: &Mat3) -> [f64; 6] {
-    let d0 = h[0][0];
-    let l10 = h[1][0] / d0;
-    let l20 = h[2][0] / d0;
-    let d1 = h[1][1] - l10 * l10 * d0;
-    let l21 = (h[2][1] - l20 * l10 * d0) / d1;
-    let d2 = h[2][2] - l20 * l20 * d0 - l21 * l21 * d1;
-    if d0 > 0.0 && d1 > 0.0 && d2 > 0.0 && l21.is_finite() {
-        [l10, l20, l21, 1.0 / d0, 1.0 / d1, 1.0 / d2]
-    } else {
-        let s = (h[0][0].abs() + h[1][1].abs() + h[2][2].abs()) / 3.0;
-        let inv = if s > 0.0 { 1.0 / s } else { 1.0 };
-        [0.0, 0.0, 0.0, inv, inv, inv]
-    }
-}
-
-impl Precond for BlockJacobi {
-    fn apply(&self, x: &[Vec3], y: &mut [Vec3]) {
-        y.par_iter_mut()
-            .with_min_len(1024)
-            .zip(x)
-            .zip(&self.factors)
-            .for_each(|((yi, xi), f)| {
-                let [l10, l20, l21, i0, i1, i2] = *f;
-                // L^-1
-                let z0 = xi[0];
-                let z1 = xi[1] - l10 * z0;
-                let z2 = xi[2] - l20 * z0 - l21 * z1;
-                // D^-1
-                let (w0, w1, w2) = (z0 * i0, z1 * i1, z2 * i2);
-                // L^-T
-                let y2 = w2;
-                let y1 = w1 - l21 * y2;
-                let y0 = w0 - l10 * y1 - l20 * y2;
-                *yi = [y0, y1, y2];
-            });
-    }
-}
+use crate::backend::{Backend, Coef, Slot, Vector};
+use crate::error::Result;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PcgParams {
@@ -105,13 +28,14 @@ impl Default for PcgParams {
 
 /// The answer on negative curvature met after the first iteration (at the
 /// first, both are the preconditioned right-hand side).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum NegativeCurvature {
     /// The direction p of negative curvature, oriented so that p^T b > 0
     /// (section 3.2 of the Newton paper).
     Direction,
     /// The CG iterate so far, a descent direction from the positive definite
     /// part of the Krylov space (truncated Newton); often allows longer steps.
+    #[default]
     Iterate,
 }
 
@@ -130,93 +54,104 @@ pub struct PcgInfo {
     pub relative_residual: f64,
 }
 
-fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
-    // fixed chunking: deterministic
-    a.par_chunks(4096)
-        .zip(b.par_chunks(4096))
-        .map(|(x, y)| {
-            x.iter()
-                .zip(y)
-                .map(|(u, v)| u[0] * v[0] + u[1] * v[1] + u[2] * v[2])
-                .sum::<f64>()
+// PCG's scalar slots
+const BB: Slot = Slot(0);
+const RZ: Slot = Slot(1);
+const CURVATURE: Slot = Slot(2);
+const RR: Slot = Slot(3);
+const RZ_NEW: Slot = Slot(4);
+const PB: Slot = Slot(5);
+/// Slots below this are PCG's; callers use the others.
+pub const FIRST_FREE_SLOT: u32 = 6;
+
+/// PCG's work vectors, allocated once on the backend.
+#[derive(Clone, Copy, Debug)]
+pub struct PcgWork {
+    r: Vector,
+    z: Vector,
+    p: Vector,
+    q: Vector,
+}
+
+impl PcgWork {
+    pub fn new<B: Backend + ?Sized>(be: &mut B) -> Result<PcgWork> {
+        Ok(PcgWork {
+            r: be.vector()?,
+            z: be.vector()?,
+            p: be.vector()?,
+            q: be.vector()?,
         })
-        .collect::<Vec<f64>>()
-        .iter()
-        .sum()
+    }
 }
 
-fn axpy(alpha: f64, x: &[Vec3], y: &mut [Vec3]) {
-    y.par_iter_mut().with_min_len(4096).zip(x).for_each(|(yi, xi)| {
-        for r in 0..3 {
-            yi[r] += alpha * xi[r];
-        }
-    });
-}
-
-/// Solves A d = b approximately from d = 0. On negative curvature at the
-/// first iteration the result is the preconditioned right-hand side M^-1 b
-/// (for b = -g: preconditioned steepest descent); later, the direction of
-/// negative curvature itself, with its sign chosen so that d^T b > 0.
-pub fn pcg(a: &dyn LinOp, m: &dyn Precond, b: &[Vec3], d: &mut [Vec3], params: &PcgParams) -> PcgInfo {
-    let n = b.len();
-    d.iter_mut().for_each(|v| *v = [0.0; 3]);
-    let mut r = b.to_vec();
-    let mut z = vec![[0.0; 3]; n];
-    let mut q = vec![[0.0; 3]; n];
-    let bnorm = dot(b, b).sqrt();
+/// Solves H d = b approximately from d = 0 with the backend's assembled
+/// Hessian and factored preconditioner. On negative curvature at the first
+/// iteration the result is M^-1 b (for b = -g: preconditioned steepest
+/// descent); later, the iterate or the direction of negative curvature with
+/// its sign chosen so that d^T b > 0, as `params` says.
+pub fn pcg<B: Backend + ?Sized>(be: &mut B, w: &PcgWork, b: Vector, d: Vector, params: &PcgParams) -> Result<PcgInfo> {
+    let (r, z, p, q) = (w.r, w.z, w.p, w.q);
+    let one = Coef::value(1.0);
+    let zero = Coef::value(0.0);
+    be.axpby(zero, b, zero, d, None)?;
+    be.copy(b, r)?;
+    be.norm_sq(b, BB)?;
+    be.precond(r, z)?;
+    be.dot(r, z, RZ, None)?;
+    be.copy(z, p)?;
+    let s = be.flush()?;
+    let bnorm = s[BB.0 as usize].sqrt();
     if bnorm == 0.0 {
-        return PcgInfo {
+        return Ok(PcgInfo {
             iterations: 0,
             stop: PcgStop::Converged,
             relative_residual: 0.0,
-        };
+        });
     }
-    m.apply(&r, &mut z);
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
     let mut rel = 1.0;
     for k in 0..params.max_iter {
-        a.apply(&p, &mut q);
-        let curvature = dot(&p, &q);
+        // every update is skipped once p^T H p <= 0, which leaves d and p as
+        // the negative-curvature exits below need them
+        let positive = Some(CURVATURE);
+        be.hess_mul(p, q)?;
+        be.dot(p, q, CURVATURE, None)?;
+        be.axpby(Coef::ratio(1.0, RZ, CURVATURE), p, one, d, positive)?;
+        be.axpby(Coef::ratio(-1.0, RZ, CURVATURE), q, one, r, positive)?;
+        be.norm_sq(r, RR)?;
+        be.precond(r, z)?;
+        be.dot(r, z, RZ_NEW, None)?;
+        be.axpby(one, z, Coef::ratio(1.0, RZ_NEW, RZ), p, positive)?;
+        be.set_slot(RZ, Coef::slot(RZ_NEW), positive)?;
+        let s = be.flush()?;
+        let curvature = s[CURVATURE.0 as usize];
         if !(curvature > 0.0) {
             if k > 0 && params.negative_curvature == NegativeCurvature::Iterate {
                 // d already holds the iterate
             } else if k > 0 {
-                let sign = if dot(&p, b) >= 0.0 { 1.0 } else { -1.0 };
-                d.par_iter_mut().zip(&p).for_each(|(di, pi)| *di = pi.map(|c| sign * c));
+                be.dot(p, b, PB, None)?;
+                let sign = if be.flush()?[PB.0 as usize] >= 0.0 { 1.0 } else { -1.0 };
+                be.axpby(Coef::value(sign), p, zero, d, None)?;
             } else {
-                d.copy_from_slice(&p);
+                be.copy(p, d)?;
             }
-            return PcgInfo {
+            return Ok(PcgInfo {
                 iterations: k,
                 stop: PcgStop::NegativeCurvature,
                 relative_residual: rel,
-            };
+            });
         }
-        let alpha = rz / curvature;
-        axpy(alpha, &p, d);
-        axpy(-alpha, &q, &mut r);
-        rel = dot(&r, &r).sqrt() / bnorm;
+        rel = s[RR.0 as usize].sqrt() / bnorm;
         if rel <= params.rtol {
-            return PcgInfo {
+            return Ok(PcgInfo {
                 iterations: k + 1,
                 stop: PcgStop::Converged,
                 relative_residual: rel,
-            };
+            });
         }
-        m.apply(&r, &mut z);
-        let rz_new = dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        p.par_iter_mut().with_min_len(4096).zip(&z).for_each(|(pi, zi)| {
-            for c in 0..3 {
-                pi[c] = zi[c] + beta * pi[c];
-            }
-        });
     }
-    PcgInfo {
+    Ok(PcgInfo {
         iterations: params.max_iter,
         stop: PcgStop::MaxIterations,
         relative_residual: rel,
-    }
+    })
 }

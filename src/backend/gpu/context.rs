@@ -1,13 +1,14 @@
 //! Adapter choice, device creation and the long-lived context that owns the
 //! device, queue and compiled pipelines.
 
-use super::shader::{Kernel, Real};
+use super::layout::Op;
+use super::shader::{Access, Real, Variant};
 use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 /// Device arithmetic wanted by the caller.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Precision {
     F32,
     F64,
@@ -103,7 +104,7 @@ pub struct GpuContext {
     pub(crate) real: Real,
     pub(crate) limits: wgpu::Limits,
     info: wgpu::AdapterInfo,
-    pipelines: HashMap<Kernel, wgpu::ComputePipeline>,
+    pipelines: HashMap<Variant, (wgpu::BindGroupLayout, wgpu::ComputePipeline)>,
     /// Errors reported by wgpu outside any call's reach (validation, OOM, loss).
     errors: Arc<Mutex<Vec<String>>>,
 }
@@ -201,20 +202,9 @@ impl GpuContext {
             pipelines: HashMap::new(),
             errors,
         };
-        for k in Kernel::ALL {
-            let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(k.name()),
-                source: wgpu::ShaderSource::Wgsl(k.compose(real).into()),
-            });
-            let pipeline = ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(k.name()),
-                layout: None,
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            ctx.pipelines.insert(k, pipeline);
+        for v in Variant::all() {
+            let built = ctx.build_pipeline(v);
+            ctx.pipelines.insert(v, built);
         }
         ctx.check()?;
         Ok(ctx)
@@ -233,8 +223,114 @@ impl GpuContext {
         self.real == Real::F64
     }
 
-    pub(crate) fn pipeline(&self, k: Kernel) -> &wgpu::ComputePipeline {
-        &self.pipelines[&k]
+    /// The bind-group layout and pipeline of a kernel instance, both from
+    /// the kernel table (`shader::KERNELS`).
+    fn build_pipeline(&self, v: Variant) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
+        let label = v.label();
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = v
+            .kernel
+            .def()
+            .bindings
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupLayoutEntry {
+                binding: i as u32,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: match b.access {
+                        Access::Uniform | Access::Op => wgpu::BufferBindingType::Uniform,
+                        Access::Read => wgpu::BufferBindingType::Storage { read_only: true },
+                        Access::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+                    },
+                    has_dynamic_offset: b.access == Access::Op,
+                    min_binding_size: None,
+                },
+                count: None,
+            })
+            .collect();
+        let layout = self.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(&label),
+            entries: &entries,
+        });
+        let pipeline_layout = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(&label),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&label),
+            source: wgpu::ShaderSource::Wgsl(v.compose(self.real).into()),
+        });
+        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(&label),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        (layout, pipeline)
+    }
+
+    pub(crate) fn pipeline(&self, v: Variant) -> &wgpu::ComputePipeline {
+        &self.pipelines[&v].1
+    }
+
+    /// Bytes between `Op` records in a uniform buffer bound at dynamic offsets.
+    pub(crate) fn op_stride(&self) -> u64 {
+        let align = self.limits.min_uniform_buffer_offset_alignment as u64;
+        (Op::size(self.real) as u64).div_ceil(align) * align
+    }
+
+    /// A bind group for `v` with `buffers` at bindings 0, 1, ... in the
+    /// order of the kernel table; the `Op` binding sees one record.
+    pub(crate) fn bind(&self, v: Variant, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let bindings = v.kernel.def().bindings;
+        assert_eq!(
+            buffers.len(),
+            bindings.len(),
+            "{}: buffers for every binding",
+            v.label()
+        );
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .zip(bindings)
+            .enumerate()
+            .map(|(i, (buf, b))| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: if b.access == Access::Op {
+                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: buf,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(Op::size(self.real) as u64),
+                    })
+                } else {
+                    buf.as_entire_binding()
+                },
+            })
+            .collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(v.kernel.name()),
+            layout: &self.pipelines[&v].0,
+            entries: &entries,
+        })
+    }
+
+    /// Records one dispatch of `v` covering `threads` (2D grid), its `Op`
+    /// record (if it has one) at `offset` in the bound uniform buffer.
+    pub(crate) fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        v: Variant,
+        group: &wgpu::BindGroup,
+        offset: Option<u32>,
+        threads: usize,
+    ) -> Result<()> {
+        let (x, y) = super::buffers::grid(threads)?;
+        pass.set_pipeline(self.pipeline(v));
+        pass.set_bind_group(0, group, offset.as_slice());
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
     }
 
     /// Turns any error wgpu reported since the last check into `Err`.

@@ -1,8 +1,8 @@
 //! Host mirrors of the WGSL structs in `shaders/common/layout.wgsl` and
 //! `shaders/bcd.wgsl`.
 
-use super::context::GpuContext;
-use super::shader::Kernel;
+use super::shader::Real;
+use crate::backend::{Coef, N_SLOTS, Slot};
 use crate::metric::TetShape;
 use crate::metric::corner_model::Template;
 use crate::metric::smetric::MetricKind;
@@ -20,26 +20,112 @@ pub(crate) struct Sizes {
 }
 const _: () = assert!(std::mem::size_of::<Sizes>() == 16);
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub(crate) struct Color {
-    pub offset: u32,
-    pub count: u32,
-    pub max_backtracks: u32,
-    pub pad: u32,
-}
-const _: () = assert!(std::mem::size_of::<Color>() == 16);
-
-/// `struct Dims` of `layout.wgsl`: per-dispatch parameters of the Newton kernels.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub(crate) struct Dims {
+/// `struct Op` of `layout.wgsl`: the per-operation record, a 64-byte
+/// header of u32s followed by `coef: vec4<real>` (written by `Op::bytes` in
+/// the device precision).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Op {
     pub n: u32,
-    pub op: u32,
     pub slot: u32,
     pub aux: u32,
+    pub aux2: u32,
+    pub aux3: u32,
+    pub guard: u32,
+    pub flags: u32,
+    pub offset: u32,
+    pub a: Coef,
+    pub b: Coef,
 }
-const _: () = assert!(std::mem::size_of::<Dims>() == 16);
+
+/// "No slot" in `Op` fields.
+pub(crate) const NONE: u32 = u32::MAX;
+
+fn slot_id(s: Option<Slot>) -> u32 {
+    s.map_or(NONE, |s| s.0)
+}
+
+impl Op {
+    pub const HEADER_BYTES: usize = 64;
+
+    /// An operation over `n` items with nothing else set.
+    pub fn n(n: usize) -> Op {
+        Op {
+            n: n as u32,
+            slot: NONE,
+            aux: NONE,
+            aux2: NONE,
+            aux3: NONE,
+            guard: NONE,
+            flags: 0,
+            offset: 0,
+            a: Coef::value(1.0),
+            b: Coef::value(1.0),
+        }
+    }
+
+    /// Bytes of the WGSL struct in precision `real`.
+    pub fn size(real: Real) -> usize {
+        Self::HEADER_BYTES + 4 * real.size()
+    }
+
+    pub fn slot(s: Option<Slot>) -> u32 {
+        slot_id(s)
+    }
+
+    /// The record as the device reads it.
+    pub fn bytes(&self, real: Real) -> Vec<u8> {
+        let header: [u32; 16] = [
+            self.n,
+            self.slot,
+            self.aux,
+            self.aux2,
+            self.aux3,
+            self.guard,
+            self.flags,
+            self.offset,
+            slot_id(self.a.num),
+            slot_id(self.a.den),
+            slot_id(self.b.num),
+            slot_id(self.b.den),
+            0,
+            0,
+            0,
+            0,
+        ];
+        let mut out = bytemuck::cast_slice(&header).to_vec();
+        let coef = [self.a.scale, self.b.scale, 0.0, 0.0];
+        match real {
+            Real::F64 => out.extend_from_slice(bytemuck::cast_slice(&coef)),
+            Real::F32 => out.extend_from_slice(bytemuck::cast_slice(&coef.map(|c| c as f32))),
+        }
+        out
+    }
+}
+
+/// Reals per corner in the Newton assembly buffer: the gradient (12) then
+/// the 10 upper 3x3 blocks.
+pub(crate) const ELEM_STRIDE: u32 = 102;
+/// u32s per corner in the solver kernels: 4 vertex ids, then a `shapes` table index.
+pub(crate) const CORNER_STRIDE: u32 = 5;
+pub(crate) const METRIC_IMR: u32 = 0;
+pub(crate) const METRIC_CN: u32 = 1;
+pub(crate) const METRIC_TMP: u32 = 2;
+pub(crate) const TEMPLATE_HARMONIC: u32 = 0;
+pub(crate) const TEMPLATE_AVERAGE: u32 = 1;
+
+/// The constants Rust and WGSL share, generated into every kernel's prelude
+/// (`Real::prelude`); no WGSL file defines them.
+pub(crate) const PRELUDE_CONSTANTS: &[(&str, u32)] = &[
+    ("NONE", NONE),
+    ("N_SLOTS", N_SLOTS as u32),
+    ("CORNER_STRIDE", CORNER_STRIDE),
+    ("ELEM_STRIDE", ELEM_STRIDE),
+    ("METRIC_IMR", METRIC_IMR),
+    ("METRIC_CN", METRIC_CN),
+    ("METRIC_TMP", METRIC_TMP),
+    ("TEMPLATE_HARMONIC", TEMPLATE_HARMONIC),
+    ("TEMPLATE_AVERAGE", TEMPLATE_AVERAGE),
+];
 
 /// `struct Model` of `layout.wgsl`.
 #[repr(C)]
@@ -58,16 +144,16 @@ impl ModelUniform {
         ModelUniform {
             dim: p.dim as u32,
             metric: match m.metric {
-                MetricKind::InverseMeanRatio => 0,
-                MetricKind::ConditionNumber => 1,
-                MetricKind::TargetShapeSize => 2,
+                MetricKind::InverseMeanRatio => METRIC_IMR,
+                MetricKind::ConditionNumber => METRIC_CN,
+                MetricKind::TargetShapeSize => METRIC_TMP,
             },
             tmpl: match m.template {
-                Template::Harmonic => 0,
-                Template::Average => 1,
+                Template::Harmonic => TEMPLATE_HARMONIC,
+                Template::Average => TEMPLATE_AVERAGE,
             },
             // the closed forms `Model::blocks` and friends take on the CPU
-            fast: (p.dim == 3 && m.metric == MetricKind::InverseMeanRatio && m.template == Template::Harmonic) as u32,
+            fast: m.fast(p.dim) as u32,
         }
     }
 }
@@ -75,14 +161,14 @@ impl ModelUniform {
 /// Reals per `shapes` table entry: four `vec4` rows, b_k in .xyz, the weight in row 0's w.
 const TABLE_ENTRY: usize = 16;
 
-/// The corners as the solver kernels read them (`CORNER_STRIDE` = 5 u32 each:
+/// The corners as the solver kernels read them (`CORNER_STRIDE` u32 each:
 /// the 4 vertex ids, then an index into the table) and the table of distinct
 /// (B, weight) pairs: weights differ by element kind, so the table stays a
 /// few entries long however many corners share it.
 pub(crate) fn corner_tables(p: &Problem) -> (Vec<u32>, Vec<f64>) {
     let mut ids: HashMap<(u32, u64), u32> = HashMap::new();
     let mut table = Vec::new();
-    let mut corners = Vec::with_capacity(5 * p.num_corners());
+    let mut corners = Vec::with_capacity(CORNER_STRIDE as usize * p.num_corners());
     for (c, vs) in p.corners.iter().enumerate() {
         let (shape, w) = (p.corner_shape[c], p.corner_weight[c]);
         let id = *ids.entry((shape, w.to_bits())).or_insert_with(|| {
@@ -107,39 +193,4 @@ pub(crate) fn shape_values(shape: &TetShape) -> [f64; 20] {
         v[4 * k..4 * k + 3].copy_from_slice(shape.b(k));
     }
     v
-}
-
-impl GpuContext {
-    /// A bind group for `kernel` with `buffers` at bindings 0, 1, ...
-    pub(crate) fn bind(&self, kernel: Kernel, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let layout = self.pipeline(kernel).get_bind_group_layout(0);
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(kernel.name()),
-            layout: &layout,
-            entries: &entries,
-        })
-    }
-
-    /// Records one dispatch of `kernel` covering `threads` (2D grid).
-    pub(crate) fn dispatch(
-        &self,
-        pass: &mut wgpu::ComputePass<'_>,
-        kernel: Kernel,
-        group: &wgpu::BindGroup,
-        threads: usize,
-    ) -> crate::Result<()> {
-        let (x, y) = super::buffers::grid(threads)?;
-        pass.set_pipeline(self.pipeline(kernel));
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-        Ok(())
-    }
 }

@@ -42,14 +42,12 @@ pub fn mean_ratio_eval(ctx: &GpuContext, shape: &TetShape, tets: &[[u32; 4]], x:
     let value = ctx.zeros_real("value", n);
     let grad = ctx.zeros_real("grad", 12 * n);
     let hess = ctx.zeros_real("hess", 144 * n);
-    let group = ctx.bind(
-        Kernel::MeanRatioEval,
-        &[&shape_buf, &sizes, &xb, &tb, &value, &grad, &hess],
-    );
+    let k = Kernel::MeanRatioEval.for_model(true);
+    let group = ctx.bind(k, &[&shape_buf, &sizes, &xb, &tb, &value, &grad, &hess]);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
-        ctx.dispatch(&mut pass, Kernel::MeanRatioEval, &group, n)?;
+        ctx.dispatch(&mut pass, k, &group, None, n)?;
     }
     ctx.queue.submit([enc.finish()]);
     ctx.check()?;
@@ -73,11 +71,12 @@ pub fn cbrt_eval(ctx: &GpuContext, values: &[f64]) -> Result<Vec<f64>> {
         },
     );
     let buf = ctx.storage_real("values", values);
-    let group = ctx.bind(Kernel::CbrtEval, &[&sizes, &buf]);
+    let k = Kernel::CbrtEval.for_model(true);
+    let group = ctx.bind(k, &[&sizes, &buf]);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
-        ctx.dispatch(&mut pass, Kernel::CbrtEval, &group, n)?;
+        ctx.dispatch(&mut pass, k, &group, None, n)?;
     }
     ctx.queue.submit([enc.finish()]);
     ctx.check()?;

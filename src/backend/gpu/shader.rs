@@ -1,6 +1,10 @@
-//! WGSL composition: every kernel is one file in `shaders/` written against
-//! the scalar alias `real`; a tiny `#import name` preprocessor (vello-style)
-//! pulls in the shared files and a prelude instantiates the precision.
+//! WGSL composition and the kernel table. Every kernel is one file in
+//! `shaders/` written against the scalar alias `real`; a tiny `#import name`
+//! preprocessor (vello-style) pulls in the shared files, and a prelude
+//! generated from Rust instantiates the precision and every constant the two
+//! sides share (`layout::PRELUDE_CONSTANTS`). `KERNELS` declares each kernel
+//! once, with its bindings and variants: pipelines and bind-group layouts are
+//! built from it, and a test checks it against naga's reflection of the WGSL.
 
 use std::collections::HashSet;
 
@@ -19,11 +23,16 @@ impl Real {
         }
     }
 
-    fn prelude(self) -> &'static str {
-        match self {
-            Real::F32 => "alias real = f32;\nconst REAL_MAX: real = 3.40282347e38;\n",
-            Real::F64 => "alias real = f64;\nconst REAL_MAX: real = 1.7976931348623157e308;\n",
+    fn prelude(self) -> String {
+        let (ty, max) = match self {
+            Real::F32 => ("f32", "3.40282347e38"),
+            Real::F64 => ("f64", "1.7976931348623157e308"),
+        };
+        let mut s = format!("alias real = {ty};\nconst REAL_MAX: real = {max};\n");
+        for (name, value) in super::layout::PRELUDE_CONSTANTS {
+            s.push_str(&format!("const {name}: u32 = {value}u;\n"));
         }
+        s
     }
 }
 
@@ -33,6 +42,8 @@ const SHARED: &[(&str, &str)] = &[
     ("mat3", include_str!("../../../shaders/common/mat3.wgsl")),
     ("layout", include_str!("../../../shaders/common/layout.wgsl")),
     ("corners", include_str!("../../../shaders/common/corners.wgsl")),
+    ("tree", include_str!("../../../shaders/common/tree.wgsl")),
+    ("slots", include_str!("../../../shaders/common/slots.wgsl")),
     ("mean_ratio", include_str!("../../../shaders/metric/mean_ratio.wgsl")),
     ("condition", include_str!("../../../shaders/metric/condition.wgsl")),
     ("target", include_str!("../../../shaders/metric/target.wgsl")),
@@ -43,123 +54,173 @@ const SHARED: &[(&str, &str)] = &[
     ),
 ];
 
-/// The compute kernels, one per file, entry point `main`.
+/// How a kernel sees one binding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    Uniform,
+    /// The per-operation `Op` record, a uniform bound at a dynamic offset.
+    Op,
+    Read,
+    ReadWrite,
+}
+
+/// What one binding holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Elem {
+    /// `array<real>`
+    Real,
+    /// `array<u32>`
+    U32,
+    /// `array<vec4<real>>`
+    Vec4,
+    /// A struct of that name (uniforms).
+    Struct(&'static str),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub name: &'static str,
+    pub access: Access,
+    pub elem: Elem,
+}
+
+const fn b(name: &'static str, access: Access, elem: Elem) -> Binding {
+    Binding { name, access, elem }
+}
+
+use Access::{Op as OpU, Read as R, ReadWrite as RW, Uniform as U};
+use Elem::{Real as Re, Struct as St, U32 as Ui, Vec4 as V4};
+
+const OP: Binding = b("op", OpU, St("Op"));
+const MODEL: Binding = b("model", U, St("Model"));
+const SCALARS_R: Binding = b("scalars", R, Re);
+const SCALARS_RW: Binding = b("scalars", RW, Re);
+
+/// One kernel: its WGSL stem (file, CPU twin and tests share it), source,
+/// bindings in order (group 0, binding i) and whether it has a closed-form
+/// (`#if FAST`, the tetrahedral inverse mean ratio) and a general variant.
+#[derive(Debug)]
+pub struct KernelDef {
+    pub stem: &'static str,
+    source: &'static str,
+    pub bindings: &'static [Binding],
+    pub variants: bool,
+}
+
+macro_rules! kernels {
+    ($($kernel:ident = $stem:literal, variants: $v:expr, [$($bind:expr),* $(,)?];)*) => {
+        /// The compute kernels, one per file, entry point `main`.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Kernel { $($kernel),* }
+
+        /// The kernel table: the one place a binding list is written.
+        pub static KERNELS: &[(Kernel, KernelDef)] = &[$(
+            (Kernel::$kernel, KernelDef {
+                stem: $stem,
+                source: include_str!(concat!("../../../shaders/", $stem, ".wgsl")),
+                bindings: &[$($bind),*],
+                variants: $v,
+            }),
+        )*];
+    };
+}
+
+kernels! {
+    MeanRatioEval = "mean_ratio_eval", variants: false, [
+        b("shape", U, St("Shape")), b("sizes", U, St("Sizes")), b("x", R, Re), b("tets", R, Ui),
+        b("value", RW, Re), b("grad", RW, Re), b("hess", RW, Re),
+    ];
+    CbrtEval = "cbrt_eval", variants: false, [b("sizes", U, St("Sizes")), b("values", RW, Re)];
+    Objective = "objective", variants: true, [
+        MODEL, OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4), b("grad", RW, Re),
+        b("partials", RW, V4),
+    ];
+    Reduce = "reduce", variants: false, [OP, b("partials", R, V4), SCALARS_RW];
+    GradientGather = "gradient_gather", variants: false, [
+        OP, b("free_vertices", R, Ui), b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("elem", R, Re),
+        b("grad", RW, Re),
+    ];
+    Bcd = "bcd", variants: true, [
+        MODEL, b("ls", U, V4), OP, b("x", RW, Re), b("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
+    ];
+    HessianAssemble = "hessian_assemble", variants: true, [
+        MODEL, OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4), b("elem", RW, Re),
+    ];
+    HessianGather = "hessian_gather", variants: false, [
+        OP, b("contrib_offsets", R, Ui), b("contrib_items", R, Ui), b("elem", R, Re), b("blocks", RW, Re),
+    ];
+    BsrSpmv = "bsr_spmv", variants: false, [
+        OP, b("row_offsets", R, Ui), b("cols", R, Ui), b("blocks", R, Re), b("x", R, Re), b("y", RW, Re),
+    ];
+    BlockJacobiFactor = "block_jacobi_factor", variants: false, [
+        OP, b("blocks", R, Re), b("diag", R, Ui), b("factors", RW, Re),
+    ];
+    BlockJacobi = "block_jacobi", variants: false, [OP, b("factors", R, Re), b("x", R, Re), b("y", RW, Re)];
+    Axpby = "axpby", variants: false, [OP, SCALARS_R, b("x", R, Re), b("y", RW, Re)];
+    SetSlot = "set_slot", variants: false, [OP, SCALARS_RW];
+    Dot = "dot", variants: false, [OP, b("a", R, Re), b("b", R, Re), b("partials", RW, V4)];
+    LineSearch = "line_search", variants: false, [
+        OP, SCALARS_R, b("free_vertices", R, Ui), b("x", R, Re), b("d", R, Re), b("trial", RW, Re),
+    ];
+}
+
+/// A kernel as compiled: the closed-form (`fast`) or general instance of its source.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Kernel {
-    MeanRatioEval,
-    Objective,
-    VertexGradient,
-    Reduce,
-    Bcd,
-    CbrtEval,
-    HessianAssemble,
-    HessianGather,
-    GradientGather,
-    BsrSpmv,
-    BlockJacobi,
-    Vector,
-    Dot,
-    DotFinal,
-    LineSearch,
-    /// The corner kernels again, for any metric, template and dimension: the
-    /// plain ones are the tetrahedral inverse mean ratio's closed forms only,
-    /// because lavapipe runs a kernel carrying the general path hundreds of
-    /// times slower even when a uniform branch skips it.
-    BcdGeneral,
-    ObjectiveGeneral,
-    HessianAssembleGeneral,
+pub struct Variant {
+    pub kernel: Kernel,
+    pub fast: bool,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 18] = [
-        Kernel::MeanRatioEval,
-        Kernel::Objective,
-        Kernel::VertexGradient,
-        Kernel::Reduce,
-        Kernel::Bcd,
-        Kernel::CbrtEval,
-        Kernel::HessianAssemble,
-        Kernel::HessianGather,
-        Kernel::GradientGather,
-        Kernel::BsrSpmv,
-        Kernel::BlockJacobi,
-        Kernel::Vector,
-        Kernel::Dot,
-        Kernel::DotFinal,
-        Kernel::LineSearch,
-        Kernel::BcdGeneral,
-        Kernel::ObjectiveGeneral,
-        Kernel::HessianAssembleGeneral,
-    ];
+    pub fn def(self) -> &'static KernelDef {
+        &KERNELS
+            .iter()
+            .find(|(k, _)| *k == self)
+            .expect("every kernel is in the table")
+            .1
+    }
 
     pub fn name(self) -> &'static str {
-        match self {
-            Kernel::MeanRatioEval => "mean_ratio_eval",
-            Kernel::Objective => "objective",
-            Kernel::VertexGradient => "vertex_gradient",
-            Kernel::Reduce => "reduce",
-            Kernel::Bcd => "bcd",
-            Kernel::CbrtEval => "cbrt_eval",
-            Kernel::HessianAssemble => "hessian_assemble",
-            Kernel::HessianGather => "hessian_gather",
-            Kernel::GradientGather => "gradient_gather",
-            Kernel::BsrSpmv => "bsr_spmv",
-            Kernel::BlockJacobi => "block_jacobi",
-            Kernel::Vector => "vector",
-            Kernel::Dot => "dot",
-            Kernel::DotFinal => "dot_final",
-            Kernel::LineSearch => "line_search",
-            Kernel::BcdGeneral => "bcd_general",
-            Kernel::ObjectiveGeneral => "objective_general",
-            Kernel::HessianAssembleGeneral => "hessian_assemble_general",
+        self.def().stem
+    }
+
+    /// Every kernel.
+    pub fn all() -> impl Iterator<Item = Kernel> {
+        KERNELS.iter().map(|(k, _)| *k)
+    }
+
+    /// The instance for a model: kernels without variants have only the fast one.
+    pub fn for_model(self, fast: bool) -> Variant {
+        Variant {
+            kernel: self,
+            fast: fast || !self.def().variants,
+        }
+    }
+}
+
+impl Variant {
+    /// Every compiled instance: both of a kernel with variants, else one.
+    pub fn all() -> impl Iterator<Item = Variant> {
+        Kernel::all().flat_map(|k| {
+            let both: &[bool] = if k.def().variants { &[true, false] } else { &[true] };
+            both.iter().map(move |&fast| Variant { kernel: k, fast })
+        })
+    }
+
+    pub fn label(self) -> String {
+        if self.fast {
+            self.kernel.name().to_string()
+        } else {
+            format!("{}_general", self.kernel.name())
         }
     }
 
-    fn source(self) -> &'static str {
-        match self {
-            Kernel::MeanRatioEval => include_str!("../../../shaders/mean_ratio_eval.wgsl"),
-            Kernel::Objective | Kernel::ObjectiveGeneral => include_str!("../../../shaders/objective.wgsl"),
-            Kernel::VertexGradient => include_str!("../../../shaders/vertex_gradient.wgsl"),
-            Kernel::Reduce => include_str!("../../../shaders/reduce.wgsl"),
-            Kernel::Bcd | Kernel::BcdGeneral => include_str!("../../../shaders/bcd.wgsl"),
-            Kernel::CbrtEval => include_str!("../../../shaders/cbrt_eval.wgsl"),
-            Kernel::HessianAssemble | Kernel::HessianAssembleGeneral => {
-                include_str!("../../../shaders/hessian_assemble.wgsl")
-            }
-            Kernel::HessianGather => include_str!("../../../shaders/hessian_gather.wgsl"),
-            Kernel::GradientGather => include_str!("../../../shaders/gradient_gather.wgsl"),
-            Kernel::BsrSpmv => include_str!("../../../shaders/bsr_spmv.wgsl"),
-            Kernel::BlockJacobi => include_str!("../../../shaders/block_jacobi.wgsl"),
-            Kernel::Vector => include_str!("../../../shaders/vector.wgsl"),
-            Kernel::Dot => include_str!("../../../shaders/dot.wgsl"),
-            Kernel::DotFinal => include_str!("../../../shaders/dot_final.wgsl"),
-            Kernel::LineSearch => include_str!("../../../shaders/line_search.wgsl"),
-        }
-    }
-
-    /// Whether `#if FAST` blocks are kept (the tetrahedral closed forms).
-    pub fn fast(self) -> bool {
-        !matches!(
-            self,
-            Kernel::BcdGeneral | Kernel::ObjectiveGeneral | Kernel::HessianAssembleGeneral
-        )
-    }
-
-    /// The variant of a corner kernel for a problem's model.
-    pub fn for_model(self, fast: bool) -> Kernel {
-        match (self, fast) {
-            (Kernel::Bcd, false) => Kernel::BcdGeneral,
-            (Kernel::Objective, false) => Kernel::ObjectiveGeneral,
-            (Kernel::HessianAssemble, false) => Kernel::HessianAssembleGeneral,
-            (k, _) => k,
-        }
-    }
-
-    /// The full WGSL source of this kernel in precision `real`.
+    /// The full WGSL source of this instance in precision `real`.
     pub fn compose(self, real: Real) -> String {
-        let mut out = String::from(real.prelude());
+        let mut out = real.prelude();
         let mut seen = HashSet::new();
-        preprocess(self.source(), self.fast(), &mut seen, &mut out);
+        preprocess(self.kernel.def().source, self.fast, &mut seen, &mut out);
         out
     }
 }
@@ -207,55 +268,240 @@ fn preprocess(src: &str, fast: bool, seen: &mut HashSet<&'static str>, out: &mut
     }
 }
 
+/// Checks a kernel's declared bindings against naga's reflection of its
+/// composed WGSL: names, address spaces and element types, in order.
+pub fn check_bindings_reflect(declared: &[Binding], module: &naga::Module) -> Result<(), String> {
+    use naga::{AddressSpace, Scalar, ScalarKind, StorageAccess, TypeInner, VectorSize};
+    let mut found: Vec<(u32, &naga::GlobalVariable)> = Vec::new();
+    for (_, g) in module.global_variables.iter() {
+        if let Some(b) = &g.binding {
+            if b.group != 0 {
+                return Err(format!(
+                    "'{}' is in group {}",
+                    g.name.as_deref().unwrap_or("?"),
+                    b.group
+                ));
+            }
+            found.push((b.binding, g));
+        }
+    }
+    found.sort_by_key(|(i, _)| *i);
+    if found.len() != declared.len() {
+        return Err(format!(
+            "{} bindings in the WGSL, {} declared",
+            found.len(),
+            declared.len()
+        ));
+    }
+    let is_real = |s: &Scalar| s.kind == ScalarKind::Float;
+    for (k, ((index, g), d)) in found.iter().zip(declared).enumerate() {
+        let name = g.name.as_deref().unwrap_or("?");
+        if *index != k as u32 {
+            return Err(format!("binding {k} is missing (next is {index})"));
+        }
+        if name != d.name {
+            return Err(format!(
+                "binding {k} is '{name}' in the WGSL, '{}' in the table",
+                d.name
+            ));
+        }
+        let space_ok = match (d.access, g.space) {
+            (Access::Uniform | Access::Op, AddressSpace::Uniform) => true,
+            (Access::Read, AddressSpace::Storage { access }) => access == StorageAccess::LOAD,
+            (Access::ReadWrite, AddressSpace::Storage { access }) => {
+                access == StorageAccess::LOAD | StorageAccess::STORE
+            }
+            _ => false,
+        };
+        if !space_ok {
+            return Err(format!(
+                "binding {k} ('{name}'): {:?} in the WGSL, {:?} in the table",
+                g.space, d.access
+            ));
+        }
+        let ty = &module.types[g.ty];
+        let elem_ok = match (&ty.inner, d.elem) {
+            (TypeInner::Array { base, .. }, e) => match (&module.types[*base].inner, e) {
+                (TypeInner::Scalar(s), Elem::Real) => is_real(s),
+                (TypeInner::Scalar(s), Elem::U32) => *s == Scalar::U32,
+                (
+                    TypeInner::Vector {
+                        size: VectorSize::Quad,
+                        scalar,
+                    },
+                    Elem::Vec4,
+                ) => is_real(scalar),
+                _ => false,
+            },
+            (TypeInner::Struct { .. }, Elem::Struct(n)) => ty.name.as_deref() == Some(n),
+            (
+                TypeInner::Vector {
+                    size: VectorSize::Quad,
+                    scalar,
+                },
+                Elem::Vec4,
+            ) => is_real(scalar),
+            _ => false,
+        };
+        if !elem_ok {
+            return Err(format!(
+                "binding {k} ('{name}'): {:?} in the WGSL, {:?} in the table",
+                ty.inner, d.elem
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks that the composed module's shared constants have Rust's values.
+pub fn check_constants(module: &naga::Module, expected: &[(&str, u32)]) -> Result<(), String> {
+    for &(name, value) in expected {
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .ok_or_else(|| format!("constant {name} is not in the WGSL"))?;
+        let got = match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => v,
+            ref e => return Err(format!("constant {name} is {e:?}, not a u32 literal")),
+        };
+        if got != value {
+            return Err(format!("constant {name} is {got} in the WGSL, {value} in Rust"));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::gpu::layout::PRELUDE_CONSTANTS;
 
-    fn validate(k: Kernel, real: Real) -> naga::Module {
-        let src = k.compose(real);
+    fn parse(v: Variant, real: Real) -> naga::Module {
+        let src = v.compose(real);
         let module = naga::front::wgsl::parse_str(&src)
-            .unwrap_or_else(|e| panic!("{} ({real:?}) does not parse:\n{}", k.name(), e.emit_to_string(&src)));
+            .unwrap_or_else(|e| panic!("{} ({real:?}) does not parse:\n{}", v.label(), e.emit_to_string(&src)));
         let mut caps = naga::valid::Capabilities::default();
         if real == Real::F64 {
             caps |= naga::valid::Capabilities::FLOAT64;
         }
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
             .validate(&module)
-            .unwrap_or_else(|e| panic!("{} ({real:?}) does not validate:\n{}", k.name(), e.emit_to_string(&src)));
+            .unwrap_or_else(|e| {
+                panic!(
+                    "{} ({real:?}) does not validate:\n{}",
+                    v.label(),
+                    e.emit_to_string(&src)
+                )
+            });
         module
     }
 
     #[test]
-    fn every_kernel_validates_in_both_precisions() {
-        for k in Kernel::ALL {
+    fn every_kernel_validates_in_both_precisions_with_the_table_bindings() {
+        for v in Variant::all() {
             for real in [Real::F32, Real::F64] {
-                let m = validate(k, real);
+                let m = parse(v, real);
                 let ep = m
                     .entry_points
                     .iter()
                     .find(|e| e.name == "main")
-                    .unwrap_or_else(|| panic!("{} has no entry point main", k.name()));
-                assert_eq!(ep.workgroup_size, [64, 1, 1], "{}", k.name());
-                // bindings are numbered 0.. without gaps, all in group 0
-                let mut bindings: Vec<u32> = m
-                    .global_variables
-                    .iter()
-                    .filter_map(|(_, g)| g.binding.as_ref())
-                    .map(|b| {
-                        assert_eq!(b.group, 0, "{}", k.name());
-                        b.binding
-                    })
-                    .collect();
-                bindings.sort_unstable();
-                assert_eq!(bindings, (0..bindings.len() as u32).collect::<Vec<_>>());
+                    .unwrap_or_else(|| panic!("{} has no entry point main", v.label()));
+                assert_eq!(
+                    ep.workgroup_size,
+                    [super::super::buffers::WORKGROUP, 1, 1],
+                    "{}",
+                    v.label()
+                );
+                check_bindings_reflect(v.kernel.def().bindings, &m)
+                    .unwrap_or_else(|e| panic!("{} ({real:?}): {e}", v.label()));
+                check_constants(&m, PRELUDE_CONSTANTS).unwrap_or_else(|e| panic!("{}: {e}", v.label()));
             }
         }
     }
 
     #[test]
+    fn a_deliberate_binding_mismatch_is_caught() {
+        let m = parse(Kernel::Axpby.for_model(true), Real::F32);
+        let good = Kernel::Axpby.def().bindings;
+        assert!(check_bindings_reflect(good, &m).is_ok());
+        let mut wrong_access = good.to_vec();
+        wrong_access[3].access = Access::Read;
+        assert!(check_bindings_reflect(&wrong_access, &m).unwrap_err().contains("'y'"));
+        let mut wrong_name = good.to_vec();
+        wrong_name[2].name = "z";
+        assert!(check_bindings_reflect(&wrong_name, &m).is_err());
+        let mut wrong_elem = good.to_vec();
+        wrong_elem[2].elem = Elem::U32;
+        assert!(check_bindings_reflect(&wrong_elem, &m).is_err());
+        assert!(check_bindings_reflect(&good[..3], &m).is_err());
+    }
+
+    #[test]
+    fn a_deliberate_constant_mismatch_is_caught() {
+        let m = parse(Kernel::Objective.for_model(false), Real::F64);
+        assert!(check_constants(&m, &[("ELEM_STRIDE", 102)]).is_ok());
+        assert!(
+            check_constants(&m, &[("ELEM_STRIDE", 101)])
+                .unwrap_err()
+                .contains("ELEM_STRIDE")
+        );
+    }
+
+    #[test]
+    fn shared_constants_are_defined_only_in_rust() {
+        // a WGSL file redefining one would clash with Rust's value; the
+        // prelude is the only definition
+        for (_, def) in KERNELS {
+            for (name, _) in PRELUDE_CONSTANTS {
+                assert!(
+                    !def.source.contains(&format!("const {name}:")),
+                    "{} defines {name}",
+                    def.stem
+                );
+            }
+        }
+        for (file, text) in SHARED {
+            for (name, _) in PRELUDE_CONSTANTS {
+                assert!(!text.contains(&format!("const {name}:")), "{file} defines {name}");
+            }
+        }
+    }
+
+    #[test]
+    fn struct_layouts_match_the_rust_mirrors() {
+        use crate::backend::gpu::layout::{ModelUniform, Op, Sizes};
+        for real in [Real::F32, Real::F64] {
+            let m = parse(Kernel::Objective.for_model(false), real);
+            let find = |m: &naga::Module, name: &str| -> (Vec<naga::StructMember>, usize) {
+                let (_, ty) = m.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap();
+                match &ty.inner {
+                    naga::TypeInner::Struct { members, span } => (members.clone(), *span as usize),
+                    _ => unreachable!(),
+                }
+            };
+            let (members, span) = find(&m, "Op");
+            assert_eq!(span, Op::size(real), "{real:?}");
+            let coef = members.iter().find(|m| m.name.as_deref() == Some("coef")).unwrap();
+            assert_eq!(coef.offset as usize, Op::HEADER_BYTES);
+            assert_eq!(find(&m, "Model").1, std::mem::size_of::<ModelUniform>());
+            let m2 = parse(Kernel::CbrtEval.for_model(true), real);
+            assert_eq!(find(&m2, "Sizes").1, std::mem::size_of::<Sizes>());
+        }
+    }
+
+    #[test]
     fn imports_are_included_once() {
-        let src = Kernel::Bcd.compose(Real::F32);
+        let src = Kernel::Bcd.for_model(true).compose(Real::F32);
         assert_eq!(src.matches("fn det3(").count(), 1);
         assert!(!src.contains("#import"));
+    }
+
+    #[test]
+    fn one_workgroup_reduction() {
+        // the tree reduction lives in common/tree.wgsl alone
+        for (_, def) in KERNELS {
+            assert!(!def.source.contains("stride >>= 1u"), "{} has its own tree", def.stem);
+        }
     }
 }

@@ -64,3 +64,34 @@ pub fn gradient(p: &Problem, x: &[Vec3]) -> Option<(f64, Vec<Vec3>)> {
 pub fn norm(g: &[Vec3]) -> f64 {
     g.iter().flatten().map(|c| c * c).sum::<f64>().sqrt()
 }
+
+/// F and the free gradient (indexed like `Problem::free_vertices`); `None` if infeasible.
+pub fn free_gradient(p: &Problem, x: &[Vec3]) -> Option<(f64, Vec<Vec3>)> {
+    let (f, g) = gradient(p, x)?;
+    Some((f, p.free_vertices.iter().map(|&v| g[v as usize]).collect()))
+}
+
+/// Corners whose term is infeasible at `x`.
+pub fn infeasible_corners(p: &Problem, x: &[Vec3]) -> usize {
+    (0..p.num_corners())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .filter(|&c| p.corner_term(x, c).is_none())
+        .count()
+}
+
+/// Smallest det(S) over the corners (the leading n x n block in 2D).
+pub fn min_det(p: &Problem, x: &[Vec3]) -> f64 {
+    (0..p.num_corners())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|c| {
+            let s = p.shape(c).tet.s_rest(&p.corner_points(x, c), usize::MAX);
+            if p.dim == 2 {
+                s[0][0] * s[1][1] - s[0][1] * s[1][0]
+            } else {
+                crate::metric::mat3::det(&s)
+            }
+        })
+        .reduce(|| f64::INFINITY, f64::min)
+}

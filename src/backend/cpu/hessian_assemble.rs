@@ -1,47 +1,14 @@
-//! The global Hessian over the free vertices in 3x3-block compressed sparse
-//! rows. Both triangles are stored so that a row-parallel product needs no
-//! write conflicts (on the GPU there are no float atomics either).
+//! CPU twin of `shaders/hessian_assemble.wgsl` and `shaders/hessian_gather.wgsl`:
+//! the global Hessian over the free vertices in 3x3-block compressed sparse
+//! rows, and the free gradient. The CPU fuses the two kernels: each row range
+//! evaluates its corners' blocks (`Model::blocks`, times the corner weight, as
+//! `hessian_assemble.wgsl` stores them) and sums them into its own rows in
+//! ascending corner order (the order `hessian_gather.wgsl` sums them in).
 
-use crate::metric::mat3::{Mat3, Vec3};
+use super::bsr_spmv::BlockCsr;
+use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use rayon::prelude::*;
-
-/// Symmetric block matrix: row `i` holds blocks `blocks[row_offsets[i]..row_offsets[i+1]]`
-/// at block columns `cols[..]` (sorted; the diagonal included).
-#[derive(Clone, Debug, Default)]
-pub struct BlockCsr {
-    pub row_offsets: Vec<u32>,
-    pub cols: Vec<u32>,
-    pub blocks: Vec<Mat3>,
-    /// Index of each row's diagonal block.
-    pub diag: Vec<u32>,
-}
-
-impl BlockCsr {
-    pub fn rows(&self) -> usize {
-        self.diag.len()
-    }
-
-    /// y = A x
-    pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
-        y.par_iter_mut().with_min_len(512).enumerate().for_each(|(i, yi)| {
-            let mut acc = [0.0; 3];
-            for s in self.row_offsets[i] as usize..self.row_offsets[i + 1] as usize {
-                let (b, xj) = (&self.blocks[s], &x[self.cols[s] as usize]);
-                for r in 0..3 {
-                    acc[r] += b[r][0] * xj[0] + b[r][1] * xj[1] + b[r][2] * xj[2];
-                }
-            }
-            *yi = acc;
-        });
-    }
-
-    /// Bytes held (structure and values).
-    pub fn bytes(&self) -> usize {
-        4 * (self.row_offsets.len() + self.cols.len() + self.diag.len())
-            + std::mem::size_of::<Mat3>() * self.blocks.len()
-    }
-}
 
 /// The Hessian's sparsity pattern for a problem, with the map from every
 /// element's 4x4 vertex blocks to matrix slots, and the rows cut into
@@ -174,6 +141,14 @@ impl HessianPattern {
                 diag,
             },
         }
+    }
+
+    /// Bytes held: the pattern, its element slots and row ranges, the matrix.
+    pub fn bytes(&self) -> usize {
+        self.matrix.bytes()
+            + 4 * (self.free_index.len() + self.free_vertex.len())
+            + 64 * self.slots.len()
+            + 4 * self.ranges.iter().map(|r| r.elements.len() + 2).sum::<usize>()
     }
 
     /// Assembles the free gradient and the Hessian of F at `x` into `grad`

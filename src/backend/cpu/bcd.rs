@@ -1,0 +1,166 @@
+//! CPU twin of `shaders/bcd.wgsl`: one safeguarded Newton step per free
+//! vertex on its 3x3 block, Armijo backtracking on the elements around it
+//! (section 3.1 of the Newton paper). `sweep_color` runs one colour in
+//! parallel, as the kernel does; `sweep` visits the vertices one at a time in
+//! locality order, which only the CPU can (the sequential BCD is CPU-only).
+
+use crate::metric::TetShape;
+use crate::metric::mat3::{Mat3, Vec3, cholesky_solve, dot};
+use crate::problem::Problem;
+use crate::solve::line_search::LineSearch;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The corners around one vertex, each as S without the vertex's term
+/// (`TetShape::s_rest`), the vertex's B row and the corner's weight: trial
+/// points then cost one rank-one update per corner instead of a gather.
+#[derive(Default)]
+pub struct Patch {
+    rest: Vec<(Mat3, Vec3, f64)>,
+}
+
+impl Patch {
+    pub fn load(&mut self, p: &Problem, x: &[Vec3], v: usize) {
+        self.rest.clear();
+        for &packed in p.incidence.of(v) {
+            let (c, k) = ((packed >> 2) as usize, (packed & 3) as usize);
+            let shape = p.shape(c);
+            self.rest.push((
+                shape.tet.s_rest(&p.corner_points(x, c), k),
+                *shape.tet.b(k),
+                p.corner_weight[c],
+            ));
+        }
+    }
+
+    /// The objective terms of these corners with the vertex at `at`; `None` if
+    /// any corner would be inverted.
+    #[inline]
+    pub fn value(&self, p: &Problem, at: &Vec3) -> Option<f64> {
+        let mut sum = 0.0;
+        // the branch hoisted out of the loop keeps the common case tight
+        if p.model.fast(p.dim) {
+            for (rest, b, w) in &self.rest {
+                sum += w * TetShape::value_of_s(&s_with(rest, b, at))?;
+            }
+        } else {
+            for (rest, b, w) in &self.rest {
+                sum += w * p.model.value_of_s(p.dim, &s_with(rest, b, at))?;
+            }
+        }
+        Some(sum)
+    }
+
+    /// That sum, its gradient and 3x3 Hessian with respect to the vertex at `at`.
+    #[inline]
+    pub fn gradient_hessian(&self, p: &Problem, at: &Vec3) -> Option<(f64, Vec3, Mat3)> {
+        let mut f = 0.0;
+        let mut g = [0.0; 3];
+        let mut h = [[0.0; 3]; 3];
+        let fast = p.model.fast(p.dim);
+        for (rest, b, w) in &self.rest {
+            let s = s_with(rest, b, at);
+            let (eta, ge, he) = if fast {
+                TetShape::vertex_gradient_hessian_at(s, b)?
+            } else {
+                p.model.vertex_gradient_hessian_of_s(p.dim, s, b)?
+            };
+            f += w * eta;
+            for i in 0..3 {
+                g[i] += w * ge[i];
+                for j in 0..3 {
+                    h[i][j] += w * he[i][j];
+                }
+            }
+        }
+        Some((f, g, h))
+    }
+}
+
+/// rest + y b^T
+#[inline]
+fn s_with(rest: &Mat3, b: &Vec3, y: &Vec3) -> Mat3 {
+    let mut s = *rest;
+    for i in 0..3 {
+        for c in 0..3 {
+            s[i][c] += y[i] * b[c];
+        }
+    }
+    s
+}
+
+/// One safeguarded Newton step for vertex `v`: the accepted new position, or
+/// `None` when no trial point decreased the patch objective enough.
+#[inline]
+pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &mut Patch) -> Option<Vec3> {
+    patch.load(p, x, v);
+    let (f0, g, h) = patch.gradient_hessian(p, &x[v])?;
+    let neg_g = [-g[0], -g[1], -g[2]];
+    // the block is positive definite for the mean ratio; fall back to a scaled
+    // steepest descent step should rounding say otherwise
+    let d = cholesky_solve(&h, &neg_g).unwrap_or_else(|| {
+        let tr = h[0][0] + h[1][1] + h[2][2];
+        let s = if tr > 0.0 { 3.0 / tr } else { 1.0 };
+        neg_g.map(|c| c * s)
+    });
+    let slope = dot(&g, &d);
+    if !(slope < 0.0) {
+        return None;
+    }
+    let mut alpha = 1.0;
+    for _ in 0..=ls.max_backtracks {
+        let trial = [x[v][0] + alpha * d[0], x[v][1] + alpha * d[1], x[v][2] + alpha * d[2]];
+        if let Some(f) = patch.value(p, &trial)
+            && f <= f0 + ls.sigma * alpha * slope
+        {
+            return Some(trial);
+        }
+        alpha *= ls.beta;
+    }
+    None
+}
+
+fn dist_sq(a: &Vec3, b: &Vec3) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum()
+}
+
+/// One sweep over all free vertices; stops early (leaving a valid state) at
+/// `deadline`. Returns the largest squared displacement.
+pub fn sweep(p: &Problem, x: &mut [Vec3], ls: &LineSearch, deadline: Option<Instant>) -> f64 {
+    let mut max_sq: f64 = 0.0;
+    let mut patch = Patch::default();
+    for (i, &v) in p.free_vertices.iter().enumerate() {
+        if i % 4096 == 4095 && deadline.is_some_and(|d| Instant::now() >= d) {
+            break;
+        }
+        let v = v as usize;
+        if let Some(y) = newton_step(p, x, v, ls, &mut patch) {
+            max_sq = max_sq.max(dist_sq(&x[v], &y));
+            x[v] = y;
+        }
+    }
+    max_sq
+}
+
+/// One colour of a sweep: the vertices of a colour share no element, so
+/// their steps are independent and run in parallel. Returns the largest
+/// squared displacement.
+pub fn sweep_color(p: &Problem, x: &mut [Vec3], color: usize, ls: &LineSearch) -> f64 {
+    let xs: &[Vec3] = x;
+    let moves: Vec<(usize, Vec3)> = p
+        .colors
+        .of(color)
+        .par_iter()
+        .with_min_len(256)
+        .map_init(Patch::default, |patch, &v| {
+            newton_step(p, xs, v as usize, ls, patch).map(|y| (v as usize, y))
+        })
+        .flatten()
+        .collect();
+    let mut max_sq: f64 = 0.0;
+    for (v, y) in moves {
+        max_sq = max_sq.max(dist_sq(&x[v], &y));
+        x[v] = y;
+    }
+    max_sq
+}

@@ -1,0 +1,44 @@
+//! CPU twin of `shaders/bsr_spmv.wgsl`: the symmetric Hessian in 3x3-block
+//! compressed sparse rows and y = A x. Both triangles are stored so that a
+//! row-parallel product needs no write conflicts (on the GPU there are no
+//! float atomics either).
+
+use crate::metric::mat3::{Mat3, Vec3};
+use rayon::prelude::*;
+
+/// Symmetric block matrix: row `i` holds blocks `blocks[row_offsets[i]..row_offsets[i+1]]`
+/// at block columns `cols[..]` (sorted; the diagonal included).
+#[derive(Clone, Debug, Default)]
+pub struct BlockCsr {
+    pub row_offsets: Vec<u32>,
+    pub cols: Vec<u32>,
+    pub blocks: Vec<Mat3>,
+    /// Index of each row's diagonal block.
+    pub diag: Vec<u32>,
+}
+
+impl BlockCsr {
+    pub fn rows(&self) -> usize {
+        self.diag.len()
+    }
+
+    /// y = A x
+    pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
+        y.par_iter_mut().with_min_len(512).enumerate().for_each(|(i, yi)| {
+            let mut acc = [0.0; 3];
+            for s in self.row_offsets[i] as usize..self.row_offsets[i + 1] as usize {
+                let (b, xj) = (&self.blocks[s], &x[self.cols[s] as usize]);
+                for r in 0..3 {
+                    acc[r] += b[r][0] * xj[0] + b[r][1] * xj[1] + b[r][2] * xj[2];
+                }
+            }
+            *yi = acc;
+        });
+    }
+
+    /// Bytes held (structure and values).
+    pub fn bytes(&self) -> usize {
+        4 * (self.row_offsets.len() + self.cols.len() + self.diag.len())
+            + std::mem::size_of::<Mat3>() * self.blocks.len()
+    }
+}

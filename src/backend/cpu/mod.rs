@@ -1,0 +1,278 @@
+//! The CPU backend: f64, rayon, every operation executed when called. It is
+//! the reference every GPU result is checked against; each file here is the
+//! CPU twin of the WGSL kernel with the same stem in `shaders/`.
+
+pub mod axpby;
+pub mod bcd;
+pub mod block_jacobi;
+pub mod bsr_spmv;
+pub mod dot;
+pub mod hessian_assemble;
+pub mod laplace;
+pub mod line_search;
+pub mod objective;
+
+use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, guard_passes};
+use crate::error::{Error, Result};
+use crate::metric::mat3::Vec3;
+use crate::problem::Problem;
+use crate::solve::line_search::LineSearch;
+use block_jacobi::BlockJacobi;
+use hessian_assemble::HessianPattern;
+use rayon::prelude::*;
+use std::time::Instant;
+
+pub struct CpuBackend<'p> {
+    p: &'p Problem,
+    ls: LineSearch,
+    x: Vec<Vec3>,
+    trial: Vec<Vec3>,
+    vectors: Vec<Vec<Vec3>>,
+    slots: [f64; N_SLOTS],
+    /// Largest squared move since the last `max_move`.
+    moved: f64,
+    hessian: Option<HessianPattern>,
+    precond: Option<BlockJacobi>,
+}
+
+impl<'p> CpuBackend<'p> {
+    /// Positions `x` in the problem's numbering; `ls` drives the per-vertex
+    /// line searches of BCD.
+    pub fn new(p: &'p Problem, x: &[Vec3], ls: &LineSearch) -> Result<Self> {
+        if x.len() != p.num_vertices() {
+            return Err(Error::InvalidArgument(format!(
+                "{} positions for a problem with {} vertices",
+                x.len(),
+                p.num_vertices()
+            )));
+        }
+        Ok(CpuBackend {
+            p,
+            ls: *ls,
+            x: x.to_vec(),
+            trial: Vec::new(),
+            vectors: Vec::new(),
+            slots: [0.0; N_SLOTS],
+            moved: 0.0,
+            hessian: None,
+            precond: None,
+        })
+    }
+
+    /// The assembled Hessian (after `assemble`), for tests.
+    pub fn hessian(&self) -> Option<&HessianPattern> {
+        self.hessian.as_ref()
+    }
+
+    fn points(&self, at: Points) -> &[Vec3] {
+        match at {
+            Points::Current => &self.x,
+            Points::Trial => &self.trial,
+        }
+    }
+
+    fn pair(&mut self, x: Vector, y: Vector) -> (&[Vec3], &mut [Vec3]) {
+        let (xi, yi) = (x.0 as usize, y.0 as usize);
+        assert_ne!(xi, yi);
+        if xi < yi {
+            let (a, b) = self.vectors.split_at_mut(yi);
+            (&a[xi], &mut b[0])
+        } else {
+            let (a, b) = self.vectors.split_at_mut(xi);
+            (&b[0], &mut a[yi])
+        }
+    }
+
+    fn set(&mut self, s: Slot, v: f64) {
+        self.slots[s.0 as usize] = v;
+    }
+}
+
+impl Backend for CpuBackend<'_> {
+    fn describe(&self) -> String {
+        "cpu".into()
+    }
+
+    fn num_free(&self) -> usize {
+        self.p.free_vertices.len()
+    }
+
+    fn num_colors(&self) -> usize {
+        self.p.colors.len()
+    }
+
+    fn vector(&mut self) -> Result<Vector> {
+        self.vectors.push(vec![[0.0; 3]; self.num_free()]);
+        Ok(Vector(self.vectors.len() as u32 - 1))
+    }
+
+    fn read_vector(&mut self, v: Vector) -> Result<Vec<Vec3>> {
+        Ok(self.vectors[v.0 as usize].clone())
+    }
+
+    fn write_vector(&mut self, v: Vector, data: &[Vec3]) -> Result<()> {
+        let dst = &mut self.vectors[v.0 as usize];
+        if data.len() != dst.len() {
+            return Err(Error::InvalidArgument(format!(
+                "a vector of {} blocks for {} free vertices",
+                data.len(),
+                dst.len()
+            )));
+        }
+        dst.copy_from_slice(data);
+        Ok(())
+    }
+
+    fn download(&mut self) -> Result<Vec<Vec3>> {
+        Ok(self.x.clone())
+    }
+
+    fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
+        let (p, x) = (self.p, self.points(at));
+        let value = match gradient {
+            Some(_) => objective::free_gradient(p, x),
+            None => objective::value(p, x).map(|f| (f, Vec::new())),
+        };
+        let min_det = out.min_det.map(|_| objective::min_det(p, x));
+        let (f, bad) = match value {
+            Some((f, g)) => {
+                if let Some(v) = gradient {
+                    self.vectors[v.0 as usize] = g;
+                }
+                (f, 0.0)
+            }
+            None => (f64::NAN, objective::infeasible_corners(p, x) as f64),
+        };
+        self.set(out.value, f);
+        self.set(out.infeasible, bad);
+        if let (Some(s), Some(d)) = (out.min_det, min_det) {
+            self.set(s, d);
+        }
+        Ok(())
+    }
+
+    fn trial(&mut self, alpha: Coef, d: Vector) -> Result<()> {
+        let a = alpha.eval(&self.slots);
+        line_search::trial(
+            &self.x,
+            &self.p.free_vertices,
+            a,
+            &self.vectors[d.0 as usize],
+            &mut self.trial,
+        );
+        Ok(())
+    }
+
+    fn accept_trial(&mut self) -> Result<()> {
+        self.x.copy_from_slice(&self.trial);
+        Ok(())
+    }
+
+    fn bcd_color(&mut self, color: usize) -> Result<()> {
+        let m = bcd::sweep_color(self.p, &mut self.x, color, &self.ls);
+        self.moved = self.moved.max(m);
+        Ok(())
+    }
+
+    fn max_move(&mut self, out: Slot) -> Result<()> {
+        let m = std::mem::take(&mut self.moved);
+        self.set(out, m);
+        Ok(())
+    }
+
+    fn bcd_sequential(&mut self, out: Slot, deadline: Option<Instant>) -> Result<bool> {
+        let m = bcd::sweep(self.p, &mut self.x, &self.ls, deadline);
+        self.set(out, m);
+        Ok(true)
+    }
+
+    fn laplace(&mut self, out: Slot, deadline: Option<Instant>) -> Result<bool> {
+        let m = laplace::sweep(self.p, &mut self.x, deadline);
+        self.set(out, m);
+        Ok(true)
+    }
+
+    fn prepare_hessian(&mut self) -> Result<usize> {
+        let pattern = HessianPattern::new(self.p);
+        let bytes = pattern.bytes() + 48 * pattern.free_vertex.len();
+        self.hessian = Some(pattern);
+        Ok(bytes)
+    }
+
+    fn assemble(&mut self, g: Vector) -> Result<()> {
+        let h = self
+            .hessian
+            .as_mut()
+            .ok_or_else(|| Error::InvalidArgument("assemble before prepare_hessian".into()))?;
+        if !h.assemble(self.p, &self.x, &mut self.vectors[g.0 as usize]) {
+            return Err(crate::solve::accepted_step_inverted());
+        }
+        Ok(())
+    }
+
+    fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()> {
+        let h = self.hessian.take().expect("assemble before hess_mul");
+        let (xs, ys) = self.pair(x, y);
+        h.matrix.mul(xs, ys);
+        self.hessian = Some(h);
+        Ok(())
+    }
+
+    fn factor_precond(&mut self) -> Result<()> {
+        let m = &self.hessian.as_ref().expect("assemble before factor_precond").matrix;
+        self.precond = Some(BlockJacobi::new(m.diag.par_iter().map(|&s| m.blocks[s as usize])));
+        Ok(())
+    }
+
+    fn precond(&mut self, x: Vector, y: Vector) -> Result<()> {
+        let m = self.precond.take().expect("factor_precond before precond");
+        let (xs, ys) = self.pair(x, y);
+        m.apply(xs, ys);
+        self.precond = Some(m);
+        Ok(())
+    }
+
+    fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
+        let (s, m) = dot::dot(&self.vectors[a.0 as usize], &self.vectors[b.0 as usize]);
+        self.set(sum, s);
+        if let Some(slot) = max {
+            self.set(slot, m);
+        }
+        Ok(())
+    }
+
+    fn axpby(&mut self, a: Coef, x: Vector, b: Coef, y: Vector, guard: Option<Slot>) -> Result<()> {
+        if !guard_passes(&self.slots, guard) {
+            return Ok(());
+        }
+        let (a, b) = (a.eval(&self.slots), b.eval(&self.slots));
+        if x == y {
+            axpby::scale(a, b, &mut self.vectors[y.0 as usize]);
+        } else {
+            let (xs, ys) = self.pair(x, y);
+            axpby::axpby(a, xs, b, ys);
+        }
+        Ok(())
+    }
+
+    fn set_slot(&mut self, dst: Slot, value: Coef, guard: Option<Slot>) -> Result<()> {
+        if guard_passes(&self.slots, guard) {
+            let v = value.eval(&self.slots);
+            self.set(dst, v);
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<[f64; N_SLOTS]> {
+        Ok(self.slots)
+    }
+
+    fn bytes(&self) -> usize {
+        let n = self.x.len();
+        self.p.bytes()
+            + 24 * (n + self.trial.capacity())
+            + self.vectors.iter().map(|v| 24 * v.len()).sum::<usize>()
+            + self.hessian.as_ref().map_or(0, |h| h.bytes())
+            + self.precond.as_ref().map_or(0, |m| m.bytes())
+    }
+}

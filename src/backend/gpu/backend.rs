@@ -1,0 +1,605 @@
+//! `Backend` on a wgpu device. The problem is uploaded once; each operation
+//! becomes one dispatch (its `Op` record in a uniform buffer at a dynamic
+//! offset, so bind groups are built once per buffer combination and
+//! reused), recorded into one command encoder; `flush` submits it and reads
+//! the scalar slots back: the only read-back of a CG iteration or of a
+//! line-search trial.
+
+use super::buffers::{BindingLimits, check_bindings};
+use super::context::GpuContext;
+use super::layout::{ELEM_STRIDE, ModelUniform, Op, corner_tables};
+use super::shader::{Kernel, Variant};
+use crate::backend::cpu::hessian_assemble::HessianPattern;
+use crate::backend::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
+use crate::error::{Error, Result};
+use crate::metric::mat3::Vec3;
+use crate::problem::Problem;
+use crate::solve::line_search::LineSearch;
+use std::collections::HashMap;
+
+/// Device buffers by role: the keys of the bind-group cache.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Buf {
+    Model,
+    LineSearch,
+    Ops,
+    X,
+    Trial,
+    Corners,
+    Shapes,
+    IncOffsets,
+    Inc,
+    Free,
+    Colors,
+    Moves,
+    CornerGrad,
+    Partials,
+    Scalars,
+    /// Bound in place of x when `axpby` has x == y.
+    Dummy,
+    Vector(u32),
+    RowOffsets,
+    Cols,
+    Diag,
+    ContribOffsets,
+    ContribItems,
+    Elem,
+    Blocks,
+    Factors,
+}
+
+/// Operations recorded between two submissions (the `Op` buffer's capacity).
+const OPS_PER_BATCH: usize = 512;
+
+pub struct GpuBackend<'c> {
+    ctx: &'c GpuContext,
+    n_vertices: usize,
+    n_corners: usize,
+    n_free: usize,
+    /// (offset, count) of each colour in `Buf::Colors`.
+    colors: Vec<(u32, u32)>,
+    /// Closed-form (tetrahedral mean ratio) kernels or the general ones.
+    fast: bool,
+    max_backtracks: u32,
+    bufs: HashMap<Buf, wgpu::Buffer>,
+    vectors: Vec<wgpu::Buffer>,
+    staging: wgpu::Buffer,
+    groups: HashMap<(Variant, Vec<Buf>), wgpu::BindGroup>,
+    encoder: Option<wgpu::CommandEncoder>,
+    /// Pending `Op` records, `ctx.op_stride()` apart.
+    ops: Vec<u8>,
+    n_blocks: usize,
+    problem: &'c Problem,
+}
+
+fn groups_of(n: usize) -> usize {
+    n.div_ceil(64).max(1)
+}
+
+impl<'c> GpuBackend<'c> {
+    /// Uploads the problem and positions `x` (problem numbering); `ls` drives
+    /// the per-vertex line searches of BCD.
+    pub fn new(ctx: &'c GpuContext, p: &'c Problem, x: &[Vec3], ls: &LineSearch) -> Result<Self> {
+        let (nv, nc, nf) = (p.num_vertices(), p.num_corners(), p.free_vertices.len());
+        if x.len() != nv {
+            return Err(Error::InvalidArgument(format!(
+                "{} positions for a problem with {nv} vertices",
+                x.len()
+            )));
+        }
+        let r = ctx.real_size();
+        check_bindings(
+            &BindingLimits::of(&ctx.limits),
+            &[
+                ("positions", 3 * nv as u64 * r),
+                ("corners", 20 * nc as u64),
+                ("incidence", 4 * p.incidence.items.len() as u64),
+                ("corner gradients", 12 * nc as u64 * r),
+            ],
+        )?;
+        super::buffers::grid(nc)?;
+        let model = ModelUniform::of(p);
+        let (corner_items, table) = corner_tables(p);
+        let flat: Vec<f64> = x.iter().flatten().copied().collect();
+        let partials = groups_of(nc.max(nv).max(nf));
+        let mut bufs = HashMap::new();
+        bufs.insert(Buf::Model, ctx.uniform("model", &model));
+        bufs.insert(
+            Buf::LineSearch,
+            ctx.uniform_real("line search", &[ls.beta, ls.sigma, 0.0, 0.0]),
+        );
+        bufs.insert(
+            Buf::Ops,
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("operations"),
+                size: OPS_PER_BATCH as u64 * ctx.op_stride(),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        );
+        bufs.insert(Buf::X, ctx.storage_real("positions", &flat));
+        bufs.insert(Buf::Trial, ctx.storage_real("trial positions", &flat));
+        bufs.insert(Buf::Corners, ctx.storage_u32("corners", &corner_items));
+        bufs.insert(Buf::Shapes, ctx.storage_real("corner shapes", &table));
+        bufs.insert(
+            Buf::IncOffsets,
+            ctx.storage_u32("incidence offsets", &p.incidence.offsets),
+        );
+        bufs.insert(Buf::Inc, ctx.storage_u32("incidence", &p.incidence.items));
+        bufs.insert(Buf::Free, ctx.storage_u32("free vertices", &p.free_vertices));
+        bufs.insert(Buf::Colors, ctx.storage_u32("colours", &p.colors.items));
+        bufs.insert(Buf::Moves, ctx.zeros_real("moves", 3 * nv));
+        bufs.insert(Buf::CornerGrad, ctx.zeros_real("corner gradients", 12 * nc));
+        bufs.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
+        bufs.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
+        bufs.insert(Buf::Dummy, ctx.zeros_real("unused", 4));
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scalar slots read back"),
+            size: N_SLOTS as u64 * r,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let colors = (0..p.colors.len())
+            .map(|c| (p.colors.offsets[c], p.colors.of(c).len() as u32))
+            .collect();
+        ctx.check()?;
+        Ok(GpuBackend {
+            ctx,
+            n_vertices: nv,
+            n_corners: nc,
+            n_free: nf,
+            colors,
+            fast: model.fast != 0,
+            max_backtracks: ls.max_backtracks as u32,
+            bufs,
+            vectors: Vec::new(),
+            staging,
+            groups: HashMap::new(),
+            encoder: None,
+            ops: Vec::new(),
+            n_blocks: 0,
+            problem: p,
+        })
+    }
+
+    fn buf(&self, b: Buf) -> &wgpu::Buffer {
+        match b {
+            Buf::Vector(i) => &self.vectors[i as usize],
+            other => &self.bufs[&other],
+        }
+    }
+
+    /// Records one dispatch of `v` over `threads` with `bufs` bound in table
+    /// order and `op` as its `Op` record.
+    fn record(&mut self, v: Variant, bufs: &[Buf], op: Op, threads: usize) -> Result<()> {
+        let stride = self.ctx.op_stride() as usize;
+        if self.ops.len() / stride >= OPS_PER_BATCH {
+            self.submit()?;
+        }
+        let offset = self.ops.len();
+        self.ops.extend_from_slice(&op.bytes(self.ctx.real));
+        self.ops.resize(offset + stride, 0);
+        let key = (v, bufs.to_vec());
+        if !self.groups.contains_key(&key) {
+            let buffers: Vec<&wgpu::Buffer> = bufs.iter().map(|b| self.buf(*b)).collect();
+            let group = self.ctx.bind(v, &buffers);
+            self.groups.insert(key.clone(), group);
+        }
+        let ctx = self.ctx;
+        let enc = self
+            .encoder
+            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        ctx.dispatch(&mut pass, v, &self.groups[&key], Some(offset as u32), threads)
+    }
+
+    fn copy(&mut self, src: Buf, dst: Buf) {
+        let ctx = self.ctx;
+        let size = self.buf(src).size().min(self.buf(dst).size());
+        let enc = self
+            .encoder
+            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
+        enc.copy_buffer_to_buffer(&self.bufs[&src], 0, &self.bufs[&dst], 0, size);
+    }
+
+    /// Submits what was recorded (the `Op` records go first).
+    fn submit(&mut self) -> Result<()> {
+        if let Some(enc) = self.encoder.take() {
+            if !self.ops.is_empty() {
+                self.ctx.queue.write_buffer(&self.bufs[&Buf::Ops], 0, &self.ops);
+                self.ops.clear();
+            }
+            self.ctx.queue.submit([enc.finish()]);
+        }
+        self.ctx.check()
+    }
+
+    /// The final pass of a reduction over `n_partials` partials into slots.
+    fn reduce(
+        &mut self,
+        sum: Option<Slot>,
+        min: Option<Slot>,
+        max: Option<Slot>,
+        count: Option<Slot>,
+        n_partials: usize,
+    ) -> Result<()> {
+        let op = Op {
+            slot: Op::slot(sum),
+            aux: Op::slot(min),
+            aux2: Op::slot(max),
+            aux3: Op::slot(count),
+            ..Op::n(n_partials)
+        };
+        self.record(
+            Kernel::Reduce.for_model(true),
+            &[Buf::Ops, Buf::Partials, Buf::Scalars],
+            op,
+            1,
+        )
+    }
+
+    fn read_vec3(&mut self, b: Buf, n: usize) -> Result<Vec<Vec3>> {
+        self.submit()?;
+        let flat = self.ctx.read_real(self.buf(b), 3 * n)?;
+        Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// The assembled Hessian blocks, in the order of `HessianPattern::matrix.blocks`.
+    pub fn hessian_blocks(&mut self) -> Result<Vec<crate::metric::mat3::Mat3>> {
+        self.submit()?;
+        let flat = self.ctx.read_real(self.buf(Buf::Blocks), 9 * self.n_blocks)?;
+        Ok(flat
+            .chunks_exact(9)
+            .map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]])
+            .collect())
+    }
+}
+
+/// Per block slot, its element contributions `corner * 16 + 4 a + b` in
+/// ascending corner order (the CPU assembly's sum order).
+fn contributions(pattern: &HessianPattern) -> (Vec<u32>, Vec<u32>) {
+    let nb = pattern.matrix.blocks.len();
+    let mut offsets = vec![0u32; nb + 1];
+    for s in pattern.slots.iter().flatten() {
+        if *s != u32::MAX {
+            offsets[*s as usize + 1] += 1;
+        }
+    }
+    for i in 0..nb {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut fill = offsets.clone();
+    let mut items = vec![0u32; offsets[nb] as usize];
+    for (e, slots) in pattern.slots.iter().enumerate() {
+        for (ab, &s) in slots.iter().enumerate() {
+            if s != u32::MAX {
+                items[fill[s as usize] as usize] = 16 * e as u32 + ab as u32;
+                fill[s as usize] += 1;
+            }
+        }
+    }
+    (offsets, items)
+}
+
+impl Backend for GpuBackend<'_> {
+    fn describe(&self) -> String {
+        format!(
+            "{}, {}",
+            self.ctx.adapter_name(),
+            if self.ctx.is_f64() { "f64" } else { "f32" }
+        )
+    }
+
+    fn num_free(&self) -> usize {
+        self.n_free
+    }
+
+    fn num_colors(&self) -> usize {
+        self.colors.len()
+    }
+
+    fn vector(&mut self) -> Result<Vector> {
+        check_bindings(
+            &BindingLimits::of(&self.ctx.limits),
+            &[("free-vertex vector", 3 * self.n_free as u64 * self.ctx.real_size())],
+        )?;
+        self.vectors.push(self.ctx.zeros_real("vector", 3 * self.n_free));
+        Ok(Vector(self.vectors.len() as u32 - 1))
+    }
+
+    fn read_vector(&mut self, v: Vector) -> Result<Vec<Vec3>> {
+        self.read_vec3(Buf::Vector(v.0), self.n_free)
+    }
+
+    fn write_vector(&mut self, v: Vector, data: &[Vec3]) -> Result<()> {
+        if data.len() != self.n_free {
+            return Err(Error::InvalidArgument(format!(
+                "a vector of {} blocks for {} free vertices",
+                data.len(),
+                self.n_free
+            )));
+        }
+        // after what is recorded, before what comes next
+        self.submit()?;
+        let flat: Vec<f64> = data.iter().flatten().copied().collect();
+        self.ctx.write_real(&self.vectors[v.0 as usize], &flat);
+        Ok(())
+    }
+
+    fn download(&mut self) -> Result<Vec<Vec3>> {
+        self.read_vec3(Buf::X, self.n_vertices)
+    }
+
+    fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
+        let x = match at {
+            Points::Current => Buf::X,
+            Points::Trial => Buf::Trial,
+        };
+        let nc = self.n_corners;
+        self.record(
+            Kernel::Objective.for_model(self.fast),
+            &[
+                Buf::Model,
+                Buf::Ops,
+                x,
+                Buf::Corners,
+                Buf::Shapes,
+                Buf::CornerGrad,
+                Buf::Partials,
+            ],
+            Op::n(nc),
+            nc,
+        )?;
+        self.reduce(Some(out.value), out.min_det, None, Some(out.infeasible), groups_of(nc))?;
+        if let Some(g) = gradient {
+            let op = Op {
+                aux: 12,
+                ..Op::n(self.n_free)
+            };
+            self.record(
+                Kernel::GradientGather.for_model(true),
+                &[
+                    Buf::Ops,
+                    Buf::Free,
+                    Buf::IncOffsets,
+                    Buf::Inc,
+                    Buf::CornerGrad,
+                    Buf::Vector(g.0),
+                ],
+                op,
+                self.n_free,
+            )?;
+        }
+        Ok(())
+    }
+
+    fn trial(&mut self, alpha: Coef, d: Vector) -> Result<()> {
+        let op = Op {
+            a: alpha,
+            ..Op::n(self.n_free)
+        };
+        self.record(
+            Kernel::LineSearch.for_model(true),
+            &[Buf::Ops, Buf::Scalars, Buf::Free, Buf::X, Buf::Vector(d.0), Buf::Trial],
+            op,
+            self.n_free,
+        )
+    }
+
+    fn accept_trial(&mut self) -> Result<()> {
+        self.copy(Buf::Trial, Buf::X);
+        Ok(())
+    }
+
+    fn bcd_color(&mut self, color: usize) -> Result<()> {
+        let (offset, count) = self.colors[color];
+        if count == 0 {
+            return Ok(());
+        }
+        let op = Op {
+            offset,
+            aux: self.max_backtracks,
+            ..Op::n(count as usize)
+        };
+        self.record(
+            Kernel::Bcd.for_model(self.fast),
+            &[
+                Buf::Model,
+                Buf::LineSearch,
+                Buf::Ops,
+                Buf::X,
+                Buf::Corners,
+                Buf::Shapes,
+                Buf::IncOffsets,
+                Buf::Inc,
+                Buf::Colors,
+                Buf::Moves,
+            ],
+            op,
+            count as usize,
+        )
+    }
+
+    fn max_move(&mut self, out: Slot) -> Result<()> {
+        let nv = self.n_vertices;
+        self.record(
+            Kernel::Dot.for_model(true),
+            &[Buf::Ops, Buf::Moves, Buf::Moves, Buf::Partials],
+            Op::n(nv),
+            nv,
+        )?;
+        self.reduce(None, None, Some(out), None, groups_of(nv))
+    }
+
+    fn prepare_hessian(&mut self) -> Result<usize> {
+        let ctx = self.ctx;
+        let pattern = HessianPattern::new(self.problem);
+        let nb = pattern.matrix.blocks.len();
+        let (c_off, c_items) = contributions(&pattern);
+        let r = ctx.real_size();
+        check_bindings(
+            &BindingLimits::of(&ctx.limits),
+            &[
+                (
+                    "corner gradients and Hessian blocks",
+                    ELEM_STRIDE as u64 * self.n_corners as u64 * r,
+                ),
+                ("Hessian blocks", 9 * nb as u64 * r),
+                ("Hessian contributions", 4 * c_items.len() as u64),
+            ],
+        )?;
+        super::buffers::grid(nb)?;
+        let m = &pattern.matrix;
+        let new = [
+            (Buf::RowOffsets, ctx.storage_u32("row offsets", &m.row_offsets)),
+            (Buf::Cols, ctx.storage_u32("block columns", &m.cols)),
+            (Buf::Diag, ctx.storage_u32("diagonal blocks", &m.diag)),
+            (Buf::ContribOffsets, ctx.storage_u32("contribution offsets", &c_off)),
+            (Buf::ContribItems, ctx.storage_u32("contributions", &c_items)),
+            (
+                Buf::Elem,
+                ctx.zeros_real("corner blocks", ELEM_STRIDE as usize * self.n_corners),
+            ),
+            (Buf::Blocks, ctx.zeros_real("Hessian blocks", 9 * nb)),
+            (Buf::Factors, ctx.zeros_real("block-Jacobi factors", 6 * self.n_free)),
+        ];
+        let bytes = new.iter().map(|(_, b)| b.size() as usize).sum();
+        self.bufs.extend(new);
+        self.n_blocks = nb;
+        ctx.check()?;
+        Ok(bytes)
+    }
+
+    fn assemble(&mut self, g: Vector) -> Result<()> {
+        let (nc, nb, nf) = (self.n_corners, self.n_blocks, self.n_free);
+        self.record(
+            Kernel::HessianAssemble.for_model(self.fast),
+            &[Buf::Model, Buf::Ops, Buf::X, Buf::Corners, Buf::Shapes, Buf::Elem],
+            Op::n(nc),
+            nc,
+        )?;
+        self.record(
+            Kernel::HessianGather.for_model(true),
+            &[Buf::Ops, Buf::ContribOffsets, Buf::ContribItems, Buf::Elem, Buf::Blocks],
+            Op::n(nb),
+            nb,
+        )?;
+        let op = Op {
+            aux: ELEM_STRIDE,
+            ..Op::n(nf)
+        };
+        self.record(
+            Kernel::GradientGather.for_model(true),
+            &[
+                Buf::Ops,
+                Buf::Free,
+                Buf::IncOffsets,
+                Buf::Inc,
+                Buf::Elem,
+                Buf::Vector(g.0),
+            ],
+            op,
+            nf,
+        )
+    }
+
+    fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()> {
+        let nf = self.n_free;
+        self.record(
+            Kernel::BsrSpmv.for_model(true),
+            &[
+                Buf::Ops,
+                Buf::RowOffsets,
+                Buf::Cols,
+                Buf::Blocks,
+                Buf::Vector(x.0),
+                Buf::Vector(y.0),
+            ],
+            Op::n(nf),
+            nf,
+        )
+    }
+
+    fn factor_precond(&mut self) -> Result<()> {
+        let nf = self.n_free;
+        self.record(
+            Kernel::BlockJacobiFactor.for_model(true),
+            &[Buf::Ops, Buf::Blocks, Buf::Diag, Buf::Factors],
+            Op::n(nf),
+            nf,
+        )
+    }
+
+    fn precond(&mut self, x: Vector, y: Vector) -> Result<()> {
+        let nf = self.n_free;
+        self.record(
+            Kernel::BlockJacobi.for_model(true),
+            &[Buf::Ops, Buf::Factors, Buf::Vector(x.0), Buf::Vector(y.0)],
+            Op::n(nf),
+            nf,
+        )
+    }
+
+    fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
+        let nf = self.n_free;
+        self.record(
+            Kernel::Dot.for_model(true),
+            &[Buf::Ops, Buf::Vector(a.0), Buf::Vector(b.0), Buf::Partials],
+            Op::n(nf),
+            nf,
+        )?;
+        self.reduce(Some(sum), None, max, None, groups_of(nf))
+    }
+
+    fn axpby(&mut self, a: Coef, x: Vector, b: Coef, y: Vector, guard: Option<Slot>) -> Result<()> {
+        let (xb, flags) = if x == y { (Buf::Dummy, 1) } else { (Buf::Vector(x.0), 0) };
+        let op = Op {
+            guard: Op::slot(guard),
+            flags,
+            a,
+            b,
+            ..Op::n(self.n_free)
+        };
+        self.record(
+            Kernel::Axpby.for_model(true),
+            &[Buf::Ops, Buf::Scalars, xb, Buf::Vector(y.0)],
+            op,
+            self.n_free,
+        )
+    }
+
+    fn set_slot(&mut self, dst: Slot, value: Coef, guard: Option<Slot>) -> Result<()> {
+        let op = Op {
+            slot: dst.0,
+            guard: Op::slot(guard),
+            a: value,
+            ..Op::n(1)
+        };
+        self.record(Kernel::SetSlot.for_model(true), &[Buf::Ops, Buf::Scalars], op, 1)
+    }
+
+    fn flush(&mut self) -> Result<[f64; N_SLOTS]> {
+        let ctx = self.ctx;
+        let size = N_SLOTS as u64 * ctx.real_size();
+        let enc = self
+            .encoder
+            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
+        enc.copy_buffer_to_buffer(&self.bufs[&Buf::Scalars], 0, &self.staging, 0, size);
+        self.submit()?;
+        let v = ctx.map_read(&self.staging, N_SLOTS)?;
+        let mut out = [0.0; N_SLOTS];
+        out.copy_from_slice(&v);
+        Ok(out)
+    }
+
+    fn bytes(&self) -> usize {
+        self.problem.bytes()
+            + self
+                .bufs
+                .values()
+                .chain(&self.vectors)
+                .chain([&self.staging])
+                .map(|b| b.size() as usize)
+                .sum::<usize>()
+    }
+}
