@@ -57,7 +57,13 @@ fn main() {
                 (0..3)
                     .map(|_| {
                         let mut m = mesh.clone();
-                        solve::smooth_mesh(&mut m, method, &Params::default(), &mut |_| true).unwrap()
+                        solve::smooth_mesh(
+                            &mut m,
+                            &Default::default(),
+                            &solve::Options::cpu(method, &Params::default()),
+                            &mut |_| true,
+                        )
+                        .unwrap()
                     })
                     .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
                     .unwrap()

@@ -25,10 +25,15 @@ fn main() -> meshsmooth::Result<()> {
     // -- the README example --
     let mut mesh = meshsmooth::io::read(&input)?;
     let before = meshsmooth::report::quality_report(&mesh, &mesh.points);
-    let info = solve::smooth_mesh(&mut mesh, Method::Newton, &Params::default(), &mut |rec| {
-        eprintln!("iteration {}: F = {:.8}", rec.iteration, rec.objective);
-        true // return false to stop early
-    })?;
+    let info = solve::smooth_mesh(
+        &mut mesh,
+        &Default::default(),
+        &solve::Options::cpu(Method::Newton, &Params::default()),
+        &mut |rec| {
+            eprintln!("iteration {}: F = {:.8}", rec.iteration, rec.objective);
+            true // return false to stop early
+        },
+    )?;
     let after = meshsmooth::report::quality_report(&mesh, &mesh.points);
     println!(
         "{before}\n{after}\n{:?} after {} iterations",

@@ -1,6 +1,8 @@
 //! The optimisers on generated meshes: convergence to the known optimum,
 //! monotone decrease, fixed boundary, feasibility, invariances.
 
+mod common;
+use common::{perturbed_box, smooth};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::mesh::topology;
 use meshsmooth::metric;
@@ -11,21 +13,6 @@ use std::time::Duration;
 
 /// Inverse mean ratio of each tet of a Kuhn-split cube: the optimum of the box.
 const BOX_OPTIMUM: f64 = 1.322_834_2;
-
-fn perturbed_box(n: usize, alpha: f64, seed: u64) -> Mesh {
-    let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
-    let opts = PerturbOptions {
-        perturbation: Perturbation::Random { alpha },
-        fraction: 1.0,
-        seed,
-    };
-    generate::perturb(&mut m, &opts).unwrap();
-    m
-}
-
-fn smooth(mesh: &mut Mesh, method: Method, params: &Params) -> solve::Info {
-    solve::smooth_mesh(mesh, method, params, &mut |_| true).unwrap()
-}
 
 #[test]
 fn bcd_converges_on_perturbed_20_box_to_the_known_optimum() {
@@ -179,10 +166,15 @@ fn limits_stop_the_solver_with_a_valid_mesh() {
     );
     assert_eq!(info.stop, StopReason::TimeLimit);
     let mut calls = 0;
-    let info = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| {
-        calls += 1;
-        calls < 3
-    })
+    let info = solve::smooth_mesh(
+        &mut mesh,
+        &Default::default(),
+        &solve::Options::cpu(Method::Bcd, &Params::default()),
+        &mut |_| {
+            calls += 1;
+            calls < 3
+        },
+    )
     .unwrap();
     assert_eq!(info.stop, StopReason::Cancelled);
     assert_eq!(info.iterations, 2);
@@ -196,7 +188,13 @@ fn an_inverted_start_is_refused_with_element_ids() {
     mesh.points[centre] = [2.6, 2.6, 2.6];
     let bad = metric::inverted_elements(&mesh, &mesh.points);
     assert!(!bad.is_empty());
-    let err = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true).unwrap_err();
+    let err = solve::smooth_mesh(
+        &mut mesh,
+        &Default::default(),
+        &solve::Options::cpu(Method::Bcd, &Params::default()),
+        &mut |_| true,
+    )
+    .unwrap_err();
     let msg = err.to_string();
     assert!(msg.contains(&format!("{} inverted", bad.len())), "{msg}");
     assert!(msg.contains(&bad[0].to_string()), "{msg}");
@@ -222,7 +220,13 @@ fn mixed_tet_prism_hex_meshes_optimise_with_every_metric() {
                 template: Template::Harmonic,
                 reference: None,
             };
-            let info = solve::smooth_mesh_with(&mut mesh, &po, method, &Params::default(), &mut |_| true).unwrap();
+            let info = solve::smooth_mesh(
+                &mut mesh,
+                &po,
+                &solve::Options::cpu(method, &Params::default()),
+                &mut |_| true,
+            )
+            .unwrap();
             assert_eq!(info.stop, StopReason::Converged, "{metric} {method}");
             assert!(info.objective < info.history.records[0].objective, "{metric} {method}");
             assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());

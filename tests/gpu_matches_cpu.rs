@@ -3,40 +3,18 @@
 //! pass — except under `CI`, where they fail.
 
 mod common;
-use common::context;
+use common::{Tet, context, options, perturbed_box, random_tets, solve_on};
 
-use meshsmooth::backend::gpu::{self, GpuBcd, GpuContext, GpuOptions, Precision};
-use meshsmooth::generate::{self, PerturbOptions, Perturbation};
-use meshsmooth::metric::{self, TetShape, tet_det};
+use meshsmooth::backend::Backend;
+use meshsmooth::backend::cpu::CpuBackend;
+use meshsmooth::backend::gpu::{self, GpuBackend, GpuContext, GpuOptions, Precision};
+use meshsmooth::metric::{self, TetShape};
+use meshsmooth::objective;
 use meshsmooth::problem::Problem;
-use meshsmooth::solve::{self, Method, Params, bcd};
-use meshsmooth::{Mesh, objective};
+use meshsmooth::solve::bcd::Bcd;
+use meshsmooth::solve::{self, Device, Method, Params};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-type Tet = [[f64; 3]; 4];
-
-/// Random positively oriented tets; `flatten` squeezes z for poor shapes.
-fn random_tets(seed: u64, count: usize, flatten: f64) -> Vec<Tet> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut out = Vec::new();
-    while out.len() < count {
-        let mut t: Tet = [[0.0; 3]; 4];
-        for v in t.iter_mut() {
-            for c in v.iter_mut() {
-                *c = rng.random_range(-1.0..1.0);
-            }
-            v[2] *= flatten;
-        }
-        if tet_det(&t) < 0.0 {
-            t.swap(1, 2);
-        }
-        if TetShape::equilateral().value(&t).is_some() {
-            out.push(t);
-        }
-    }
-    out
-}
 
 /// Largest |gpu - cpu| / (|cpu| + floor) over the entries of each element,
 /// the floor being the element's largest entry (so near-zero entries are
@@ -81,7 +59,7 @@ fn mean_ratio_eval_matches_cpu_f64() {
         return;
     };
     for (flatten, name) in [(1.0, "random"), (0.02, "flattened")] {
-        let w = element_errors(&ctx, &random_tets(11, 4000, flatten));
+        let w = element_errors(&ctx, &random_tets(11, 4000, flatten, f64::INFINITY));
         eprintln!(
             "f64 {name}: worst relative error value {:.1e} grad {:.1e} hess {:.1e}",
             w[0], w[1], w[2]
@@ -89,7 +67,7 @@ fn mean_ratio_eval_matches_cpu_f64() {
         assert!(w.iter().all(|&e| e < 1e-10), "{name}: {w:?}");
     }
     // an inverted element is flagged, not evaluated
-    let mut t = random_tets(3, 1, 1.0)[0];
+    let mut t = random_tets(3, 1, 1.0, f64::INFINITY)[0];
     t.swap(1, 2);
     let x: Vec<[f64; 3]> = t.to_vec();
     let out = gpu::mean_ratio_eval(&ctx, &TetShape::equilateral(), &[[0, 1, 2, 3]], &x).unwrap();
@@ -102,7 +80,7 @@ fn mean_ratio_eval_matches_cpu_f32() {
         return;
     };
     // well-shaped: eta below 3
-    let good: Vec<Tet> = random_tets(12, 4000, 1.0)
+    let good: Vec<Tet> = random_tets(12, 4000, 1.0, f64::INFINITY)
         .into_iter()
         .filter(|t| TetShape::equilateral().value(t).unwrap() < 3.0)
         .collect();
@@ -117,12 +95,14 @@ fn mean_ratio_eval_matches_cpu_f32() {
     );
     assert!(w.iter().all(|&e| e < 1e-4), "{w:?}");
     // poorly shaped: measured, bounded loosely (f32 cancellation in det and cofactors)
-    let w = element_errors(&ctx, &random_tets(13, 4000, 0.02));
+    let w = element_errors(&ctx, &random_tets(13, 4000, 0.02, f64::INFINITY));
     eprintln!(
         "f32 poorly shaped: worst relative error value {:.1e} grad {:.1e} hess {:.1e}",
         w[0], w[1], w[2]
     );
-    assert!(w.iter().all(|&e| e < 1.0), "{w:?}");
+    // f32 cancellation in det and cofactors on flat elements costs digits,
+    // but the derivatives still agree to a few parts in a thousand
+    assert!(w.iter().all(|&e| e < 1e-2), "{w:?}");
 }
 
 #[test]
@@ -146,35 +126,27 @@ fn cbrt_matches_cpu_f64() {
     assert!(worst_ulps <= 1.0, "{worst_ulps} ulp");
 }
 
-fn perturbed_box(n: usize) -> Mesh {
-    let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
-    let opts = PerturbOptions {
-        perturbation: Perturbation::Random { alpha: 0.3 },
-        fraction: 1.0,
-        seed: 1,
-    };
-    generate::perturb(&mut m, &opts).unwrap();
-    m
-}
-
+/// One coloured sweep of the one BCD solver (`solve::bcd::Bcd`) on the GPU
+/// and on the CPU from the same start.
 fn sweep_matches(precision: Precision, tol_edge: f64, tol_rel: f64) {
     let Some(ctx) = context(precision) else {
         return;
     };
-    let mesh = perturbed_box(8);
+    let mesh = perturbed_box(8, 0.3, 1);
     let p = Problem::new(&mesh).unwrap();
     let x0 = p.gather(&mesh.points);
-    let mut gpu = GpuBcd::new(&ctx, &p, &x0).unwrap();
-    let (f0, g0) = gpu.objective_and_grad_norm().unwrap().unwrap();
-    let (cf0, cg0) = objective::gradient(&p, &x0).unwrap();
-    let cg0 = objective::norm(&cg0);
+    let ls = Default::default();
+    let mut gpu = GpuBackend::new(&ctx, &p, &x0, &ls).unwrap();
+    let mut cpu = CpuBackend::new(&p, &x0, &ls).unwrap();
+    let (mut gb, mut cb) = (Bcd::new(&mut gpu, false).unwrap(), Bcd::new(&mut cpu, false).unwrap());
+    let (f0, g0) = gb.start(&mut gpu).unwrap().unwrap();
+    let (cf0, cg0) = cb.start(&mut cpu).unwrap().unwrap();
     assert!((f0 - cf0).abs() <= tol_rel * cf0, "F {f0} vs {cf0}");
     assert!((g0 - cg0).abs() <= tol_rel * cg0, "|g| {g0} vs {cg0}");
 
-    let mut x = x0.clone();
-    bcd::sweep_colored(&p, &mut x, &Default::default(), None);
-    gpu.sweep().unwrap();
-    let got = gpu.download().unwrap();
+    let gs = gb.step(&mut gpu, None).unwrap();
+    let cs = cb.step(&mut cpu, None).unwrap();
+    let (got, x) = (gpu.download().unwrap(), cpu.download().unwrap());
     let edge = p.mean_edge_length(&x0);
     let worst = x
         .iter()
@@ -186,15 +158,29 @@ fn sweep_matches(precision: Precision, tol_edge: f64, tol_rel: f64) {
         worst / edge
     );
     assert!(worst <= tol_edge * edge, "{worst} vs edge {edge}");
+    assert!(gs.objective < f0, "the sweep decreased F");
     // the scalars read back are those of the device's positions ...
-    let (f1, g1) = gpu.objective_and_grad_norm().unwrap().unwrap();
     let (cf1, cg1) = objective::gradient(&p, &got).unwrap();
     let cg1 = objective::norm(&cg1);
-    assert!((f1 - cf1).abs() <= tol_rel * cf1, "F {f1} vs {cf1}");
-    assert!((g1 - cg1).abs() <= tol_rel * cg1, "|g| {g1} vs {cg1}");
+    assert!(
+        (gs.objective - cf1).abs() <= tol_rel * cf1,
+        "F {} vs {cf1}",
+        gs.objective
+    );
+    assert!(
+        (gs.grad_norm - cg1).abs() <= tol_rel * cg1,
+        "|g| {} vs {cg1}",
+        gs.grad_norm
+    );
     // ... and the sweep decreased F as much as the CPU's did
-    let cpu_f1 = objective::value(&p, &x).unwrap();
-    assert!((f1 - cpu_f1).abs() <= tol_rel * cpu_f1, "F {f1} vs CPU sweep {cpu_f1}");
+    assert!(
+        (gs.objective - cs.objective).abs() <= tol_rel * cs.objective,
+        "F {} vs CPU sweep {}",
+        gs.objective,
+        cs.objective
+    );
+    let (dg, dc) = (gs.max_move_sq.sqrt(), cs.max_move_sq.sqrt());
+    assert!((dg - dc).abs() <= tol_edge * edge, "largest move {dg} vs {dc}");
 }
 
 #[test]
@@ -212,18 +198,18 @@ fn full_solve(precision: Precision, tol: f64, gpu_tol: f64) {
     let Some(ctx) = context(precision) else {
         return;
     };
-    let mut mesh = perturbed_box(20);
+    let mut mesh = perturbed_box(20, 0.3, 1);
     let p = Problem::new(&mesh).unwrap();
     let x0 = p.gather(&mesh.points);
     let params = Params::default();
     let mut cpu_x = x0.clone();
-    let cpu = solve::solve(&p, &mut cpu_x, Method::BcdColored, &params, &mut |_| true).unwrap();
+    let cpu = solve_on(&p, &mut cpu_x, Method::BcdColored, &params, Device::Cpu);
     let gpu_params = Params {
         tol: gpu_tol,
         ..Params::default()
     };
     let mut x = x0.clone();
-    let info = gpu::solve_gpu(&ctx, &p, &mut x, &gpu_params, &mut |_| true).unwrap();
+    let info = solve_on(&p, &mut x, Method::BcdColored, &gpu_params, Device::Gpu(&ctx));
     eprintln!(
         "{precision:?} solve: GPU {} sweeps in {:.2} s ({:?}) F = {:.12}, CPU {} sweeps in {:.2} s F = {:.12}",
         info.iterations, info.seconds, info.stop, info.objective, cpu.iterations, cpu.seconds, cpu.objective
@@ -274,13 +260,14 @@ fn unknown_adapter_name_is_an_error_listing_what_was_found() {
 #[test]
 fn a_failure_midway_leaves_the_last_checkpoint_which_is_feasible() {
     let Some(ctx) = context(Precision::F64) else { return };
-    let mut mesh = perturbed_box(6);
+    let mut mesh = perturbed_box(6, 0.3, 1);
     let start = mesh.points.clone();
-    let opts = gpu::GpuRunOptions {
+    let opts = solve::Options {
         checkpoint_every: Some(2),
         fail_after: Some(5),
+        ..options(Method::BcdColored, &Params::default(), Device::Gpu(&ctx))
     };
-    let err = gpu::smooth_mesh_gpu(&ctx, &mut mesh, &Params::default(), &opts, &mut |_| true).unwrap_err();
+    let err = solve::smooth_mesh(&mut mesh, &Default::default(), &opts, &mut |_| true).unwrap_err();
     assert!(err.to_string().contains("device lost"), "{err}");
     assert_ne!(
         mesh.points, start,
@@ -288,13 +275,13 @@ fn a_failure_midway_leaves_the_last_checkpoint_which_is_feasible() {
     );
     assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
     // the checkpoint is the state after exactly four sweeps
-    let p = Problem::new(&perturbed_box(6)).unwrap();
+    let p = Problem::new(&perturbed_box(6, 0.3, 1)).unwrap();
     let mut x = p.gather(&start);
     let four = Params {
         max_iter: 4,
         ..Params::default()
     };
-    gpu::solve_gpu(&ctx, &p, &mut x, &four, &mut |_| true).unwrap();
+    solve_on(&p, &mut x, Method::BcdColored, &four, Device::Gpu(&ctx));
     let expected = p.scatter(&x);
     assert_eq!(mesh.points, expected);
 }

@@ -4,86 +4,19 @@
 //! pass — except under `CI`, where they fail.
 
 mod common;
-use common::context;
+use common::{KINDS, context, meshes, models, problem, solve_on};
 
-use meshsmooth::backend::gpu::{self, GpuBcd, GpuRunOptions, Precision};
-use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::backend::Backend;
+use meshsmooth::backend::cpu::CpuBackend;
+use meshsmooth::backend::gpu::{GpuBackend, Precision};
+use meshsmooth::generate;
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
-use meshsmooth::problem::{Problem, ProblemOptions};
-use meshsmooth::solve::bcd::{LineSearch, sweep_colored};
-use meshsmooth::solve::{self, Method, Params};
-use meshsmooth::{ElementKind, Mesh, objective};
+use meshsmooth::solve::bcd::Bcd;
+use meshsmooth::solve::{Device, Method, Params};
+use meshsmooth::{ElementKind, objective};
 
 type Vec3 = [f64; 3];
-
-const KINDS: [ElementKind; 5] = [
-    ElementKind::Triangle,
-    ElementKind::Quadrilateral,
-    ElementKind::Tetrahedron,
-    ElementKind::Hexahedron,
-    ElementKind::Prism,
-];
-
-/// Triangles of a `n x n` grid extruded through `n` layers.
-fn prism_stack(n: usize) -> Mesh {
-    let tris = generate::tri_grid(n, n, [n as f64; 2]);
-    let layer = tris.num_points() as u32;
-    let points = (0..=n)
-        .flat_map(|k| tris.points.iter().map(move |p| [p[0], p[1], k as f64]))
-        .collect();
-    let mut mesh = Mesh::new(points);
-    for k in 0..n as u32 {
-        for e in 0..tris.num_elements() {
-            let t = tris.element(e);
-            let (lo, hi) = (layer * k, layer * (k + 1));
-            mesh.push_element(
-                ElementKind::Prism,
-                &[t[0] + lo, t[1] + lo, t[2] + lo, t[0] + hi, t[1] + hi, t[2] + hi],
-            );
-        }
-    }
-    mesh
-}
-
-/// A small regular mesh of `kind` (the reference) and a seeded perturbation of it.
-fn meshes(kind: ElementKind, seed: u64) -> (Mesh, Mesh) {
-    let reference = match kind {
-        ElementKind::Triangle => generate::tri_grid(6, 6, [6.0, 6.0]),
-        ElementKind::Quadrilateral => generate::quad_grid(6, 6, [6.0, 6.0]),
-        ElementKind::Tetrahedron => generate::tet_box(3, 3, 3, [3.0; 3]),
-        ElementKind::Hexahedron => generate::hex_box(3, 3, 3, [3.0; 3]),
-        ElementKind::Prism => prism_stack(3),
-    };
-    let mut mesh = reference.clone();
-    let opts = PerturbOptions {
-        perturbation: Perturbation::Random { alpha: 0.25 },
-        fraction: 1.0,
-        seed,
-    };
-    generate::perturb(&mut mesh, &opts).unwrap();
-    (mesh, reference)
-}
-
-/// Every metric with each template it allows; tmp targets the unperturbed mesh.
-fn models() -> Vec<(MetricKind, Template)> {
-    vec![
-        (MetricKind::InverseMeanRatio, Template::Harmonic),
-        (MetricKind::InverseMeanRatio, Template::Average),
-        (MetricKind::ConditionNumber, Template::Harmonic),
-        (MetricKind::ConditionNumber, Template::Average),
-        (MetricKind::TargetShapeSize, Template::Harmonic),
-    ]
-}
-
-fn problem(mesh: &Mesh, reference: &Mesh, metric: MetricKind, template: Template) -> Problem {
-    let opts = ProblemOptions {
-        metric,
-        template,
-        reference: (metric == MetricKind::TargetShapeSize).then_some(reference),
-    };
-    Problem::with_options(mesh, &opts).unwrap()
-}
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
@@ -108,10 +41,12 @@ fn every_case(precision: Precision, tol_rel: f64, tol_edge: Option<f64>) {
             let case = format!("{kind} {metric} {template:?} {precision:?}");
             let p = problem(&mesh, &reference, metric, template);
             let x0 = p.gather(&mesh.points);
-            let mut gpu = GpuBcd::new(&ctx, &p, &x0).unwrap();
+            let ls = Default::default();
+            let mut gpu = GpuBackend::new(&ctx, &p, &x0, &ls).unwrap();
+            let mut gb = Bcd::new(&mut gpu, false).unwrap();
             let (cf, cg) = objective::gradient(&p, &x0).unwrap();
             let cg = objective::norm(&cg);
-            let (f, g) = gpu.objective_and_grad_norm().unwrap().expect("feasible start");
+            let (f, g) = gb.start(&mut gpu).unwrap().expect("feasible start");
             eprintln!(
                 "{case}: F {:.1e} |g| {:.1e} relative differences",
                 rel(f, cf),
@@ -122,10 +57,11 @@ fn every_case(precision: Precision, tol_rel: f64, tol_edge: Option<f64>) {
             let Some(tol_edge) = tol_edge else {
                 continue;
             };
-            let mut cx = x0.clone();
-            sweep_colored(&p, &mut cx, &LineSearch::default(), None);
-            gpu.sweep().unwrap();
-            let gx = gpu.download().unwrap();
+            let mut cpu = CpuBackend::new(&p, &x0, &ls).unwrap();
+            let mut cb = Bcd::new(&mut cpu, false).unwrap();
+            cb.step(&mut cpu, None).unwrap();
+            gb.step(&mut gpu, None).unwrap();
+            let (gx, cx) = (gpu.download().unwrap(), cpu.download().unwrap());
             let edge = p.mean_edge_length(&x0);
             let worst = worst_diff(&gx, &cx) / edge;
             eprintln!("{case}: sweep differs by {worst:.1e} mean edges");
@@ -169,9 +105,9 @@ fn full_solve(kind: ElementKind, metric: MetricKind) {
         ..Params::default()
     };
     let mut cx = x0.clone();
-    let cpu = solve::solve(&p, &mut cx, Method::BcdColored, &params, &mut |_| true).unwrap();
+    let cpu = solve_on(&p, &mut cx, Method::BcdColored, &params, Device::Cpu);
     let mut gx = x0.clone();
-    let info = gpu::solve_gpu(&ctx, &p, &mut gx, &params, &mut |_| true).unwrap();
+    let info = solve_on(&p, &mut gx, Method::BcdColored, &params, Device::Gpu(&ctx));
     eprintln!(
         "{kind} {metric}: GPU {} sweeps F = {:.12} ({:?}), CPU {} sweeps F = {:.12}",
         info.iterations, info.objective, info.stop, cpu.iterations, cpu.objective
@@ -205,9 +141,9 @@ fn newton_first_iterates(kind: ElementKind, metric: MetricKind, template: Templa
         ..Params::default()
     };
     let mut cx = x0.clone();
-    let cpu = solve::solve(&p, &mut cx, Method::Newton, &params, &mut |_| true).unwrap();
+    let cpu = solve_on(&p, &mut cx, Method::Newton, &params, Device::Cpu);
     let mut gx = x0.clone();
-    let info = gpu::solve_newton_gpu(&ctx, &p, &mut gx, &params, &GpuRunOptions::default(), &mut |_| true).unwrap();
+    let info = solve_on(&p, &mut gx, Method::Newton, &params, Device::Gpu(&ctx));
     assert_eq!(info.iterations, cpu.iterations);
     for (c, g) in cpu.history.records.iter().zip(&info.history.records) {
         eprintln!(

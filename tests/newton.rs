@@ -1,15 +1,18 @@
 //! Inexact Newton: PCG against dense solves, negative curvature, the
 //! assembled Hessian against finite differences, agreement with BCD.
 
-use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+mod common;
+use common::perturbed_box;
+use meshsmooth::backend::Backend;
+use meshsmooth::backend::cpu::CpuBackend;
+use meshsmooth::backend::cpu::bsr_spmv::BlockCsr;
+use meshsmooth::backend::cpu::hessian_assemble::HessianPattern;
 use meshsmooth::objective;
 use meshsmooth::problem::Problem;
-use meshsmooth::solve::bsr::{BlockCsr, HessianPattern};
-use meshsmooth::solve::pcg::{BlockJacobi, NegativeCurvature, PcgParams, PcgStop, pcg};
+use meshsmooth::solve::pcg::{NegativeCurvature, PcgInfo, PcgParams, PcgStop, PcgWork, pcg};
 use meshsmooth::solve::{self, Method, Params, StopReason};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
 
 type Vec3 = [f64; 3];
 
@@ -77,8 +80,15 @@ fn flat(v: &[Vec3]) -> Vec<f64> {
     v.iter().flatten().copied().collect()
 }
 
-fn jacobi(m: &BlockCsr) -> BlockJacobi {
-    BlockJacobi::new(m.diag.par_iter().map(|&s| m.blocks[s as usize]))
+/// The one PCG (`solve::pcg`) on a CPU backend holding only `m`.
+fn run_pcg(m: &BlockCsr, b: &[Vec3], params: &PcgParams) -> (PcgInfo, Vec<Vec3>) {
+    let mut be = CpuBackend::linear(m.clone());
+    let work = PcgWork::new(&mut be).unwrap();
+    let (bv, dv) = (be.vector().unwrap(), be.vector().unwrap());
+    be.write_vector(bv, b).unwrap();
+    be.factor_precond().unwrap();
+    let info = pcg(&mut be, &work, bv, dv, params).unwrap();
+    (info, be.read_vector(dv).unwrap())
 }
 
 #[test]
@@ -88,12 +98,9 @@ fn pcg_solves_random_spd_block_systems_like_a_dense_solve() {
         let a = random_symmetric(n, &mut rng, 0.5);
         let m = dense_blocks(&a);
         let b: Vec<Vec3> = (0..n).map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0))).collect();
-        let mut d = vec![[0.0; 3]; n];
-        let info = pcg(
+        let (info, d) = run_pcg(
             &m,
-            &jacobi(&m),
             &b,
-            &mut d,
             &PcgParams {
                 max_iter: 500,
                 rtol: 1e-12,
@@ -152,13 +159,12 @@ fn pcg_returns_a_descent_direction_of_negative_curvature_on_indefinite_systems()
     let b: Vec<Vec3> = bf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
     let m = dense_blocks(&a);
     for mode in [NegativeCurvature::Direction, NegativeCurvature::Iterate] {
-        let mut d = vec![[0.0; 3]; n];
         let params = PcgParams {
             max_iter: 200,
             rtol: 1e-14,
             negative_curvature: mode,
         };
-        let info = pcg(&m, &jacobi(&m), &b, &mut d, &params);
+        let (info, d) = run_pcg(&m, &b, &params);
         assert_eq!(info.stop, PcgStop::NegativeCurvature, "{mode:?}: {info:?}");
         assert!(info.iterations > 0, "{mode:?}: {info:?}");
         let mut ad = vec![[0.0; 3]; n];
@@ -172,20 +178,9 @@ fn pcg_returns_a_descent_direction_of_negative_curvature_on_indefinite_systems()
     }
 }
 
-fn perturbed_box(n: usize, seed: u64) -> meshsmooth::Mesh {
-    let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
-    let opts = PerturbOptions {
-        perturbation: Perturbation::Random { alpha: 0.3 },
-        fraction: 1.0,
-        seed,
-    };
-    generate::perturb(&mut m, &opts).unwrap();
-    m
-}
-
 #[test]
 fn assembled_gradient_and_hessian_match_finite_differences() {
-    let mesh = perturbed_box(4, 9);
+    let mesh = perturbed_box(4, 0.3, 9);
     let p = Problem::new(&mesh).unwrap();
     let x = p.gather(&mesh.points);
     let mut pat = HessianPattern::new(&p);
@@ -216,7 +211,7 @@ fn assembled_gradient_and_hessian_match_finite_differences() {
         objective::gradient(&p, &y).unwrap().1
     };
     let (gp, gm) = (shifted(eps), shifted(-eps));
-    let scale = hv.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+    let scale = hv.iter().flatten().map(|v| v.abs()).fold(0.0f64, f64::max);
     for (i, &v) in pat.free_vertex.iter().enumerate() {
         for c in 0..3 {
             let fd = (gp[v as usize][c] - gm[v as usize][c]) / (2.0 * eps);
@@ -231,15 +226,27 @@ fn assembled_gradient_and_hessian_match_finite_differences() {
 
 #[test]
 fn newton_and_bcd_reach_the_same_vertex_positions() {
-    let mesh = perturbed_box(8, 4);
+    let mesh = perturbed_box(8, 0.3, 4);
     let tight = Params {
         tol: 1e-9,
         ..Params::default()
     };
     let mut a = mesh.clone();
-    let na = solve::smooth_mesh(&mut a, Method::Newton, &tight, &mut |_| true).unwrap();
+    let na = solve::smooth_mesh(
+        &mut a,
+        &Default::default(),
+        &solve::Options::cpu(Method::Newton, &tight),
+        &mut |_| true,
+    )
+    .unwrap();
     let mut b = mesh.clone();
-    let nb = solve::smooth_mesh(&mut b, Method::Bcd, &tight, &mut |_| true).unwrap();
+    let nb = solve::smooth_mesh(
+        &mut b,
+        &Default::default(),
+        &solve::Options::cpu(Method::Bcd, &tight),
+        &mut |_| true,
+    )
+    .unwrap();
     assert_eq!(na.stop, StopReason::Converged);
     assert_eq!(nb.stop, StopReason::Converged);
     assert!(

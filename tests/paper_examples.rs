@@ -23,7 +23,7 @@ fn horseshoe_sqi_converges_to_its_semi_annulus_targets() {
             max_iter: if method == Method::Bcd { 3000 } else { 500 },
             ..Params::default()
         };
-        let info = solve::smooth_mesh_with(&mut m, &opts, method, &params, &mut |_| true).unwrap();
+        let info = solve::smooth_mesh(&mut m, &opts, &solve::Options::cpu(method, &params), &mut |_| true).unwrap();
         assert_eq!(info.stop, StopReason::Converged, "{method}: {:?}", info.history.last());
         // the boundary keeps the horseshoe, so the targets cannot all be met: F drops, not to 0
         assert!(
@@ -57,7 +57,13 @@ fn condition_number_fixes_the_distorted_prism_mesh_like_example_1() {
     };
     let before = metric_summary(&mesh, &mesh.points, MetricKind::ConditionNumber, None).unwrap();
     let mut out = mesh.clone();
-    let info = solve::smooth_mesh_with(&mut out, &cn, Method::Newton, &Params::default(), &mut |_| true).unwrap();
+    let info = solve::smooth_mesh(
+        &mut out,
+        &cn,
+        &solve::Options::cpu(Method::Newton, &Params::default()),
+        &mut |_| true,
+    )
+    .unwrap();
     assert_eq!(info.stop, StopReason::Converged);
     let after = metric_summary(&out, &out.points, MetricKind::ConditionNumber, None).unwrap();
     eprintln!("before {before:?}\nafter {after:?}");

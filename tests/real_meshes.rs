@@ -46,7 +46,13 @@ fn matches_mesquite(meshes: &[(&str, f64)], method: Method) {
         let mut mesh = io::read(&dir.join(name)).unwrap_or_else(|e| panic!("{e}"));
         let fixed = topology::fixed_vertices(&mesh);
         let start = mesh.points.clone();
-        let info = solve::smooth_mesh(&mut mesh, method, &Params::default(), &mut |_| true).unwrap();
+        let info = solve::smooth_mesh(
+            &mut mesh,
+            &Default::default(),
+            &solve::Options::cpu(method, &Params::default()),
+            &mut |_| true,
+        )
+        .unwrap();
         eprintln!(
             "{name}: F {:.6} -> {:.6} (Mesquite {mesquite_f}) in {} {method} iterations, {:.2} s, {:?}",
             info.history.records[0].objective, info.objective, info.iterations, info.seconds, info.stop
@@ -94,8 +100,13 @@ fn meshes_the_optimiser_cannot_take_are_refused_clearly() {
     );
     // a tangled quad mesh: read fine, refused by the solver
     let mut mesh = io::read(&dir.join("shest_grid32.vtk")).unwrap();
-    let err = solve::smooth_mesh(&mut mesh, Method::Bcd, &Params::default(), &mut |_| true)
-        .unwrap_err()
-        .to_string();
+    let err = solve::smooth_mesh(
+        &mut mesh,
+        &Default::default(),
+        &solve::Options::cpu(Method::Bcd, &Params::default()),
+        &mut |_| true,
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("inverted"), "{err}");
 }

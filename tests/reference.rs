@@ -55,8 +55,13 @@ fn the_target_metric_brings_a_perturbed_mesh_back_to_its_reference() {
                 tol: 1e-10,
                 ..Params::default()
             };
-            let info = solve::smooth_mesh_with(&mut mesh, &tmp_options(&reference), method, &params, &mut |_| true)
-                .unwrap_or_else(|e| panic!("{name} {method}: {e}"));
+            let info = solve::smooth_mesh(
+                &mut mesh,
+                &tmp_options(&reference),
+                &solve::Options::cpu(method, &params),
+                &mut |_| true,
+            )
+            .unwrap_or_else(|e| panic!("{name} {method}: {e}"));
             assert_eq!(info.stop, StopReason::Converged, "{name} {method}");
             assert!(
                 info.history.records[0].objective > 1e-3,
@@ -106,8 +111,13 @@ fn every_metric_and_template_converges_on_hexahedra_and_quads() {
                 template,
                 reference: None,
             };
-            let info =
-                solve::smooth_mesh_with(&mut mesh, &opts, Method::Newton, &Params::default(), &mut |_| true).unwrap();
+            let info = solve::smooth_mesh(
+                &mut mesh,
+                &opts,
+                &solve::Options::cpu(Method::Newton, &Params::default()),
+                &mut |_| true,
+            )
+            .unwrap();
             assert_eq!(info.stop, StopReason::Converged, "{metric} {template:?}");
             // the unperturbed grid is ideal for these metrics: back to it
             let ideal = if template == Template::Harmonic { 1.0 } else { 0.0 };

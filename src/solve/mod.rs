@@ -134,6 +134,17 @@ pub struct Options<'a> {
     pub fail_after: Option<usize>,
 }
 
+impl Options<'_> {
+    /// `method` with `params` on the CPU.
+    pub fn cpu(method: Method, params: &Params) -> Options<'static> {
+        Options {
+            method,
+            params: params.clone(),
+            ..Default::default()
+        }
+    }
+}
+
 /// What a solve did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Info {

@@ -1,6 +1,20 @@
-//! Shared by the GPU test files.
+//! Helpers shared by the test files (each includes this with `mod common;`
+//! and uses what it needs).
+#![allow(dead_code)]
 
 use meshsmooth::backend::gpu::{GpuContext, GpuOptions, Precision};
+use meshsmooth::generate::{self, PerturbOptions, Perturbation};
+use meshsmooth::metric::corner_model::Template;
+use meshsmooth::metric::mat3::Vec3;
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::metric::{TetShape, tet_det};
+use meshsmooth::problem::{Problem, ProblemOptions};
+use meshsmooth::solve::{self, Device, Info, Method, Options, Params};
+use meshsmooth::{ElementKind, Mesh};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+pub type Tet = [Vec3; 4];
 
 /// A device for the GPU tests: `None` (with the reason printed) on a machine
 /// without an adapter, so the tests skip there — except under `CI`, where a
@@ -20,4 +34,146 @@ pub fn context(precision: Precision) -> Option<GpuContext> {
             None
         }
     }
+}
+
+/// An n x n x n Kuhn box of side n (unit cells), every interior vertex
+/// moved randomly by up to `alpha` of the edge length (never inverting).
+pub fn perturbed_box(n: usize, alpha: f64, seed: u64) -> Mesh {
+    let mut m = generate::tet_box(n, n, n, [n as f64; 3]);
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha },
+        fraction: 1.0,
+        seed,
+    };
+    generate::perturb(&mut m, &opts).unwrap();
+    m
+}
+
+/// `count` random positively oriented tetrahedra in [-1, 1]^3 with z scaled
+/// by `flatten`, each with an inverse mean ratio below `max_eta`.
+pub fn random_tets(seed: u64, count: usize, flatten: f64, max_eta: f64) -> Vec<Tet> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut out = Vec::new();
+    while out.len() < count {
+        let mut t: Tet = [[0.0; 3]; 4];
+        for v in t.iter_mut() {
+            for c in v.iter_mut() {
+                *c = rng.random_range(-1.0..1.0);
+            }
+            v[2] *= flatten;
+        }
+        if tet_det(&t) < 0.0 {
+            t.swap(1, 2);
+        }
+        if TetShape::equilateral().value(&t).is_some_and(|eta| eta < max_eta) {
+            out.push(t);
+        }
+    }
+    out
+}
+
+/// Options for `method` on `device` with `params`.
+pub fn options<'a>(method: Method, params: &Params, device: Device<'a>) -> Options<'a> {
+    Options {
+        method,
+        params: params.clone(),
+        device,
+        ..Default::default()
+    }
+}
+
+/// Solves from `x` in place and returns what the solver reported.
+pub fn solve_on(p: &Problem, x: &mut [Vec3], method: Method, params: &Params, device: Device) -> Info {
+    solve::solve(p, x, &options(method, params, device), &mut |_| true).unwrap()
+}
+
+/// Smooths `mesh` in place on the CPU with the default objective.
+pub fn smooth(mesh: &mut Mesh, method: Method, params: &Params) -> Info {
+    solve::smooth_mesh(
+        mesh,
+        &ProblemOptions::default(),
+        &options(method, params, Device::Cpu),
+        &mut |_| true,
+    )
+    .unwrap()
+}
+
+/// Largest |a - b| over the largest |b|: errors measured against the vector's scale.
+pub fn rel_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let scale = b.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = a
+        .iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    worst / scale.max(f64::MIN_POSITIVE)
+}
+
+/// Every element kind the optimisers take.
+pub const KINDS: [ElementKind; 5] = [
+    ElementKind::Triangle,
+    ElementKind::Quadrilateral,
+    ElementKind::Tetrahedron,
+    ElementKind::Hexahedron,
+    ElementKind::Prism,
+];
+
+/// Triangles of a `n x n` grid extruded through `n` layers.
+pub fn prism_stack(n: usize) -> Mesh {
+    let tris = generate::tri_grid(n, n, [n as f64; 2]);
+    let layer = tris.num_points() as u32;
+    let points = (0..=n)
+        .flat_map(|k| tris.points.iter().map(move |p| [p[0], p[1], k as f64]))
+        .collect();
+    let mut mesh = Mesh::new(points);
+    for k in 0..n as u32 {
+        for e in 0..tris.num_elements() {
+            let t = tris.element(e);
+            let (lo, hi) = (layer * k, layer * (k + 1));
+            mesh.push_element(
+                ElementKind::Prism,
+                &[t[0] + lo, t[1] + lo, t[2] + lo, t[0] + hi, t[1] + hi, t[2] + hi],
+            );
+        }
+    }
+    mesh
+}
+
+/// A small regular mesh of `kind` (the reference) and a seeded perturbation of it.
+pub fn meshes(kind: ElementKind, seed: u64) -> (Mesh, Mesh) {
+    let reference = match kind {
+        ElementKind::Triangle => generate::tri_grid(6, 6, [6.0, 6.0]),
+        ElementKind::Quadrilateral => generate::quad_grid(6, 6, [6.0, 6.0]),
+        ElementKind::Tetrahedron => generate::tet_box(3, 3, 3, [3.0; 3]),
+        ElementKind::Hexahedron => generate::hex_box(3, 3, 3, [3.0; 3]),
+        ElementKind::Prism => prism_stack(3),
+    };
+    let mut mesh = reference.clone();
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.25 },
+        fraction: 1.0,
+        seed,
+    };
+    generate::perturb(&mut mesh, &opts).unwrap();
+    (mesh, reference)
+}
+
+/// Every metric with each template it allows; tmp targets the unperturbed mesh.
+pub fn models() -> Vec<(MetricKind, Template)> {
+    vec![
+        (MetricKind::InverseMeanRatio, Template::Harmonic),
+        (MetricKind::InverseMeanRatio, Template::Average),
+        (MetricKind::ConditionNumber, Template::Harmonic),
+        (MetricKind::ConditionNumber, Template::Average),
+        (MetricKind::TargetShapeSize, Template::Harmonic),
+    ]
+}
+
+pub fn problem(mesh: &Mesh, reference: &Mesh, metric: MetricKind, template: Template) -> Problem {
+    let opts = ProblemOptions {
+        metric,
+        template,
+        reference: (metric == MetricKind::TargetShapeSize).then_some(reference),
+    };
+    Problem::with_options(mesh, &opts).unwrap()
 }

@@ -18,12 +18,17 @@ use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use crate::solve::line_search::LineSearch;
 use block_jacobi::BlockJacobi;
+use bsr_spmv::BlockCsr;
 use hessian_assemble::HessianPattern;
 use rayon::prelude::*;
 use std::time::Instant;
 
 pub struct CpuBackend<'p> {
-    p: &'p Problem,
+    /// `None` for a bare linear system (`CpuBackend::linear`).
+    p: Option<&'p Problem>,
+    n_free: usize,
+    /// The matrix of a bare linear system.
+    system: Option<BlockCsr>,
     ls: LineSearch,
     x: Vec<Vec3>,
     trial: Vec<Vec3>,
@@ -47,16 +52,50 @@ impl<'p> CpuBackend<'p> {
             )));
         }
         Ok(CpuBackend {
-            p,
+            p: Some(p),
+            n_free: p.free_vertices.len(),
+            system: None,
             ls: *ls,
             x: x.to_vec(),
-            trial: Vec::new(),
+            trial: x.to_vec(),
             vectors: Vec::new(),
             slots: [0.0; N_SLOTS],
             moved: 0.0,
             hessian: None,
             precond: None,
         })
+    }
+
+    /// A backend holding only the symmetric system `matrix` (for testing
+    /// the linear algebra: PCG, the preconditioner, the vector operations);
+    /// the geometric operations fail.
+    pub fn linear(matrix: BlockCsr) -> CpuBackend<'static> {
+        CpuBackend {
+            p: None,
+            n_free: matrix.rows(),
+            system: Some(matrix),
+            ls: LineSearch::default(),
+            x: Vec::new(),
+            trial: Vec::new(),
+            vectors: Vec::new(),
+            slots: [0.0; N_SLOTS],
+            moved: 0.0,
+            hessian: None,
+            precond: None,
+        }
+    }
+
+    fn problem(&self) -> Result<&'p Problem> {
+        self.p
+            .ok_or_else(|| Error::InvalidArgument("a linear-system backend has no mesh".into()))
+    }
+
+    fn matrix(&self) -> Result<&BlockCsr> {
+        match (&self.hessian, &self.system) {
+            (Some(h), _) => Ok(&h.matrix),
+            (None, Some(m)) => Ok(m),
+            (None, None) => Err(Error::InvalidArgument("no assembled Hessian".into())),
+        }
     }
 
     /// The assembled Hessian (after `assemble`), for tests.
@@ -94,11 +133,11 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn num_free(&self) -> usize {
-        self.p.free_vertices.len()
+        self.n_free
     }
 
     fn num_colors(&self) -> usize {
-        self.p.colors.len()
+        self.p.map_or(0, |p| p.colors.len())
     }
 
     fn vector(&mut self) -> Result<Vector> {
@@ -128,7 +167,7 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
-        let (p, x) = (self.p, self.points(at));
+        let (p, x) = (self.problem()?, self.points(at));
         let value = match gradient {
             Some(_) => objective::free_gradient(p, x),
             None => objective::value(p, x).map(|f| (f, Vec::new())),
@@ -155,7 +194,7 @@ impl Backend for CpuBackend<'_> {
         let a = alpha.eval(&self.slots);
         line_search::trial(
             &self.x,
-            &self.p.free_vertices,
+            &self.problem()?.free_vertices,
             a,
             &self.vectors[d.0 as usize],
             &mut self.trial,
@@ -169,7 +208,7 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn bcd_color(&mut self, color: usize) -> Result<()> {
-        let m = bcd::sweep_color(self.p, &mut self.x, color, &self.ls);
+        let m = bcd::sweep_color(self.problem()?, &mut self.x, color, &self.ls);
         self.moved = self.moved.max(m);
         Ok(())
     }
@@ -181,51 +220,62 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn bcd_sequential(&mut self, out: Slot, deadline: Option<Instant>) -> Result<bool> {
-        let m = bcd::sweep(self.p, &mut self.x, &self.ls, deadline);
+        let m = bcd::sweep(self.problem()?, &mut self.x, &self.ls, deadline);
         self.set(out, m);
         Ok(true)
     }
 
     fn laplace(&mut self, out: Slot, deadline: Option<Instant>) -> Result<bool> {
-        let m = laplace::sweep(self.p, &mut self.x, deadline);
+        let m = laplace::sweep(self.problem()?, &mut self.x, deadline);
         self.set(out, m);
         Ok(true)
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {
-        let pattern = HessianPattern::new(self.p);
+        let pattern = HessianPattern::new(self.problem()?);
         let bytes = pattern.bytes() + 48 * pattern.free_vertex.len();
         self.hessian = Some(pattern);
         Ok(bytes)
     }
 
     fn assemble(&mut self, g: Vector) -> Result<()> {
+        let p = self.problem()?;
         let h = self
             .hessian
             .as_mut()
             .ok_or_else(|| Error::InvalidArgument("assemble before prepare_hessian".into()))?;
-        if !h.assemble(self.p, &self.x, &mut self.vectors[g.0 as usize]) {
+        if !h.assemble(p, &self.x, &mut self.vectors[g.0 as usize]) {
             return Err(crate::solve::accepted_step_inverted());
         }
         Ok(())
     }
 
     fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()> {
-        let h = self.hessian.take().expect("assemble before hess_mul");
-        let (xs, ys) = self.pair(x, y);
-        h.matrix.mul(xs, ys);
-        self.hessian = Some(h);
-        Ok(())
+        // the matrix is taken out for the call, so that the vectors can be borrowed
+        let (h, m) = (self.hessian.take(), self.system.take());
+        let result = match h.as_ref().map(|h| &h.matrix).or(m.as_ref()) {
+            Some(a) => {
+                let (xs, ys) = self.pair(x, y);
+                a.mul(xs, ys);
+                Ok(())
+            }
+            None => Err(Error::InvalidArgument("hess_mul before assemble".into())),
+        };
+        (self.hessian, self.system) = (h, m);
+        result
     }
 
     fn factor_precond(&mut self) -> Result<()> {
-        let m = &self.hessian.as_ref().expect("assemble before factor_precond").matrix;
+        let m = self.matrix()?;
         self.precond = Some(BlockJacobi::new(m.diag.par_iter().map(|&s| m.blocks[s as usize])));
         Ok(())
     }
 
     fn precond(&mut self, x: Vector, y: Vector) -> Result<()> {
-        let m = self.precond.take().expect("factor_precond before precond");
+        let m = self
+            .precond
+            .take()
+            .ok_or_else(|| Error::InvalidArgument("precond before factor_precond".into()))?;
         let (xs, ys) = self.pair(x, y);
         m.apply(xs, ys);
         self.precond = Some(m);
@@ -269,7 +319,7 @@ impl Backend for CpuBackend<'_> {
 
     fn bytes(&self) -> usize {
         let n = self.x.len();
-        self.p.bytes()
+        self.p.map_or(0, |p| p.bytes())
             + 24 * (n + self.trial.capacity())
             + self.vectors.iter().map(|v| 24 * v.len()).sum::<usize>()
             + self.hessian.as_ref().map_or(0, |h| h.bytes())

@@ -428,7 +428,14 @@ impl Backend for GpuBackend<'_> {
             Op::n(nv),
             nv,
         )?;
-        self.reduce(None, None, Some(out), None, groups_of(nv))
+        self.reduce(None, None, Some(out), None, groups_of(nv))?;
+        // "since the last call": the next colours start from no move
+        let ctx = self.ctx;
+        let enc = self
+            .encoder
+            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
+        enc.clear_buffer(&self.bufs[&Buf::Moves], 0, None);
+        Ok(())
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {

@@ -1,0 +1,372 @@
+//! Every WGSL kernel against its CPU twin (same stem in `shaders/` and
+//! `src/backend/cpu/`), through the backend operation that dispatches it, on
+//! every element kind, with the closed-form and the general variants, in f32
+//! and f64. Inputs are seeded and quantised (positions and vectors are
+//! multiples of 1/64), so differences show the kernels, not the inputs.
+//! Without an adapter these tests print why and pass — except under `CI`,
+//! where they fail.
+
+mod common;
+use common::{KINDS, context, meshes, problem, rel_diff};
+
+use meshsmooth::backend::cpu::CpuBackend;
+use meshsmooth::backend::gpu::{GpuBackend, GpuContext, Precision};
+use meshsmooth::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
+use meshsmooth::metric::corner_model::Template;
+use meshsmooth::metric::mat3::Vec3;
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::problem::Problem;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// One input: a problem and quantised positions.
+struct Case {
+    name: String,
+    p: Problem,
+    x: Vec<Vec3>,
+}
+
+fn quantise(v: f64) -> f64 {
+    (v * 64.0).round() / 64.0
+}
+
+/// Every kind, under the closed-form model where it exists (the tetrahedral
+/// inverse mean ratio) and a general one (the condition number, average template).
+fn cases() -> Vec<Case> {
+    let mut out = Vec::new();
+    for kind in KINDS {
+        let (mesh, reference) = meshes(kind, 5);
+        for (metric, template) in [
+            (MetricKind::InverseMeanRatio, Template::Harmonic),
+            (MetricKind::ConditionNumber, Template::Average),
+        ] {
+            let p = problem(&mesh, &reference, metric, template);
+            let x: Vec<Vec3> = p.gather(&mesh.points).iter().map(|c| c.map(quantise)).collect();
+            assert!(p.check_feasible(&x).is_ok(), "quantising inverted a {kind}");
+            out.push(Case {
+                name: format!("{kind} {metric} {template:?}"),
+                p,
+                x,
+            });
+        }
+    }
+    out
+}
+
+fn random_vec(n: usize, seed: u64) -> Vec<Vec3> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| [0; 3].map(|_: i32| rng.random_range(-64i32..=64) as f64 / 64.0))
+        .collect()
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
+}
+
+/// The same case on both backends.
+struct Pair<'c> {
+    gpu: GpuBackend<'c>,
+    cpu: CpuBackend<'c>,
+}
+
+impl<'c> Pair<'c> {
+    fn new(ctx: &'c GpuContext, c: &'c Case) -> Pair<'c> {
+        let ls = Default::default();
+        Pair {
+            gpu: GpuBackend::new(ctx, &c.p, &c.x, &ls).unwrap(),
+            cpu: CpuBackend::new(&c.p, &c.x, &ls).unwrap(),
+        }
+    }
+
+    /// Runs `f` on both backends.
+    fn both<T>(&mut self, mut f: impl FnMut(&mut dyn Backend) -> T) -> (T, T) {
+        (f(&mut self.gpu), f(&mut self.cpu))
+    }
+
+    /// Vectors with the same handles on both, filled with `data`.
+    fn vectors(&mut self, data: &[Vec<Vec3>]) -> Vec<Vector> {
+        data.iter()
+            .map(|d| {
+                let (g, c) = self.both(|be| {
+                    let v = be.vector().unwrap();
+                    be.write_vector(v, d).unwrap();
+                    v
+                });
+                assert_eq!(g, c);
+                g
+            })
+            .collect()
+    }
+
+    fn read(&mut self, v: Vector) -> (Vec<Vec3>, Vec<Vec3>) {
+        self.both(|be| be.read_vector(v).unwrap())
+    }
+
+    fn slots(&mut self) -> ([f64; 32], [f64; 32]) {
+        self.both(|be| be.flush().unwrap())
+    }
+}
+
+const EVAL: EvalSlots = EvalSlots {
+    value: Slot(0),
+    infeasible: Slot(1),
+    min_det: Some(Slot(2)),
+};
+
+fn check_objective(pair: &mut Pair, c: &Case, tol: f64) {
+    for at in [Points::Current, Points::Trial] {
+        pair.both(|be| be.evaluate(at, EVAL, None).unwrap());
+        let (g, cp) = pair.slots();
+        assert!(rel(g[0], cp[0]) <= tol, "{}: F {} vs {}", c.name, g[0], cp[0]);
+        assert_eq!((g[1], cp[1]), (0.0, 0.0), "{}: infeasible", c.name);
+    }
+}
+
+fn check_reduce(pair: &mut Pair, c: &Case, tol: f64) {
+    // the smallest determinant (a min) and the infeasible count (a count) of the objective
+    pair.both(|be| be.evaluate(Points::Current, EVAL, None).unwrap());
+    let (g, cp) = pair.slots();
+    assert!(rel(g[2], cp[2]) <= tol, "{}: min det {} vs {}", c.name, g[2], cp[2]);
+    assert!(g[2] > 0.0);
+    // a count above zero: the trial point is the start moved far along a random vector
+    let n = c.p.free_vertices.len();
+    let v = pair.vectors(&[random_vec(n, 9).iter().map(|d| d.map(|t| 8.0 * t)).collect()]);
+    pair.both(|be| {
+        be.trial(Coef::value(1.0), v[0]).unwrap();
+        be.evaluate(Points::Trial, EVAL, None).unwrap();
+    });
+    let (g, cp) = pair.slots();
+    assert!(cp[1] > 0.0, "{}: the far trial point should invert corners", c.name);
+    assert_eq!(g[1], cp[1], "{}: infeasible corners", c.name);
+}
+
+fn check_gradient_gather(pair: &mut Pair, c: &Case, tol: f64) {
+    let g = pair.vectors(&[vec![[0.0; 3]; c.p.free_vertices.len()]])[0];
+    pair.both(|be| be.evaluate(Points::Current, EVAL, Some(g)).unwrap());
+    let (gg, cg) = pair.read(g);
+    let e = rel_diff(&gg, &cg);
+    assert!(e <= tol, "{}: gradient differs by {e:.1e}", c.name);
+}
+
+fn check_bcd(pair: &mut Pair, c: &Case, tol: f64) {
+    let edge = c.p.mean_edge_length(&c.x);
+    for color in 0..c.p.colors.len() {
+        pair.both(|be| {
+            be.bcd_color(color).unwrap();
+            be.max_move(Slot(3)).unwrap();
+        });
+        let (g, cp) = pair.slots();
+        assert!(
+            (g[3].sqrt() - cp[3].sqrt()).abs() <= tol * edge,
+            "{}: colour {color} largest move {} vs {}",
+            c.name,
+            g[3].sqrt(),
+            cp[3].sqrt()
+        );
+    }
+    let (gx, cx) = pair.both(|be| be.download().unwrap());
+    let worst = gx
+        .iter()
+        .flatten()
+        .zip(cx.iter().flatten())
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(
+        worst <= tol * edge,
+        "{}: a sweep differs by {:.1e} edges",
+        c.name,
+        worst / edge
+    );
+    assert!(
+        rel_diff(&cx, &c.x) > 1e-3 * edge / 64.0,
+        "{}: the sweep moved nothing",
+        c.name
+    );
+}
+
+/// Prepares and assembles the Hessian on both; returns the gradient vector.
+fn assembled(pair: &mut Pair, c: &Case) -> Vector {
+    let g = pair.vectors(&[vec![[0.0; 3]; c.p.free_vertices.len()]])[0];
+    pair.both(|be| {
+        be.prepare_hessian().unwrap();
+        be.assemble(g).unwrap();
+    });
+    g
+}
+
+fn check_hessian_assemble(pair: &mut Pair, c: &Case, tol: f64) {
+    // the gradient part of the per-corner records, gathered
+    let g = assembled(pair, c);
+    let (gg, cg) = pair.read(g);
+    let e = rel_diff(&gg, &cg);
+    assert!(e <= tol, "{}: assembled gradient differs by {e:.1e}", c.name);
+}
+
+fn check_hessian_gather(pair: &mut Pair, c: &Case, tol: f64) {
+    assembled(pair, c);
+    let gb = pair.gpu.hessian_blocks().unwrap();
+    let cb = &pair.cpu.hessian().unwrap().matrix.blocks;
+    assert_eq!(gb.len(), cb.len());
+    let flat = |b: &[[[f64; 3]; 3]]| -> Vec<Vec3> { b.iter().flatten().copied().collect() };
+    let e = rel_diff(&flat(&gb), &flat(cb));
+    assert!(e <= tol, "{}: Hessian blocks differ by {e:.1e}", c.name);
+}
+
+fn check_bsr_spmv(pair: &mut Pair, c: &Case, tol: f64) {
+    assembled(pair, c);
+    let n = c.p.free_vertices.len();
+    let v = pair.vectors(&[random_vec(n, 2), vec![[0.0; 3]; n]]);
+    pair.both(|be| be.hess_mul(v[0], v[1]).unwrap());
+    let (gy, cy) = pair.read(v[1]);
+    let e = rel_diff(&gy, &cy);
+    assert!(e <= tol, "{}: H u differs by {e:.1e}", c.name);
+}
+
+fn check_block_jacobi(pair: &mut Pair, c: &Case, tol: f64) {
+    assembled(pair, c);
+    let n = c.p.free_vertices.len();
+    let v = pair.vectors(&[random_vec(n, 3), vec![[0.0; 3]; n]]);
+    pair.both(|be| {
+        be.factor_precond().unwrap();
+        be.precond(v[0], v[1]).unwrap();
+    });
+    let (gy, cy) = pair.read(v[1]);
+    let e = rel_diff(&gy, &cy);
+    assert!(e <= tol, "{}: M^-1 u differs by {e:.1e}", c.name);
+}
+
+fn check_dot(pair: &mut Pair, c: &Case, tol: f64) {
+    let n = c.p.free_vertices.len();
+    let v = pair.vectors(&[random_vec(n, 4), random_vec(n, 5)]);
+    pair.both(|be| be.dot(v[0], v[1], Slot(4), Some(Slot(5))).unwrap());
+    let (g, cp) = pair.slots();
+    // the products are exact (multiples of 1/64^2); only the sum order differs
+    assert!(
+        (g[4] - cp[4]).abs() <= tol * n as f64,
+        "{}: dot {} vs {}",
+        c.name,
+        g[4],
+        cp[4]
+    );
+    assert_eq!(g[5], cp[5], "{}: max |b_i|^2", c.name);
+}
+
+fn check_axpby(pair: &mut Pair, c: &Case, tol: f64) {
+    let n = c.p.free_vertices.len();
+    let v = pair.vectors(&[random_vec(n, 6), random_vec(n, 7), random_vec(n, 8)]);
+    pair.both(|be| {
+        be.set_slot(Slot(6), Coef::value(0.75), None).unwrap();
+        be.set_slot(Slot(7), Coef::value(-1.5), None).unwrap();
+        be.set_slot(Slot(8), Coef::value(0.0), None).unwrap();
+        // y = (0.75 / -1.5) x + 2 y; then skipped by a failing guard; then y = 3 y (aliased); z = -x
+        be.axpby(
+            Coef::ratio(1.0, Slot(6), Slot(7)),
+            v[0],
+            Coef::value(2.0),
+            v[1],
+            Some(Slot(6)),
+        )
+        .unwrap();
+        be.axpby(Coef::value(5.0), v[0], Coef::value(1.0), v[1], Some(Slot(8)))
+            .unwrap();
+        be.axpby(Coef::value(1.0), v[1], Coef::value(2.0), v[1], None).unwrap();
+        be.axpby(Coef::slot(Slot(7)), v[0], Coef::value(0.0), v[2], None)
+            .unwrap();
+        be.scale(Coef::ratio(-1.0, Slot(6), Slot(6)), v[2]).unwrap();
+    });
+    let x = random_vec(n, 6);
+    let y0 = random_vec(n, 7);
+    let expect_y: Vec<Vec3> = x
+        .iter()
+        .zip(&y0)
+        .map(|(a, b)| [0, 1, 2].map(|k| 3.0 * (-0.5 * a[k] + 2.0 * b[k])))
+        .collect();
+    let expect_z: Vec<Vec3> = x.iter().map(|a| a.map(|t| 1.5 * t)).collect();
+    for (v, want, what) in [(v[1], &expect_y, "y"), (v[2], &expect_z, "z")] {
+        let (gy, cy) = pair.read(v);
+        assert!(rel_diff(&cy, want) <= 1e-15, "{}: CPU {what} is wrong", c.name);
+        let e = rel_diff(&gy, &cy);
+        assert!(e <= tol, "{}: {what} differs by {e:.1e}", c.name);
+    }
+}
+
+fn check_set_slot(pair: &mut Pair, c: &Case, _tol: f64) {
+    pair.both(|be| {
+        be.set_slot(Slot(9), Coef::value(3.0), None).unwrap();
+        be.set_slot(Slot(10), Coef::value(-2.0), None).unwrap();
+        be.set_slot(Slot(11), Coef::ratio(-1.0, Slot(9), Slot(10)), None)
+            .unwrap();
+        // guarded by a negative slot: skipped; by a positive one: done
+        be.set_slot(Slot(12), Coef::value(7.0), Some(Slot(10))).unwrap();
+        be.set_slot(Slot(13), Coef::value(7.0), Some(Slot(9))).unwrap();
+    });
+    let (g, cp) = pair.slots();
+    assert_eq!(cp[11], 1.5, "{}", c.name);
+    assert_eq!((cp[12], cp[13]), (0.0, 7.0), "{}", c.name);
+    assert_eq!(&g[9..14], &cp[9..14], "{}", c.name);
+}
+
+fn check_line_search(pair: &mut Pair, c: &Case, tol: f64) {
+    let n = c.p.free_vertices.len();
+    let d = pair.vectors(&[random_vec(n, 10).iter().map(|v| v.map(|t| t / 16.0)).collect()])[0];
+    pair.both(|be| {
+        be.set_slot(Slot(14), Coef::value(0.5), None).unwrap();
+        be.trial(Coef::slot(Slot(14)), d).unwrap();
+        be.evaluate(Points::Trial, EVAL, None).unwrap();
+        be.accept_trial().unwrap();
+    });
+    let (g, cp) = pair.slots();
+    assert_eq!((g[1], cp[1]), (0.0, 0.0), "{}: the short trial stays feasible", c.name);
+    assert!(
+        rel(g[0], cp[0]) <= tol,
+        "{}: F at the trial {} vs {}",
+        c.name,
+        g[0],
+        cp[0]
+    );
+    let (gx, cx) = pair.both(|be| be.download().unwrap());
+    let e = rel_diff(&gx, &cx);
+    assert!(e <= tol, "{}: accepted positions differ by {e:.1e}", c.name);
+    assert_ne!(cx, c.x);
+}
+
+type Check = fn(&mut Pair, &Case, f64);
+
+fn run(precision: Precision, tol: f64, check: Check) {
+    let Some(ctx) = context(precision) else {
+        return;
+    };
+    for c in cases() {
+        let mut pair = Pair::new(&ctx, &c);
+        check(&mut pair, &c, tol);
+    }
+}
+
+/// One test per kernel and precision, named `STEM_matches_cpu_{f32,f64}`.
+macro_rules! kernel_tests {
+    ($($check:ident: $f32:ident ($tol32:expr), $f64:ident ($tol64:expr);)*) => {$(
+        #[test]
+        fn $f32() {
+            run(Precision::F32, $tol32, $check);
+        }
+        #[test]
+        fn $f64() {
+            run(Precision::F64, $tol64, $check);
+        }
+    )*};
+}
+
+kernel_tests! {
+    check_objective: objective_matches_cpu_f32(1e-5), objective_matches_cpu_f64(1e-13);
+    check_reduce: reduce_matches_cpu_f32(1e-5), reduce_matches_cpu_f64(1e-13);
+    check_gradient_gather: gradient_gather_matches_cpu_f32(1e-4), gradient_gather_matches_cpu_f64(1e-12);
+    check_bcd: bcd_matches_cpu_f32(1e-3), bcd_matches_cpu_f64(1e-11);
+    check_hessian_assemble: hessian_assemble_matches_cpu_f32(1e-4), hessian_assemble_matches_cpu_f64(1e-12);
+    check_hessian_gather: hessian_gather_matches_cpu_f32(1e-4), hessian_gather_matches_cpu_f64(1e-12);
+    check_bsr_spmv: bsr_spmv_matches_cpu_f32(1e-4), bsr_spmv_matches_cpu_f64(1e-12);
+    check_block_jacobi: block_jacobi_matches_cpu_f32(1e-3), block_jacobi_matches_cpu_f64(1e-11);
+    check_dot: dot_matches_cpu_f32(1e-6), dot_matches_cpu_f64(1e-15);
+    check_axpby: axpby_matches_cpu_f32(1e-6), axpby_matches_cpu_f64(1e-15);
+    check_set_slot: set_slot_matches_cpu_f32(0.0), set_slot_matches_cpu_f64(0.0);
+    check_line_search: line_search_matches_cpu_f32(1e-5), line_search_matches_cpu_f64(1e-13);
+}
