@@ -221,6 +221,7 @@ fn mixed_tet_prism_hex_meshes_optimise_with_every_metric() {
                 metric,
                 template: Template::Harmonic,
                 reference: None,
+                ..Default::default()
             };
             let info = solve::smooth_mesh_with(&mut mesh, &po, method, &Params::default(), &mut |_| true).unwrap();
             assert_eq!(info.stop, StopReason::Converged, "{metric} {method}");

@@ -81,6 +81,7 @@ fn problem(mesh: &Mesh, reference: &Mesh, metric: MetricKind, template: Template
         metric,
         template,
         reference: (metric == MetricKind::TargetShapeSize).then_some(reference),
+        ..Default::default()
     };
     Problem::with_options(mesh, &opts).unwrap()
 }

@@ -68,6 +68,7 @@ impl ObjectiveArgs {
             metric: self.metric.parse()?,
             template: self.template.parse()?,
             reference,
+            ..Default::default()
         })
     }
 }

@@ -5,17 +5,36 @@
 //!
 //! Every element is a list of corners: simplices one (their map from the
 //! reference is affine, so every corner sees the same S), quadrilaterals,
-//! hexahedra and prisms all of theirs. F = sum over corners of w_c m(S_c) with
-//! w_c = 1 / (|E| corners(e)): the mean over elements of the mean corner term.
+//! hexahedra and prisms all of theirs ([`ElementKind::optimised_corners`]).
+//! F = sum over corners of w_c m(S_c) with w_c = 1 / (|E| corners(e)): the
+//! mean over elements of the mean corner term.
+//!
+//! Building is a pipeline of small stages, each in its own file and usable on
+//! its own: [`check`] (options, planarity, reference fit) → [`order`] (vertex
+//! and element numbering, by [`Ordering`]) → [`corners`] (corners, shapes,
+//! weights) → [`adjacency`] (elements, incidence, neighbours, free vertices)
+//! → [`colours`]. Reports stop after `corners`, in the mesh's own numbering
+//! ([`Numbering::identity`]).
+//!
+//! [`ElementKind::optimised_corners`]: crate::mesh::ElementKind::optimised_corners
+
+mod adjacency;
+mod check;
+mod corners;
+mod numbering;
+
+pub use adjacency::{Adjacency, adjacency, colours};
+pub use check::check;
+pub use corners::{Corners, corners, element_vertices};
+pub use numbering::{MeshGraph, Numbering, order};
 
 use crate::error::{Error, Result};
-use crate::mesh::topology::{self, Csr};
-use crate::mesh::{ElementKind, Mesh, color, order};
-use crate::metric::corner::ideal_corner;
+use crate::mesh::Mesh;
+pub use crate::mesh::order::Ordering;
+use crate::mesh::topology::Csr;
 use crate::metric::corner_model::{CornerShape, Model, Template};
-use crate::metric::mat3::{Mat3, Vec3, sub};
+use crate::metric::mat3::{Vec3, sub};
 use crate::metric::smetric::MetricKind;
-use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
 /// What to optimise.
@@ -27,27 +46,8 @@ pub struct ProblemOptions<'a> {
     /// (required by `tmp`; optional for the others, which default to the ideal
     /// element of each kind).
     pub reference: Option<&'a Mesh>,
-}
-
-impl ProblemOptions<'_> {
-    /// The options' own consistency and the reference's fit to `mesh`, without
-    /// building anything: callers can refuse bad input before any work.
-    pub fn check(&self, mesh: &Mesh) -> Result<()> {
-        if self.metric == MetricKind::TargetShapeSize && self.reference.is_none() {
-            return Err(Error::InvalidArgument(
-                "the target-matrix metric (tmp) needs a reference mesh (--reference) for its targets W".into(),
-            ));
-        }
-        if self.metric == MetricKind::TargetShapeSize && self.template == Template::Average {
-            return Err(Error::InvalidArgument(
-                "the average template needs a quality in (0, 1] (imr, cn); use the harmonic template with tmp".into(),
-            ));
-        }
-        match self.reference {
-            Some(r) => check_same_connectivity(mesh, r),
-            None => Ok(()),
-        }
-    }
+    /// The vertex order the problem is built (and swept) in.
+    pub ordering: Ordering,
 }
 
 #[derive(Clone, Debug)]
@@ -87,179 +87,39 @@ pub struct Problem {
     pub setup_time: Duration,
 }
 
-/// Local vertex order of an element reversed, for planar meshes wound clockwise.
-fn reversed(kind: ElementKind, vs: &[u32]) -> Vec<u32> {
-    match kind {
-        ElementKind::Triangle => vec![vs[0], vs[2], vs[1]],
-        ElementKind::Quadrilateral => vec![vs[0], vs[3], vs[2], vs[1]],
-        _ => vs.to_vec(),
-    }
-}
-
-/// The corner matrix (columns = edges from the corner vertex) of `c` at `pts`.
-fn corner_matrix(pts: &[Vec3], vs: &[u32], c: &[usize; 4], n: usize) -> Mat3 {
-    let o = pts[vs[c[0]] as usize];
-    let mut a = [[0.0; 3]; 3];
-    for col in 0..n {
-        let e = sub(&pts[vs[c[col + 1]] as usize], &o);
-        for row in 0..n {
-            a[row][col] = e[row];
-        }
-    }
-    a
-}
-
 impl Problem {
     /// The inverse mean ratio, harmonic template, ideal references.
     pub fn new(mesh: &Mesh) -> Result<Problem> {
         Self::with_options(mesh, &ProblemOptions::default())
     }
 
+    /// check → order → corners → adjacency → colours.
     pub fn with_options(mesh: &Mesh, opts: &ProblemOptions) -> Result<Problem> {
         let start = Instant::now();
-        if mesh.num_elements() == 0 {
-            return Err(Error::InvalidMesh("mesh has no elements".into()));
-        }
-        let dim = mesh.dim();
-        if dim == 2 {
-            let z = mesh.points[0][2];
-            if let Some(v) = mesh.points.iter().position(|p| p[2] != z) {
-                return Err(Error::Unsupported(format!(
-                    "planar mesh not parallel to the xy plane (vertex 0 has z = {z}, vertex {v} has z = {}); \
-                     rotate it into a plane z = constant first",
-                    mesh.points[v][2]
-                )));
-            }
-        }
-        opts.check(mesh)?;
-        // planar meshes wound clockwise are optimised in mirrored order
-        let flip = crate::metric::is_clockwise(mesh, &mesh.points);
-
-        let fixed_old = topology::fixed_vertices(mesh);
-        let nb_old = topology::vertex_neighbours(mesh);
-        let order = order::reverse_bfs(&mesh.points, &nb_old, &fixed_old);
-        let inv = order::invert(&order);
-
-        // elements numbered in the order the vertex sweep first touches them
-        let ve_old = topology::vertex_elements(mesh);
-        let mut elem_new = vec![u32::MAX; mesh.num_elements()];
-        let mut elem_order = Vec::with_capacity(mesh.num_elements());
-        for &old_v in &order {
-            for &e in ve_old.of(old_v as usize) {
-                if elem_new[e as usize] == u32::MAX {
-                    elem_new[e as usize] = elem_order.len() as u32;
-                    elem_order.push(e);
-                }
-            }
-        }
-        let ne = elem_order.len();
-        let mut shapes: Vec<CornerShape> = Vec::new();
-        let mut shape_ids: HashMap<[u64; 12], u32> = HashMap::new();
-        let mut corners = Vec::new();
-        let mut corner_element = Vec::new();
-        let mut corner_shape = Vec::new();
-        let mut corner_weight = Vec::new();
-        let mut elem_pairs = Vec::new();
-        for (new_e, &old_e) in elem_order.iter().enumerate() {
-            let kind = mesh.kinds[old_e as usize];
-            let raw = mesh.element(old_e as usize);
-            let vs = if flip { reversed(kind, raw) } else { raw.to_vec() };
-            let all = kind.corners();
-            let used = if matches!(kind, ElementKind::Triangle | ElementKind::Tetrahedron) {
-                &all[..1]
-            } else {
-                all
-            };
-            for c in used {
-                let w = match opts.reference {
-                    Some(r) => {
-                        let rvs = if flip {
-                            reversed(kind, r.element(old_e as usize))
-                        } else {
-                            r.element(old_e as usize).to_vec()
-                        };
-                        corner_matrix(&r.points, &rvs, c, dim)
-                    }
-                    None => ideal_corner(kind),
-                };
-                let shape = CornerShape::from_w(&w, dim).ok_or_else(|| {
-                    Error::InvalidMesh(format!(
-                        "reference element {old_e} ({kind}) is inverted or degenerate at its corner at vertex {}",
-                        vs[c[0]]
-                    ))
-                })?;
-                let key: [u64; 12] = std::array::from_fn(|i| shape.tet.b(i / 3)[i % 3].to_bits());
-                let id = *shape_ids.entry(key).or_insert_with(|| {
-                    shapes.push(shape);
-                    shapes.len() as u32 - 1
-                });
-                let mut cv = [0u32; 4];
-                for (slot, l) in cv.iter_mut().zip(c.iter()).take(dim + 1) {
-                    *slot = inv[vs[*l] as usize];
-                }
-                if dim == 2 {
-                    cv[3] = cv[0];
-                }
-                corners.push(cv);
-                corner_element.push(new_e as u32);
-                corner_shape.push(id);
-                corner_weight.push(1.0 / (ne as f64 * used.len() as f64));
-            }
-            elem_pairs.extend(vs.iter().map(|&v| (new_e as u32, inv[v as usize])));
-        }
-        let elements = Csr::from_pairs(ne, elem_pairs.into_iter());
-        let n = mesh.num_points();
-        let incidence = Csr::from_pairs(
-            n,
-            corners
-                .iter()
-                .enumerate()
-                .flat_map(|(c, t)| (0..=dim).map(move |k| (t[k], 4 * c as u32 + k as u32))),
-        );
-        let inv_ref = &inv;
-        let mut nb_pairs: Vec<(u32, u32)> = (0..n)
-            .flat_map(|new| {
-                nb_old
-                    .of(order[new] as usize)
-                    .iter()
-                    .map(move |&w| (new as u32, inv_ref[w as usize]))
-            })
-            .collect();
-        nb_pairs.sort_unstable();
-        let neighbours = Csr::from_pairs(n, nb_pairs.into_iter());
-        let free: Vec<bool> = order.iter().map(|&o| !fixed_old[o as usize]).collect();
-        let free_vertices: Vec<u32> = (0..n as u32).filter(|&v| free[v as usize]).collect();
-        let vertex_elements = Csr::from_pairs(
-            n,
-            (0..ne)
-                .flat_map(|e| elements.of(e).iter().map(move |&v| (v, e as u32)))
-                .collect::<Vec<_>>()
-                .into_iter(),
-        );
-        let colors = color::greedy(&free_vertices, n, |v| {
-            vertex_elements
-                .of(v)
-                .iter()
-                .flat_map(|&e| elements.of(e as usize).iter().copied())
-        });
+        check(mesh, &mesh.points, opts)?;
+        let graph = MeshGraph::of(mesh);
+        let numbering = order(mesh, &graph, opts.ordering);
+        let corners = corners(mesh, &mesh.points, opts, &numbering)?;
+        let adj = adjacency(mesh, &graph, &numbering, &corners);
+        let colors = colours(&adj);
         Ok(Problem {
-            dim,
-            order,
-            elem_order,
-            elements,
-            corners,
-            corner_element,
-            corner_shape,
-            corner_weight,
-            shapes,
+            dim: corners.dim,
+            order: numbering.order,
+            elem_order: numbering.elem_order,
+            elements: adj.elements,
+            corners: corners.corners,
+            corner_element: corners.corner_element,
+            corner_shape: corners.corner_shape,
+            corner_weight: corners.corner_weight,
+            shapes: corners.shapes,
             model: Model {
                 metric: opts.metric,
                 template: opts.template,
             },
-            incidence,
-            neighbours,
-            free,
-            free_vertices,
+            incidence: adj.incidence,
+            neighbours: adj.neighbours,
+            free: adj.free,
+            free_vertices: adj.free_vertices,
             colors,
             setup_time: start.elapsed(),
         })
@@ -358,34 +218,4 @@ impl Problem {
             })
         }
     }
-}
-
-/// A reference mesh must match the mesh vertex for vertex and element for element.
-fn check_same_connectivity(mesh: &Mesh, r: &Mesh) -> Result<()> {
-    if r.num_points() != mesh.num_points() {
-        return Err(Error::InvalidArgument(format!(
-            "reference mesh has {} vertices, the mesh {}",
-            r.num_points(),
-            mesh.num_points()
-        )));
-    }
-    if r.num_elements() != mesh.num_elements() {
-        return Err(Error::InvalidArgument(format!(
-            "reference mesh has {} elements, the mesh {}",
-            r.num_elements(),
-            mesh.num_elements()
-        )));
-    }
-    for e in 0..mesh.num_elements() {
-        if r.kinds[e] != mesh.kinds[e] || r.element(e) != mesh.element(e) {
-            return Err(Error::InvalidArgument(format!(
-                "reference mesh differs at element {e}: {} {:?} in the mesh, {} {:?} in the reference",
-                mesh.kinds[e],
-                mesh.element(e),
-                r.kinds[e],
-                r.element(e)
-            )));
-        }
-    }
-    Ok(())
 }
