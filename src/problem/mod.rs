@@ -10,10 +10,11 @@
 //! mean over elements of the mean corner term.
 //!
 //! Building is a pipeline of small stages, each in its own file and usable on
-//! its own: [`check`] (options, planarity, reference fit) → [`order`] (vertex
-//! and element numbering, by [`Ordering`]) → [`corners`] (corners, shapes,
-//! weights) → [`adjacency`] (elements, incidence, neighbours, free vertices)
-//! → [`colours`]. Reports stop after `corners`, in the mesh's own numbering
+//! its own: [`check`](check()) (options, planarity, reference fit) →
+//! [`order`](order()) (vertex and element numbering, by [`Ordering`]) →
+//! [`corners`](corners()) (corners, shapes, weights) →
+//! [`adjacency`](adjacency()) (elements, incidence, neighbours, free
+//! vertices) → [`colours`]. Reports stop after `corners`, in the mesh's own numbering
 //! ([`Numbering::identity`]).
 //!
 //! [`ElementKind::optimised_corners`]: crate::mesh::ElementKind::optimised_corners
