@@ -6,10 +6,10 @@
 use crate::Mesh;
 use crate::error::Result;
 use crate::mesh::topology;
-use crate::metric::corner_model::Template;
+use crate::metric::corner_model::{Model, Template};
 use crate::metric::mat3::Vec3;
 use crate::metric::smetric::MetricKind;
-use crate::problem::{Problem, ProblemOptions};
+use crate::problem::{self, Numbering, ProblemOptions};
 use serde::Serialize;
 use std::fmt;
 
@@ -28,39 +28,28 @@ pub struct MetricSummary {
 }
 
 /// Per-element value of `metric` (the mean over the element's corners) at `points`.
+///
+/// Runs only the `check` and `corners` stages of a problem, in the mesh's own
+/// numbering: no ordering, adjacency or colours.
 pub fn element_values(
     mesh: &Mesh,
     points: &[Vec3],
     metric: MetricKind,
     reference: Option<&Mesh>,
 ) -> Result<Vec<Option<f64>>> {
-    let mut m = mesh.clone();
-    m.points = points.to_vec();
-    let p = Problem::with_options(
-        &m,
-        &ProblemOptions {
-            metric,
-            template: Template::Harmonic,
-            reference,
-        },
-    )?;
-    let x = p.gather(points);
-    let mut sums = vec![Some(0.0); mesh.num_elements()];
-    let mut counts = vec![0usize; mesh.num_elements()];
-    for c in 0..p.num_corners() {
-        let e = p.elem_order[p.corner_element[c] as usize] as usize;
-        let v = p.model.value(p.shape(c), &p.corner_points(&x, c));
-        sums[e] = match (sums[e], v) {
-            (Some(s), Some(v)) => Some(s + v),
-            _ => None,
-        };
-        counts[e] += 1;
-    }
-    Ok(sums
-        .into_iter()
-        .zip(counts)
-        .map(|(s, n)| s.map(|s| s / n.max(1) as f64))
-        .collect())
+    let opts = ProblemOptions {
+        metric,
+        template: Template::Harmonic,
+        reference,
+        ..Default::default()
+    };
+    problem::check(mesh, points, &opts)?;
+    let corners = problem::corners(mesh, points, &opts, &Numbering::identity(mesh))?;
+    let model = Model {
+        metric,
+        template: opts.template,
+    };
+    Ok(corners.element_values(&model, points, mesh.num_elements()))
 }
 
 pub fn metric_summary(

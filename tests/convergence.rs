@@ -219,6 +219,7 @@ fn mixed_tet_prism_hex_meshes_optimise_with_every_metric() {
                 metric,
                 template: Template::Harmonic,
                 reference: None,
+                ..Default::default()
             };
             let info = solve::smooth_mesh(
                 &mut mesh,

@@ -37,12 +37,7 @@ fn ideal(kind: ElementKind) -> Vec<Vec3> {
 
 /// The corners the solvers use: simplices one, the others all.
 fn corners(kind: ElementKind) -> &'static [[usize; 4]] {
-    let all = kind.corners();
-    if matches!(kind, ElementKind::Triangle | ElementKind::Tetrahedron) {
-        &all[..1]
-    } else {
-        all
-    }
+    kind.optimised_corners()
 }
 
 struct Element {

@@ -16,6 +16,7 @@ fn horseshoe_sqi_converges_to_its_semi_annulus_targets() {
         metric: MetricKind::TargetShapeSize,
         template: Template::Harmonic,
         reference: Some(&reference),
+        ..Default::default()
     };
     for method in [Method::Newton, Method::Bcd] {
         let mut m = mesh.clone();

@@ -41,6 +41,7 @@ fn tmp_options(reference: &Mesh) -> ProblemOptions<'_> {
         metric: MetricKind::TargetShapeSize,
         template: Template::Harmonic,
         reference: Some(reference),
+        ..Default::default()
     }
 }
 
@@ -110,6 +111,7 @@ fn every_metric_and_template_converges_on_hexahedra_and_quads() {
                 metric,
                 template,
                 reference: None,
+                ..Default::default()
             };
             let info = solve::smooth_mesh(
                 &mut mesh,

@@ -60,6 +60,7 @@ impl ObjectiveArgs {
             metric: self.metric,
             template: self.template,
             reference,
+            ..Default::default()
         })
     }
 }

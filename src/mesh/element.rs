@@ -74,6 +74,21 @@ impl ElementKind {
         }
     }
 
+    /// Triangles and tetrahedra: their map from the reference element is
+    /// affine, so every corner sees the same Jacobian.
+    pub fn is_simplex(self) -> bool {
+        matches!(self, ElementKind::Triangle | ElementKind::Tetrahedron)
+    }
+
+    /// The corners the objective and the metric reports evaluate: a simplex
+    /// only its first (every corner of it sees the same S, see
+    /// [`is_simplex`](Self::is_simplex)), every other kind all of its corners.
+    /// The one place this rule is written.
+    pub fn optimised_corners(self) -> &'static [[usize; 4]] {
+        let all = self.corners();
+        if self.is_simplex() { &all[..1] } else { all }
+    }
+
     /// Faces (for 3D kinds) or edges (for 2D kinds) as local vertex lists; a facet
     /// used by exactly one element lies on the boundary skin.
     pub fn facets(self) -> &'static [&'static [usize]] {
@@ -167,6 +182,17 @@ impl fmt::Display for ElementKind {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn simplices_optimise_their_first_corner_the_others_all() {
+        for kind in ElementKind::ALL {
+            let used = kind.optimised_corners();
+            let simplex = kind.num_vertices() == kind.dim() + 1;
+            assert_eq!(kind.is_simplex(), simplex, "{kind}");
+            assert_eq!(used.len(), if simplex { 1 } else { kind.num_vertices() }, "{kind}");
+            assert_eq!(used, &kind.corners()[..used.len()], "{kind}");
+        }
+    }
 
     #[test]
     fn corner_tables_use_each_vertex_once_as_corner() {

@@ -1,6 +1,55 @@
-//! Vertex orderings for locality of reference.
+//! Vertex orderings for locality of reference, and the element numbering that
+//! follows a vertex order.
 
 use super::topology::Csr;
+use clap::ValueEnum;
+
+/// The vertex order a problem is built in (its sweep order). Parsed and
+/// printed through clap's `ValueEnum` names: `rbfs`, `input` (alias `n`),
+/// `cuthill-mckee`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, ValueEnum)]
+pub enum Ordering {
+    /// Reverse breadth-first from the farthest boundary vertex ([`reverse_bfs`]).
+    #[default]
+    #[value(name = "rbfs")]
+    ReverseBfs,
+    /// The file's own vertex order (the reordering paper's "N").
+    #[value(name = "input", alias = "n")]
+    Input,
+    /// Cuthill–McKee: breadth-first from a vertex of least degree, neighbours
+    /// visited by increasing degree ([`cuthill_mckee`]).
+    #[value(name = "cuthill-mckee")]
+    CuthillMcKee,
+}
+
+impl Ordering {
+    /// `order[new] = old` for a mesh with vertex `points`, edge `neighbours`
+    /// and `boundary` (fixed) flags, all in the mesh's numbering.
+    pub fn order(self, points: &[[f64; 3]], neighbours: &Csr, boundary: &[bool]) -> Vec<u32> {
+        match self {
+            Ordering::ReverseBfs => reverse_bfs(points, neighbours, boundary),
+            Ordering::Input => (0..points.len() as u32).collect(),
+            Ordering::CuthillMcKee => cuthill_mckee(neighbours),
+        }
+    }
+}
+
+impl std::fmt::Display for Ordering {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.to_possible_value().expect("no Ordering is skipped");
+        f.write_str(v.get_name())
+    }
+}
+
+impl std::str::FromStr for Ordering {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        <Ordering as ValueEnum>::from_str(s, false).map_err(|_| {
+            let names: Vec<String> = Ordering::value_variants().iter().map(|o| o.to_string()).collect();
+            crate::Error::InvalidArgument(format!("unknown ordering '{s}' (expected {})", names.join(", ")))
+        })
+    }
+}
 
 /// Reverse breadth-first order (section 3.3 of the Newton paper): BFS from the
 /// boundary vertex farthest from the origin, then reversed. Disconnected parts
@@ -42,6 +91,56 @@ pub fn reverse_bfs(points: &[[f64; 3]], neighbours: &Csr, boundary: &[bool]) -> 
     order
 }
 
+/// Cuthill–McKee order: each connected part is swept breadth-first from its
+/// vertex of least degree (lowest id on ties), the unseen neighbours of a
+/// vertex taken by increasing degree (then id). Returns `order[new] = old`.
+pub fn cuthill_mckee(neighbours: &Csr) -> Vec<u32> {
+    let n = neighbours.len();
+    let degree = |v: u32| neighbours.of(v as usize).len();
+    let mut roots: Vec<u32> = (0..n as u32).collect();
+    roots.sort_by_key(|&v| (degree(v), v));
+    let mut seen = vec![false; n];
+    let mut order = Vec::with_capacity(n);
+    let mut next: Vec<u32> = Vec::new();
+    for &root in &roots {
+        if seen[root as usize] {
+            continue;
+        }
+        seen[root as usize] = true;
+        let mut head = order.len();
+        order.push(root);
+        while head < order.len() {
+            let v = order[head] as usize;
+            head += 1;
+            next.clear();
+            next.extend(neighbours.of(v).iter().copied().filter(|&w| !seen[w as usize]));
+            next.sort_by_key(|&w| (degree(w), w));
+            for &w in &next {
+                seen[w as usize] = true;
+                order.push(w);
+            }
+        }
+    }
+    order
+}
+
+/// Elements numbered in the order a sweep over `order` first touches them:
+/// `elem_order[new] = old`. `vertex_elements` lists each vertex's elements
+/// (mesh numbering) and must cover all `num_elements`.
+pub fn elements_by_first_touch(order: &[u32], vertex_elements: &Csr, num_elements: usize) -> Vec<u32> {
+    let mut touched = vec![false; num_elements];
+    let mut elem_order = Vec::with_capacity(num_elements);
+    for &v in order {
+        for &e in vertex_elements.of(v as usize) {
+            if !touched[e as usize] {
+                touched[e as usize] = true;
+                elem_order.push(e);
+            }
+        }
+    }
+    elem_order
+}
+
 /// Inverse of a permutation: `inv[perm[i]] = i`.
 pub fn invert(perm: &[u32]) -> Vec<u32> {
     let mut inv = vec![0u32; perm.len()];
@@ -69,5 +168,61 @@ mod tests {
         // root 5 is farthest: the BFS is 5,4, then 3,2,1,0; reversed
         assert_eq!(order, vec![0, 1, 2, 3, 4, 5]);
         assert_eq!(invert(&[2, 0, 1]), vec![1, 2, 0]);
+    }
+
+    fn is_permutation(order: &[u32], n: usize) -> bool {
+        let mut sorted = order.to_vec();
+        sorted.sort_unstable();
+        sorted == (0..n as u32).collect::<Vec<_>>()
+    }
+
+    #[test]
+    fn cuthill_mckee_starts_at_least_degree_and_takes_neighbours_by_degree() {
+        // a star 0-{1,2,3} whose leaf 3 continues to 4; degrees 3,1,1,2,1
+        let edges = [(0, 1), (0, 2), (0, 3), (3, 4)];
+        let mut pairs: Vec<(u32, u32)> = edges.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
+        pairs.sort_unstable();
+        let nb = Csr::from_pairs(5, pairs.into_iter());
+        let order = cuthill_mckee(&nb);
+        assert!(is_permutation(&order, 5));
+        // root 1 (degree 1, lowest id), then 0, then 0's unseen neighbours by
+        // degree: 2 (degree 1) before 3 (degree 2), then 4
+        assert_eq!(order, vec![1, 0, 2, 3, 4]);
+    }
+
+    #[test]
+    fn orderings_are_permutations_and_input_is_the_identity() {
+        let pairs = [(0, 1), (1, 0), (1, 2), (2, 1), (2, 3), (3, 2)];
+        let nb = Csr::from_pairs(4, pairs.iter().copied());
+        let pts: Vec<[f64; 3]> = (0..4).map(|i| [i as f64, 0.0, 0.0]).collect();
+        let boundary = [true, false, false, true];
+        for o in Ordering::value_variants() {
+            assert!(is_permutation(&o.order(&pts, &nb, &boundary), 4), "{o}");
+        }
+        assert_eq!(Ordering::Input.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
+        assert_eq!(Ordering::ReverseBfs.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
+        assert_eq!(Ordering::CuthillMcKee.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn ordering_names_round_trip_through_value_enum() {
+        assert_eq!(Ordering::default(), Ordering::ReverseBfs);
+        for o in Ordering::value_variants() {
+            assert_eq!(o.to_string().parse::<Ordering>().unwrap(), *o);
+        }
+        assert_eq!(Ordering::ReverseBfs.to_string(), "rbfs");
+        assert_eq!(Ordering::CuthillMcKee.to_string(), "cuthill-mckee");
+        assert_eq!("n".parse::<Ordering>().unwrap(), Ordering::Input);
+        assert_eq!("input".parse::<Ordering>().unwrap(), Ordering::Input);
+        let err = "bfs".parse::<Ordering>().unwrap_err().to_string();
+        assert!(err.contains("rbfs, input, cuthill-mckee"), "{err}");
+    }
+
+    #[test]
+    fn elements_follow_the_first_vertex_that_touches_them() {
+        // elements 0 = {0, 1}, 1 = {1, 2}, 2 = {2, 3}; sweep 3, 2, 1, 0
+        let ve = Csr::from_pairs(4, [(0, 0), (1, 0), (1, 1), (2, 1), (2, 2), (3, 2)].into_iter());
+        assert_eq!(elements_by_first_touch(&[3, 2, 1, 0], &ve, 3), vec![2, 1, 0]);
+        assert_eq!(elements_by_first_touch(&[1, 0, 2, 3], &ve, 3), vec![0, 1, 2]);
     }
 }

@@ -52,12 +52,7 @@ pub fn corner_eta(a: &Mat3, winv: &Mat3, n: usize) -> Option<f64> {
 pub fn element_eta(kind: ElementKind, x: &[Vec3]) -> Option<f64> {
     let n = kind.dim();
     let winv = mat3::upper_inverse(&ideal_corner(kind));
-    let corners = kind.corners();
-    let corners = if kind == ElementKind::Tetrahedron {
-        &corners[..1]
-    } else {
-        corners
-    };
+    let corners = kind.optimised_corners();
     let mut sum = 0.0;
     for c in corners {
         let mut a = [[0.0; 3]; 3];

@@ -174,6 +174,7 @@ pub fn problem(mesh: &Mesh, reference: &Mesh, metric: MetricKind, template: Temp
         metric,
         template,
         reference: (metric == MetricKind::TargetShapeSize).then_some(reference),
+        ..Default::default()
     };
     Problem::with_options(mesh, &opts).unwrap()
 }

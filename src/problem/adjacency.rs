@@ -1,0 +1,179 @@
+//! Stage 4, adjacency (elements, corner incidence, vertex neighbours and the
+//! free vertices in the problem's numbering), and stage 5, colours.
+
+use super::corners::{Corners, element_vertices};
+use super::numbering::{MeshGraph, Numbering};
+use crate::mesh::topology::Csr;
+use crate::mesh::{Mesh, color};
+
+/// What a solver needs to find its way around the problem, all in the
+/// problem's numbering.
+#[derive(Clone, Debug)]
+pub struct Adjacency {
+    /// Vertices of each element, in the order the corners read them.
+    pub elements: Csr,
+    /// Per vertex: incident corners packed as `4 * corner + local slot`.
+    pub incidence: Csr,
+    /// Per vertex: its edge neighbours, sorted.
+    pub neighbours: Csr,
+    /// Per vertex: may it move?
+    pub free: Vec<bool>,
+    /// Free vertices in sweep order (ascending ids).
+    pub free_vertices: Vec<u32>,
+}
+
+pub fn adjacency(mesh: &Mesh, graph: &MeshGraph, numbering: &Numbering, corners: &Corners) -> Adjacency {
+    let (order, inv) = (&numbering.order, &numbering.inv);
+    let n = order.len();
+    let dim = corners.dim;
+    let elem_pairs: Vec<(u32, u32)> = numbering
+        .elem_order
+        .iter()
+        .enumerate()
+        .flat_map(|(new_e, &old_e)| {
+            element_vertices(mesh, old_e as usize, corners.flip)
+                .into_iter()
+                .map(move |v| (new_e as u32, inv[v as usize]))
+        })
+        .collect();
+    let elements = Csr::from_pairs(numbering.elem_order.len(), elem_pairs.into_iter());
+    let incidence = Csr::from_pairs(
+        n,
+        corners
+            .corners
+            .iter()
+            .enumerate()
+            .flat_map(|(c, t)| (0..=dim).map(move |k| (t[k], 4 * c as u32 + k as u32))),
+    );
+    let mut nb_pairs: Vec<(u32, u32)> = (0..n)
+        .flat_map(|new| {
+            graph
+                .neighbours
+                .of(order[new] as usize)
+                .iter()
+                .map(move |&w| (new as u32, inv[w as usize]))
+        })
+        .collect();
+    nb_pairs.sort_unstable();
+    let neighbours = Csr::from_pairs(n, nb_pairs.into_iter());
+    let free: Vec<bool> = order.iter().map(|&o| !graph.fixed[o as usize]).collect();
+    let free_vertices: Vec<u32> = (0..n as u32).filter(|&v| free[v as usize]).collect();
+    Adjacency {
+        elements,
+        incidence,
+        neighbours,
+        free,
+        free_vertices,
+    }
+}
+
+/// Colour classes of the free vertices (greedy, in sweep order): no two
+/// vertices of a class share an element.
+pub fn colours(adj: &Adjacency) -> Csr {
+    let n = adj.free.len();
+    let elements = &adj.elements;
+    let vertex_elements = Csr::from_pairs(
+        n,
+        (0..elements.len())
+            .flat_map(|e| elements.of(e).iter().map(move |&v| (v, e as u32)))
+            .collect::<Vec<_>>()
+            .into_iter(),
+    );
+    color::greedy(&adj.free_vertices, n, |v| {
+        vertex_elements
+            .of(v)
+            .iter()
+            .flat_map(|&e| elements.of(e as usize).iter().copied())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate;
+    use crate::mesh::order::Ordering;
+    use crate::problem::{ProblemOptions, corners, order};
+
+    fn stages(mesh: &Mesh) -> (Numbering, Corners, Adjacency) {
+        let g = MeshGraph::of(mesh);
+        let num = order(mesh, &g, Ordering::ReverseBfs);
+        let cs = corners(mesh, &mesh.points, &ProblemOptions::default(), &num).unwrap();
+        let adj = adjacency(mesh, &g, &num, &cs);
+        (num, cs, adj)
+    }
+
+    #[test]
+    fn incidence_lists_every_corner_slot_once_under_its_vertex() {
+        let m = generate::mixed_block(2, 2);
+        let (_, cs, adj) = stages(&m);
+        let dim = cs.dim;
+        let mut seen = vec![0u8; 4 * cs.len()];
+        for v in 0..adj.incidence.len() {
+            for &packed in adj.incidence.of(v) {
+                let (c, k) = (packed as usize / 4, packed as usize % 4);
+                assert!(k <= dim);
+                assert_eq!(cs.corners[c][k] as usize, v, "slot {k} of corner {c}");
+                seen[packed as usize] += 1;
+            }
+        }
+        for c in 0..cs.len() {
+            for k in 0..4 {
+                assert_eq!(seen[4 * c + k], u8::from(k <= dim), "corner {c} slot {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn elements_and_neighbours_are_the_mesh_renumbered() {
+        let m = generate::mixed_block(2, 2);
+        let (num, _, adj) = stages(&m);
+        for (new_e, &old_e) in num.elem_order.iter().enumerate() {
+            let mut a: Vec<u32> = adj.elements.of(new_e).iter().map(|&v| num.order[v as usize]).collect();
+            let mut b = m.element(old_e as usize).to_vec();
+            a.sort_unstable();
+            b.sort_unstable();
+            assert_eq!(a, b, "element {new_e}");
+        }
+        let g = MeshGraph::of(&m);
+        for v in 0..adj.neighbours.len() {
+            let nb = adj.neighbours.of(v);
+            assert!(nb.windows(2).all(|w| w[0] < w[1]));
+            let mut old: Vec<u32> = nb.iter().map(|&w| num.order[w as usize]).collect();
+            old.sort_unstable();
+            assert_eq!(old, g.neighbours.of(num.order[v] as usize));
+            assert_eq!(adj.free[v], !g.fixed[num.order[v] as usize]);
+        }
+        assert!(adj.free_vertices.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(adj.free_vertices.len(), adj.free.iter().filter(|&&f| f).count());
+    }
+
+    #[test]
+    fn no_two_vertices_of_a_colour_share_an_element() {
+        let m = generate::tet_box(4, 3, 3, [4.0, 3.0, 3.0]);
+        let (_, _, adj) = stages(&m);
+        let colors = colours(&adj);
+        let mut colour_of = vec![u32::MAX; adj.free.len()];
+        for k in 0..colors.len() {
+            for &v in colors.of(k) {
+                assert_eq!(colour_of[v as usize], u32::MAX, "vertex {v} coloured twice");
+                colour_of[v as usize] = k as u32;
+            }
+        }
+        for v in 0..adj.free.len() {
+            assert_eq!(adj.free[v], colour_of[v] != u32::MAX, "vertex {v}");
+        }
+        for e in 0..adj.elements.len() {
+            let cs: Vec<u32> = adj
+                .elements
+                .of(e)
+                .iter()
+                .map(|&v| colour_of[v as usize])
+                .filter(|&c| c != u32::MAX)
+                .collect();
+            for (i, a) in cs.iter().enumerate() {
+                assert!(!cs[i + 1..].contains(a), "element {e} has two vertices of colour {a}");
+            }
+        }
+        assert!(colors.len() >= 2);
+    }
+}

@@ -1,0 +1,112 @@
+//! Stage 1, check: the mesh has elements, a planar mesh lies in a plane
+//! z = constant, and the options fit each other and the mesh.
+
+use super::ProblemOptions;
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::metric::corner_model::Template;
+use crate::metric::mat3::Vec3;
+use crate::metric::smetric::MetricKind;
+
+/// Refuses what no later stage can build from; `points` are the positions
+/// the problem is built at (the mesh's own, or a report's).
+pub fn check(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions) -> Result<()> {
+    if mesh.num_elements() == 0 {
+        return Err(Error::InvalidMesh("mesh has no elements".into()));
+    }
+    if mesh.dim() == 2 {
+        check_planar(points)?;
+    }
+    opts.check(mesh)
+}
+
+/// A planar mesh must lie in a plane z = constant: only x and y move.
+fn check_planar(points: &[Vec3]) -> Result<()> {
+    let z = points[0][2];
+    match points.iter().position(|p| p[2] != z) {
+        None => Ok(()),
+        Some(v) => Err(Error::Unsupported(format!(
+            "planar mesh not parallel to the xy plane (vertex 0 has z = {z}, vertex {v} has z = {}); \
+             rotate it into a plane z = constant first",
+            points[v][2]
+        ))),
+    }
+}
+
+impl ProblemOptions<'_> {
+    /// The options' own consistency and the reference's fit to `mesh`, without
+    /// building anything: callers can refuse bad input before any work.
+    pub fn check(&self, mesh: &Mesh) -> Result<()> {
+        if self.metric == MetricKind::TargetShapeSize && self.reference.is_none() {
+            return Err(Error::InvalidArgument(
+                "the target-matrix metric (tmp) needs a reference mesh (--reference) for its targets W".into(),
+            ));
+        }
+        if self.metric == MetricKind::TargetShapeSize && self.template == Template::Average {
+            return Err(Error::InvalidArgument(
+                "the average template needs a quality in (0, 1] (imr, cn); use the harmonic template with tmp".into(),
+            ));
+        }
+        match self.reference {
+            Some(r) => check_same_connectivity(mesh, r),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A reference mesh must match the mesh vertex for vertex and element for element.
+fn check_same_connectivity(mesh: &Mesh, r: &Mesh) -> Result<()> {
+    if r.num_points() != mesh.num_points() {
+        return Err(Error::InvalidArgument(format!(
+            "reference mesh has {} vertices, the mesh {}",
+            r.num_points(),
+            mesh.num_points()
+        )));
+    }
+    if r.num_elements() != mesh.num_elements() {
+        return Err(Error::InvalidArgument(format!(
+            "reference mesh has {} elements, the mesh {}",
+            r.num_elements(),
+            mesh.num_elements()
+        )));
+    }
+    for e in 0..mesh.num_elements() {
+        if r.kinds[e] != mesh.kinds[e] || r.element(e) != mesh.element(e) {
+            return Err(Error::InvalidArgument(format!(
+                "reference mesh differs at element {e}: {} {:?} in the mesh, {} {:?} in the reference",
+                mesh.kinds[e],
+                mesh.element(e),
+                r.kinds[e],
+                r.element(e)
+            )));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate;
+
+    #[test]
+    fn check_refuses_a_tilted_planar_mesh_and_a_mismatched_reference() {
+        let mut m = generate::quad_grid(2, 2, [1.0, 1.0]);
+        let opts = ProblemOptions::default();
+        assert!(check(&m, &m.points, &opts).is_ok());
+        let mut tilted = m.points.clone();
+        tilted[4][2] = 0.5;
+        let err = check(&m, &tilted, &opts).unwrap_err().to_string();
+        assert!(err.contains("vertex 4 has z = 0.5"), "{err}");
+        let other = generate::quad_grid(3, 2, [1.0, 1.0]);
+        let with_ref = ProblemOptions {
+            reference: Some(&other),
+            ..Default::default()
+        };
+        assert!(check(&m, &m.points, &with_ref).is_err());
+        m.kinds.clear();
+        m.offsets = vec![0];
+        m.conn.clear();
+        assert!(check(&m, &m.points, &opts).is_err());
+    }
+}

@@ -1,0 +1,222 @@
+//! `Problem`: what a solver needs and nothing else — free-vertex flags,
+//! element corners and adjacency in locality order, each corner's reference
+//! (B = D W^-1), the metric and the template. Built once; solvers work in its
+//! (reordered) numbering and the result is mapped back to the mesh's own.
+//!
+//! Every element is a list of corners: simplices one (their map from the
+//! reference is affine, so every corner sees the same S), quadrilaterals,
+//! hexahedra and prisms all of theirs ([`ElementKind::optimised_corners`]).
+//! F = sum over corners of w_c m(S_c) with w_c = 1 / (|E| corners(e)): the
+//! mean over elements of the mean corner term.
+//!
+//! Building is a pipeline of small stages, each in its own file and usable on
+//! its own: [`check`](check()) (options, planarity, reference fit) →
+//! [`order`](order()) (vertex and element numbering, by [`Ordering`]) →
+//! [`corners`](corners()) (corners, shapes, weights) →
+//! [`adjacency`](adjacency()) (elements, incidence, neighbours, free
+//! vertices) → [`colours`]. Reports stop after `corners`, in the mesh's own numbering
+//! ([`Numbering::identity`]).
+//!
+//! [`ElementKind::optimised_corners`]: crate::mesh::ElementKind::optimised_corners
+
+mod adjacency;
+mod check;
+mod corners;
+mod numbering;
+
+pub use adjacency::{Adjacency, adjacency, colours};
+pub use check::check;
+pub use corners::{Corners, corners, element_vertices};
+pub use numbering::{MeshGraph, Numbering, order};
+
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+pub use crate::mesh::order::Ordering;
+use crate::mesh::topology::Csr;
+use crate::metric::corner_model::{CornerShape, Model, Template};
+use crate::metric::mat3::{Vec3, sub};
+use crate::metric::smetric::MetricKind;
+use std::time::{Duration, Instant};
+
+/// What to optimise.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ProblemOptions<'a> {
+    pub metric: MetricKind,
+    pub template: Template,
+    /// A mesh with the same connectivity whose corners are the targets W
+    /// (required by `tmp`; optional for the others, which default to the ideal
+    /// element of each kind).
+    pub reference: Option<&'a Mesh>,
+    /// The vertex order the problem is built (and swept) in.
+    pub ordering: Ordering,
+}
+
+#[derive(Clone, Debug)]
+pub struct Problem {
+    /// Metric dimension: 2 (x and y move) or 3.
+    pub dim: usize,
+    /// `order[new] = old` vertex id.
+    pub order: Vec<u32>,
+    /// `elem_order[new] = old` element id.
+    pub elem_order: Vec<u32>,
+    /// Vertices of each element (new numbering), for colouring and reports.
+    pub elements: Csr,
+    /// Corners: the corner vertex, then its `dim` neighbours (a 2D corner repeats
+    /// its vertex in the unused fourth slot, whose B row is zero).
+    pub corners: Vec<[u32; 4]>,
+    /// Element of each corner (new numbering).
+    pub corner_element: Vec<u32>,
+    /// Index into `shapes` for each corner.
+    pub corner_shape: Vec<u32>,
+    /// Weight of each corner in F.
+    pub corner_weight: Vec<f64>,
+    /// Distinct corner references.
+    pub shapes: Vec<CornerShape>,
+    pub model: Model,
+    /// Per vertex (new numbering): incident corners packed as `4 * corner + local slot`.
+    pub incidence: Csr,
+    /// Per vertex: its edge neighbours (new numbering).
+    pub neighbours: Csr,
+    /// Per vertex: may it move?
+    pub free: Vec<bool>,
+    /// Free vertices in sweep order (ascending new ids).
+    pub free_vertices: Vec<u32>,
+    /// Colour classes of the free vertices: no two vertices of a class share an
+    /// element. Each class is in sweep order.
+    pub colors: Csr,
+    /// Time spent building this problem.
+    pub setup_time: Duration,
+}
+
+impl Problem {
+    /// The inverse mean ratio, harmonic template, ideal references.
+    pub fn new(mesh: &Mesh) -> Result<Problem> {
+        Self::with_options(mesh, &ProblemOptions::default())
+    }
+
+    /// check → order → corners → adjacency → colours.
+    pub fn with_options(mesh: &Mesh, opts: &ProblemOptions) -> Result<Problem> {
+        let start = Instant::now();
+        check(mesh, &mesh.points, opts)?;
+        let graph = MeshGraph::of(mesh);
+        let numbering = order(mesh, &graph, opts.ordering);
+        let corners = corners(mesh, &mesh.points, opts, &numbering)?;
+        let adj = adjacency(mesh, &graph, &numbering, &corners);
+        let colors = colours(&adj);
+        Ok(Problem {
+            dim: corners.dim,
+            order: numbering.order,
+            elem_order: numbering.elem_order,
+            elements: adj.elements,
+            corners: corners.corners,
+            corner_element: corners.corner_element,
+            corner_shape: corners.corner_shape,
+            corner_weight: corners.corner_weight,
+            shapes: corners.shapes,
+            model: Model {
+                metric: opts.metric,
+                template: opts.template,
+            },
+            incidence: adj.incidence,
+            neighbours: adj.neighbours,
+            free: adj.free,
+            free_vertices: adj.free_vertices,
+            colors,
+            setup_time: start.elapsed(),
+        })
+    }
+
+    /// Bytes held by the problem's arrays.
+    pub fn bytes(&self) -> usize {
+        let csr = |c: &Csr| 4 * (c.offsets.len() + c.items.len());
+        4 * (self.order.len() + self.elem_order.len() + self.free_vertices.len())
+            + (16 + 4 + 4 + 8) * self.corners.len()
+            + std::mem::size_of::<CornerShape>() * self.shapes.len()
+            + self.free.len()
+            + csr(&self.elements)
+            + csr(&self.incidence)
+            + csr(&self.neighbours)
+            + csr(&self.colors)
+    }
+
+    pub fn num_vertices(&self) -> usize {
+        self.order.len()
+    }
+
+    pub fn num_elements(&self) -> usize {
+        self.elem_order.len()
+    }
+
+    pub fn num_corners(&self) -> usize {
+        self.corners.len()
+    }
+
+    /// Mesh positions gathered into the problem's numbering.
+    pub fn gather(&self, points: &[Vec3]) -> Vec<Vec3> {
+        self.order.iter().map(|&o| points[o as usize]).collect()
+    }
+
+    /// Problem positions scattered back to the mesh numbering.
+    pub fn scatter(&self, x: &[Vec3]) -> Vec<Vec3> {
+        let mut out = vec![[0.0; 3]; x.len()];
+        for (new, &old) in self.order.iter().enumerate() {
+            out[old as usize] = x[new];
+        }
+        out
+    }
+
+    #[inline]
+    pub fn corner_points(&self, x: &[Vec3], c: usize) -> [Vec3; 4] {
+        let t = &self.corners[c];
+        [x[t[0] as usize], x[t[1] as usize], x[t[2] as usize], x[t[3] as usize]]
+    }
+
+    #[inline]
+    pub fn shape(&self, c: usize) -> &CornerShape {
+        &self.shapes[self.corner_shape[c] as usize]
+    }
+
+    /// Weighted objective term of corner `c` at `x`; `None` if inverted.
+    #[inline]
+    pub fn corner_term(&self, x: &[Vec3], c: usize) -> Option<f64> {
+        Some(self.corner_weight[c] * self.model.value(self.shape(c), &self.corner_points(x, c))?)
+    }
+
+    /// Mean edge length, the length scale for displacement comparisons.
+    pub fn mean_edge_length(&self, x: &[Vec3]) -> f64 {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for v in 0..self.num_vertices() {
+            for &w in self.neighbours.of(v) {
+                if (w as usize) > v {
+                    sum += sub(&x[v], &x[w as usize]).iter().map(|c| c * c).sum::<f64>().sqrt();
+                    count += 1;
+                }
+            }
+        }
+        sum / count.max(1) as f64
+    }
+
+    /// Element ids (mesh numbering) with an inverted or degenerate corner at `x`.
+    pub fn infeasible_elements(&self, x: &[Vec3]) -> Vec<usize> {
+        let mut bad: Vec<usize> = (0..self.num_corners())
+            .filter(|&c| self.corner_term(x, c).is_none())
+            .map(|c| self.elem_order[self.corner_element[c] as usize] as usize)
+            .collect();
+        bad.sort_unstable();
+        bad.dedup();
+        bad
+    }
+
+    /// Refuses a start with inverted elements: every solver needs a feasible start.
+    pub fn check_feasible(&self, x: &[Vec3]) -> Result<()> {
+        let bad = self.infeasible_elements(x);
+        if bad.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::Inverted {
+                count: bad.len(),
+                first: bad.into_iter().take(5).collect(),
+            })
+        }
+    }
+}
