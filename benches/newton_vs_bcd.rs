@@ -8,7 +8,7 @@
 
 use meshsmooth::compare;
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
-use meshsmooth::solve::{Method, Params};
+use meshsmooth::solve::{Method, Options};
 
 fn main() {
     let full = std::env::args().any(|a| a == "--full");
@@ -30,7 +30,13 @@ fn main() {
             seed: 1,
         };
         generate::perturb(&mut mesh, &opts).expect("perturbation");
-        let (cmp, _) = compare::compare(&mesh, &[Method::Newton, Method::Bcd], &Params::default()).expect("solves");
+        let (cmp, _) = compare::compare(
+            &mesh,
+            &Default::default(),
+            &[Method::Newton, Method::Bcd],
+            &Options::default(),
+        )
+        .expect("solves");
         let (nw, bcd) = (&cmp.runs[0], &cmp.runs[1]);
         let t = |v: Option<f64>| v.map_or("-".into(), |s| format!("{s:.3}"));
         let cross = cmp

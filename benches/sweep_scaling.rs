@@ -5,10 +5,11 @@
 //!
 //! Run: cargo bench --bench sweep_scaling [-- --quick]
 
-use meshsmooth::backend::gpu::{GpuBcd, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::cpu::bcd;
+use meshsmooth::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::problem::Problem;
-use meshsmooth::solve::bcd;
 use meshsmooth::{Mesh, io};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -81,7 +82,9 @@ fn main() {
         });
         let mut x = x0.clone();
         let col = time(reps, || {
-            bcd::sweep_colored(&p, &mut x, &ls, None);
+            for c in 0..p.colors.len() {
+                bcd::sweep_color(&p, &mut x, c, &ls);
+            }
         });
         let rate = |s: f64| format!("{:.2} M/s ({:.1} ms)", ne / s / 1e6, s * 1e3);
         let mut row = format!(
@@ -92,11 +95,15 @@ fn main() {
             rate(col)
         );
         for (_, ctx) in &gpus {
-            match GpuBcd::new(ctx, &p, &x0) {
+            match GpuBackend::new(ctx, &p, &x0, &ls) {
                 Ok(mut g) => {
+                    // the colours, then one read-back of the largest move
                     let s = time(reps, || {
-                        g.sweep().unwrap();
-                        g.wait().unwrap();
+                        for c in 0..g.num_colors() {
+                            g.bcd_color(c).unwrap();
+                        }
+                        g.max_move(Slot(0)).unwrap();
+                        g.flush().unwrap();
                     });
                     row.push_str(&format!(" {} |", rate(s)));
                 }

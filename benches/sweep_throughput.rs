@@ -2,10 +2,10 @@
 //! perturbed 20x20x20 box (48,000 tetrahedra).
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
+use meshsmooth::backend::cpu::{bcd, laplace};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::objective;
 use meshsmooth::problem::Problem;
-use meshsmooth::solve::{bcd, laplace};
 use std::hint::black_box;
 
 fn perturbed_box(n: usize) -> meshsmooth::Mesh {

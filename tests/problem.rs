@@ -48,8 +48,13 @@ fn input_ordering_keeps_the_file_order_and_reaches_the_same_optimum() {
     let mut finals = Vec::new();
     for ordering in [Ordering::ReverseBfs, Ordering::Input, Ordering::CuthillMcKee] {
         let mut m = mesh.clone();
-        let info =
-            solve::smooth_mesh_with(&mut m, &with_ordering(ordering), Method::Newton, &params, &mut |_| true).unwrap();
+        let info = solve::smooth_mesh(
+            &mut m,
+            &with_ordering(ordering),
+            &solve::Options::cpu(Method::Newton, &params),
+            &mut |_| true,
+        )
+        .unwrap();
         assert!(
             info.objective < 0.99 * f0_rbfs,
             "{ordering}: {} from {f0_rbfs}",

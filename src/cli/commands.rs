@@ -60,7 +60,7 @@ impl ObjectiveArgs {
             metric: self.metric,
             template: self.template,
             reference,
-            ..Default::default()
+            ordering: self.order,
         })
     }
 }

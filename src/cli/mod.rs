@@ -11,6 +11,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use meshsmooth::backend::gpu::Precision;
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::problem::Ordering;
 use meshsmooth::solve::newton::NewtonParams;
 use meshsmooth::solve::pcg::NegativeCurvature;
 use meshsmooth::solve::{Method, Params};
@@ -144,6 +145,11 @@ pub struct ObjectiveArgs {
     /// Reference mesh with the same connectivity: its corners are the targets W.
     #[arg(long, value_name = "MESH")]
     pub reference: Option<PathBuf>,
+    /// Vertex order of the sweeps and of the Hessian rows: rbfs (reverse breadth-first
+    /// from the boundary, the Newton paper's), input (the file's own, the reordering
+    /// paper's N) or cuthill-mckee.
+    #[arg(long, value_enum, default_value_t = Ordering::default())]
+    pub order: Ordering,
 }
 
 #[derive(Args, Debug)]
