@@ -264,8 +264,10 @@ fn compare_reports_both_methods_and_writes_csv_and_svg() {
     let o = meshsmooth(&["compare", s(&input), "--json", "--methods", "newton,bcd-colored"]);
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(json["runs"].as_array().unwrap().len(), 2);
+    // an unknown method is a usage error, named
     let o = meshsmooth(&["compare", s(&input), "--methods", "bcd,nonsense"]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("nonsense"), "{}", text(&o));
 }
 
 #[test]

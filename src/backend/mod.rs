@@ -121,7 +121,7 @@ pub fn guard_passes(slots: &[f64], guard: Option<Slot>) -> bool {
 /// The operations the solvers need. See the module documentation for the
 /// model; every method records (GPU) or runs (CPU) one operation.
 pub trait Backend {
-    /// "cpu", or the adapter and precision.
+    /// Where it runs, for reports: "cpu (f64, N threads)", "gpu ADAPTER (f32|f64)".
     fn describe(&self) -> String;
     /// Free vertices: the length of every `Vector`.
     fn num_free(&self) -> usize;

@@ -29,13 +29,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let options = a.objective.options(reference.as_ref())?;
     // every method needs a version on the device: checked before running any
     let choice = device::choose(a.device, &a.gpu, methods)?;
-    let where_ = choice.describe();
     let opts = Options {
         params: params.clone(),
         device: choice.device(),
         ..Default::default()
     };
     let (cmp, infos) = meshsmooth::compare::compare(&mesh, &options, methods, &opts)?;
+    let where_ = infos.first().map_or_else(String::new, |i| i.device.clone());
     if a.json {
         println!("{}", serde_json::to_string_pretty(&cmp).expect("comparison serialises"));
     } else {

@@ -18,17 +18,6 @@ impl Choice {
             Choice::Gpu(ctx) => Device::Gpu(ctx),
         }
     }
-
-    pub fn describe(&self) -> String {
-        match self {
-            Choice::Cpu => format!("cpu (f64, {} threads)", rayon::current_num_threads()),
-            Choice::Gpu(ctx) => format!(
-                "gpu {} ({})",
-                ctx.adapter_name(),
-                if ctx.is_f64() { "f64" } else { "f32" }
-            ),
-        }
-    }
 }
 
 /// Picks the backend for `methods`. `auto` takes a hardware GPU when there is

@@ -149,7 +149,7 @@ impl Options<'_> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Info {
     pub method: Method,
-    /// "cpu", or the adapter and precision.
+    /// Where it ran (`Backend::describe`).
     pub device: String,
     pub iterations: usize,
     pub stop: StopReason,

@@ -189,17 +189,7 @@ impl HessianPattern {
                     for c in 0..3 {
                         gi[c] += g[a][c] * scale;
                     }
-                    for b in 0..nslots {
-                        let s = slots[e][4 * a + b];
-                        if s != u32::MAX {
-                            let blk = &mut blocks[(s - base) as usize];
-                            for c in 0..3 {
-                                for q in 0..3 {
-                                    blk[c][q] += h[a][b][c][q] * scale;
-                                }
-                            }
-                        }
-                    }
+                    super::hessian_gather::add_row(blocks, base, &slots[e][4 * a..4 * a + nslots], &h[a], scale);
                 }
             }
             true

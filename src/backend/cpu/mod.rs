@@ -5,12 +5,19 @@
 pub mod axpby;
 pub mod bcd;
 pub mod block_jacobi;
+pub mod block_jacobi_factor;
 pub mod bsr_spmv;
+pub mod cbrt_eval;
 pub mod dot;
+pub mod gradient_gather;
 pub mod hessian_assemble;
+pub mod hessian_gather;
 pub mod laplace;
 pub mod line_search;
+pub mod mean_ratio_eval;
 pub mod objective;
+pub mod reduce;
+pub mod set_slot;
 
 use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, guard_passes};
 use crate::error::{Error, Result};
@@ -129,7 +136,7 @@ impl<'p> CpuBackend<'p> {
 
 impl Backend for CpuBackend<'_> {
     fn describe(&self) -> String {
-        "cpu".into()
+        format!("cpu (f64, {} threads)", rayon::current_num_threads())
     }
 
     fn num_free(&self) -> usize {
@@ -306,10 +313,7 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn set_slot(&mut self, dst: Slot, value: Coef, guard: Option<Slot>) -> Result<()> {
-        if guard_passes(&self.slots, guard) {
-            let v = value.eval(&self.slots);
-            self.set(dst, v);
-        }
+        set_slot::set_slot(&mut self.slots, dst, value, guard);
         Ok(())
     }
 

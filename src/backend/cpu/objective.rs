@@ -1,4 +1,4 @@
-//! The objective F = sum over corners of w_c m(S_c) (the mean over elements of
+//! CPU twin of `shaders/objective.wgsl`: the objective F = sum over corners of w_c m(S_c) (the mean over elements of
 //! the mean corner term; for the inverse mean ratio under the harmonic template,
 //! equation 2 of the Newton paper), its gradient over the free vertices and
 //! that gradient's 2-norm.
@@ -7,7 +7,7 @@ use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use rayon::prelude::*;
 
-const CHUNK: usize = 4096;
+use super::reduce::CHUNK;
 
 /// Objective value; `None` when any corner is inverted or degenerate.
 pub fn value(p: &Problem, x: &[Vec3]) -> Option<f64> {
@@ -17,7 +17,7 @@ pub fn value(p: &Problem, x: &[Vec3]) -> Option<f64> {
         .into_par_iter()
         .map(|c| (c * CHUNK..((c + 1) * CHUNK).min(n)).map(|k| p.corner_term(x, k)).sum())
         .collect();
-    partial.map(|v| v.iter().sum::<f64>())
+    partial.map(|v| super::reduce::in_order(&v))
 }
 
 /// Objective and its gradient (zero at fixed vertices); `None` if infeasible.
@@ -33,30 +33,8 @@ pub fn gradient(p: &Problem, x: &[Vec3]) -> Option<(f64, Vec<Vec3>)> {
         })
         .collect();
     let grads = grads?;
-    // gather per vertex (not scatter) so that the sum order is fixed and the
-    // result repeats bit for bit
-    let g: Vec<Vec3> = (0..p.num_vertices())
-        .into_par_iter()
-        .with_min_len(1024)
-        .map(|v| {
-            let mut acc = [0.0; 3];
-            if p.free[v] {
-                for &packed in p.incidence.of(v) {
-                    let gv = &grads[(packed >> 2) as usize].1[(packed & 3) as usize];
-                    for i in 0..3 {
-                        acc[i] += gv[i];
-                    }
-                }
-            }
-            acc
-        })
-        .collect();
-    let f = grads
-        .par_chunks(CHUNK)
-        .map(|c| c.iter().map(|(t, _)| t).sum::<f64>())
-        .collect::<Vec<f64>>()
-        .iter()
-        .sum();
+    let g = super::gradient_gather::gather(p, &grads);
+    let f = super::reduce::sum(&grads, |(t, _)| *t);
     Some((f, g))
 }
 

@@ -284,7 +284,7 @@ fn contributions(pattern: &HessianPattern) -> (Vec<u32>, Vec<u32>) {
 impl Backend for GpuBackend<'_> {
     fn describe(&self) -> String {
         format!(
-            "{}, {}",
+            "gpu {} ({})",
             self.ctx.adapter_name(),
             if self.ctx.is_f64() { "f64" } else { "f32" }
         )
