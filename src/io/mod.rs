@@ -27,7 +27,7 @@ mod medit;
 mod vtk;
 mod vtu;
 
-pub use atomic::{same_file, write_atomic};
+pub use atomic::{same_file, same_target, write_atomic};
 
 use std::fmt;
 use std::path::Path;
@@ -197,8 +197,8 @@ pub fn read(path: &Path) -> Result<Mesh> {
 /// name the file; errors that already do are returned as they are.
 pub fn in_file(path: &Path, e: Error) -> Error {
     match e {
-        Error::InvalidMesh(msg) | Error::Unsupported(msg) => Error::parse(path, None, msg),
-        e @ Error::Inverted { .. } => Error::parse(path, None, e.to_string()),
+        Error::InvalidMesh(msg) => Error::parse(path, None, msg),
+        e @ (Error::Inverted { .. } | Error::Unsupported(_)) => Error::parse(path, None, e.to_string()),
         other => other,
     }
 }
