@@ -775,21 +775,30 @@ fn push_int(out: &mut Vec<u8>, t: ValueType, x: i64) {
     }
 }
 
-/// The ASCII form of an array, `per_line` values a line.
-fn array_text(w: &mut dyn Write, a: &DataArray) -> std::io::Result<()> {
-    let per_line = a.components.clamp(1, 12);
+/// The ASCII form of an array: a tuple a line, or (`rows`, CSR offsets) a
+/// cell a line.
+fn array_text(w: &mut dyn Write, a: &DataArray, rows: Option<&[usize]>) -> std::io::Result<()> {
     let mut line = String::new();
-    let mut n = 0;
+    let mut i = 0;
+    let mut row = 1;
     let mut push = |w: &mut dyn Write, s: &str| -> std::io::Result<()> {
-        if n > 0 {
+        if !line.is_empty() {
             line.push(' ');
         }
         line.push_str(s);
-        n += 1;
-        if n == per_line {
+        i += 1;
+        let end = match rows {
+            Some(r) => {
+                while row < r.len() && r[row] < i {
+                    row += 1;
+                }
+                row < r.len() && r[row] == i
+            }
+            None => i % a.components.max(1) == 0,
+        };
+        if end {
             writeln!(w, "{line}")?;
             line.clear();
-            n = 0;
         }
         Ok(())
     };
@@ -835,6 +844,10 @@ struct Out<'w> {
 
 impl Out<'_> {
     fn array(&mut self, indent: &str, a: &DataArray) -> WriteResult {
+        self.array_rows(indent, a, None)
+    }
+
+    fn array_rows(&mut self, indent: &str, a: &DataArray, rows: Option<&[usize]>) -> WriteResult {
         let fmt = if self.enc == Encoding::Ascii { "ascii" } else { "binary" };
         let tag = if a.ty == ValueType::Str { "Array" } else { "DataArray" };
         writeln!(
@@ -846,7 +859,7 @@ impl Out<'_> {
             a.tuples()
         )?;
         match self.enc {
-            Encoding::Ascii => array_text(self.w, a)?,
+            Encoding::Ascii => array_text(self.w, a, rows)?,
             Encoding::Base64 => {
                 let data = array_bytes(a);
                 let header = (data.len() as u64).to_le_bytes();
@@ -916,7 +929,8 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         .flat_map(|e| mesh.element(e).iter().copied())
         .map(|v| v as i64)
         .collect();
-    o.array("        ", &DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn)))?;
+    let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
+    o.array_rows("        ", &conn, Some(&mesh.offsets))?;
     let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
     o.array("        ", &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)))?;
     let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
