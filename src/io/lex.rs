@@ -400,7 +400,10 @@ impl Scalar {
 
     /// Parse one text value of this type.
     pub fn parse_text(self, t: &str) -> Option<NumVal> {
-        if self.is_float() {
+        if self == Scalar::F32 {
+            // the value a float array holds: the text rounded to f32
+            t.parse::<f32>().ok().map(|x| NumVal::F(x as f64))
+        } else if self.is_float() {
             t.parse::<f64>().ok().map(NumVal::F)
         } else if self == Scalar::U64 {
             t.parse::<u64>().ok().map(|v| NumVal::I(v as i64))
