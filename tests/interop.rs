@@ -128,7 +128,12 @@ fn assert_arrays_eq(ctx: &str, got: &[DataArray], want: &[DataArray]) {
     let names = |a: &[DataArray]| a.iter().map(|x| x.name.clone()).collect::<Vec<_>>();
     assert_eq!(names(got), names(want), "{ctx}: array names");
     for (g, w) in got.iter().zip(want) {
-        assert_eq!((g.ty, g.components), (w.ty, w.components), "{ctx}: '{}' type/components", w.name);
+        assert_eq!(
+            (g.ty, g.components),
+            (w.ty, w.components),
+            "{ctx}: '{}' type/components",
+            w.name
+        );
         assert_eq!(g.values.len(), w.values.len(), "{ctx}: '{}' length", w.name);
         if g.values != w.values {
             let i = (0..w.values.len())
@@ -178,7 +183,10 @@ fn check_folder(dir: &Path) -> usize {
                 assert!(names.contains(&g.as_str()), "{name}: group {g} not in {names:?}");
             }
             let phys = m.data.cell_array(GMSH_PHYSICAL).expect("gmsh:physical");
-            assert!((0..m.num_elements()).all(|e| phys.get_i64(e) != 0), "{name}: untagged element");
+            assert!(
+                (0..m.num_elements()).all(|e| phys.get_i64(e) != 0),
+                "{name}: untagged element"
+            );
         }
         check_known_values(name, &m);
         for f in Format::ALL {
@@ -225,11 +233,17 @@ fn check_known_values(name: &str, m: &Mesh) {
     }
     let v = m.data.point.iter().find(|a| a.name == "velocity").unwrap();
     assert_eq!((v.components, v.ty), (3, ValueType::F64), "{name}");
-    let Values::Float(vals) = &v.values else { panic!("{name}: velocity") };
+    let Values::Float(vals) = &v.values else {
+        panic!("{name}: velocity")
+    };
     assert!(vals.chunks(3).all(|c| c == [1.0, 2.0, 3.0]), "{name}: velocity values");
     let r = m.data.cell_array("region").unwrap();
     assert_eq!(r.ty, ValueType::I32, "{name}");
-    assert_eq!(r.values, Values::Int((0..m.num_elements() as i64).collect()), "{name}: region");
+    assert_eq!(
+        r.values,
+        Values::Int((0..m.num_elements() as i64).collect()),
+        "{name}: region"
+    );
     let t = m.data.point.iter().find(|a| a.name == "temperature").unwrap();
     assert_eq!(t.ty, ValueType::F32, "{name}");
     let note = m.data.field.iter().find(|a| a.name == "note").unwrap();
@@ -335,7 +349,12 @@ fn gmsh_reads_back_every_msh_meshsmooth_writes() {
     }
     let mut sources = vec![local_dir().join("gmsh_box_phys_msh41a.msh")];
     if let Some(d) = shared_dir() {
-        for f in ["gmsh_box_phys_msh22a.msh", "gmsh_box_phys_msh41b.msh", "meshio_tetbox_vtu_zlib.vtu", "meshio_trirect_vtu_zlib.vtu"] {
+        for f in [
+            "gmsh_box_phys_msh22a.msh",
+            "gmsh_box_phys_msh41b.msh",
+            "meshio_tetbox_vtu_zlib.vtu",
+            "meshio_trirect_vtu_zlib.vtu",
+        ] {
             sources.push(d.join(f));
         }
     }
@@ -344,7 +363,12 @@ fn gmsh_reads_back_every_msh_meshsmooth_writes() {
         let m = io::read(src).unwrap();
         let want = groups_by_geometry(&m);
         assert!(!want.is_empty(), "{}: no groups", src.display());
-        for f in [Format::Msh22Ascii, Format::Msh22Binary, Format::Msh41Ascii, Format::Msh41Binary] {
+        for f in [
+            Format::Msh22Ascii,
+            Format::Msh22Binary,
+            Format::Msh41Ascii,
+            Format::Msh41Binary,
+        ] {
             let name = src.file_name().unwrap().to_string_lossy().to_string();
             let out = dir.path().join(format!("{name}.{f}.msh"));
             io::write(&out, &m, f, &[]).unwrap();
@@ -362,7 +386,10 @@ fn gmsh_reads_back_every_msh_meshsmooth_writes() {
                 .output()
                 .unwrap();
             let log = String::from_utf8_lossy(&save.stdout).to_string() + &String::from_utf8_lossy(&save.stderr);
-            assert!(save.status.success() && !log.contains("Error"), "{name} as {f}: gmsh -save:\n{log}");
+            assert!(
+                save.status.success() && !log.contains("Error"),
+                "{name} as {f}: gmsh -save:\n{log}"
+            );
             let back = io::read(&resaved).unwrap_or_else(|e| panic!("{name} as {f}, saved by Gmsh: {e}"));
             assert_eq!(groups_by_geometry(&back), want, "{name} as {f}: groups after Gmsh");
             let mut names = back.data.physical_names.clone();
@@ -375,7 +402,10 @@ fn gmsh_reads_back_every_msh_meshsmooth_writes() {
 }
 
 fn meshsmooth(args: &[&std::ffi::OsStr]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_meshsmooth")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 /// The arrays of a VTK file survive a smoothing run, next to the quality
@@ -406,7 +436,10 @@ fn smoothing_keeps_every_array_unless_told_not_to() {
         assert_arrays_eq(&format!("{fmt}: field data"), &got.data.field, &m.data.field);
         assert_arrays_eq(&format!("{fmt}: cell data"), &got.data.cell[..1], &m.data.cell);
         let q = got.data.cell_array("inverse_mean_ratio").expect("quality array");
-        assert!((0..got.num_elements()).all(|e| q.get_f64(e) >= 1.0), "{fmt}: quality values");
+        assert!(
+            (0..got.num_elements()).all(|e| q.get_f64(e) >= 1.0),
+            "{fmt}: quality values"
+        );
         assert_ne!(got.points, m.points, "{fmt}: the mesh was smoothed");
     }
     let bare = dir.path().join("bare.vtu");

@@ -275,7 +275,10 @@ fn cell_data_is_written_to_vtk_and_vtu() {
         // The file stays readable, and the array reads back with its values.
         let got = io::read(&p).unwrap();
         assert_eq!(got.conn, m.conn, "{f}");
-        let a = got.data.cell_array("quality").unwrap_or_else(|| panic!("{f}: no quality array"));
+        let a = got
+            .data
+            .cell_array("quality")
+            .unwrap_or_else(|| panic!("{f}: no quality array"));
         assert_eq!(a.values, meshsmooth::mesh::Values::Float(q.clone()), "{f}");
     }
 }
@@ -388,7 +391,10 @@ fn vtk_wedges_follow_vtk_orientation() {
             u[0] * v[1] - u[1] * v[0],
         ];
         let toward_top = normal[0] * w[0] + normal[1] * w[1] + normal[2] * w[2];
-        assert!(toward_top > 0.0, "{name}: base normal points away from the top triangle");
+        assert!(
+            toward_top > 0.0,
+            "{name}: base normal points away from the top triangle"
+        );
         assert_eq!(
             meshsmooth::io::read(&path).unwrap().conn,
             mesh.conn,

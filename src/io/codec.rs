@@ -52,7 +52,10 @@ impl Codec {
             }
         };
         if out.len() != size {
-            return Err(format!("a block inflates to {} bytes, its header says {size}", out.len()));
+            return Err(format!(
+                "a block inflates to {} bytes, its header says {size}",
+                out.len()
+            ));
         }
         Ok(out)
     }
@@ -105,10 +108,7 @@ impl Source for RawSource<'_> {
         if n > self.left() {
             return Err((
                 self.at(),
-                format!(
-                    "the data ends {} bytes too early (truncated file?)",
-                    n - self.left()
-                ),
+                format!("the data ends {} bytes too early (truncated file?)", n - self.left()),
             ));
         }
         let s = self.data[self.pos..self.pos + n].to_vec();
@@ -188,7 +188,10 @@ impl<'a> B64Source<'a> {
                 b64_value(c).ok_or_else(|| {
                     (
                         start,
-                        format!("invalid base64 character {:?}", char::from(c).escape_default().to_string()),
+                        format!(
+                            "invalid base64 character {:?}",
+                            char::from(c).escape_default().to_string()
+                        ),
                     )
                 })?
             };
@@ -215,7 +218,10 @@ impl Source for B64Source<'_> {
             if !self.quantum()? {
                 return Err((
                     self.at(),
-                    format!("the base64 data ends {} bytes too early (truncated file?)", n - self.pending.len()),
+                    format!(
+                        "the base64 data ends {} bytes too early (truncated file?)",
+                        n - self.pending.len()
+                    ),
                 ));
             }
         }
@@ -255,7 +261,10 @@ impl Layout {
             let at = src.at();
             let n = self.word(src, "the byte count")?;
             if n > max {
-                return Err((at, format!("the header says {n} bytes, more than the array can hold ({max})")));
+                return Err((
+                    at,
+                    format!("the header says {n} bytes, more than the array can hold ({max})"),
+                ));
             }
             return src.take(n);
         };
@@ -264,16 +273,23 @@ impl Layout {
         let bs = self.word(src, "the block size")?;
         let last = self.word(src, "the last block size")?;
         if nb.saturating_mul(self.header.size()) > src.left() {
-            return Err((at, format!("{nb} compressed blocks announced, the file is too short for them (truncated?)")));
+            return Err((
+                at,
+                format!("{nb} compressed blocks announced, the file is too short for them (truncated?)"),
+            ));
         }
         let total = match nb {
             0 => 0,
-            _ => (nb - 1).saturating_mul(bs).saturating_add(if last == 0 { bs } else { last }),
+            _ => (nb - 1)
+                .saturating_mul(bs)
+                .saturating_add(if last == 0 { bs } else { last }),
         };
         if total > max || (nb > 1 && last > bs) {
             return Err((
                 at,
-                format!("compression header: {nb} blocks of {bs} bytes (last {last}) do not fit the array ({max} bytes at most)"),
+                format!(
+                    "compression header: {nb} blocks of {bs} bytes (last {last}) do not fit the array ({max} bytes at most)"
+                ),
             ));
         }
         let mut sizes = Vec::with_capacity(nb);

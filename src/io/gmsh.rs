@@ -158,7 +158,9 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                 }
             }
             s => {
-                return Err(r.c.err(format!("expected a section such as $Nodes, found '{}'", clip(s))));
+                return Err(r
+                    .c
+                    .err(format!("expected a section such as $Nodes, found '{}'", clip(s))));
             }
         }
     }
@@ -170,8 +172,18 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         return Err(Error::parse(path, None, "missing $Elements section"));
     }
     let mut raw = r.raw;
-    raw.cell_data.push(DataArray::new(GMSH_PHYSICAL, ValueType::I32, 1, Values::Int(r.physical)));
-    raw.cell_data.push(DataArray::new(GMSH_ELEMENTARY, ValueType::I32, 1, Values::Int(r.elementary)));
+    raw.cell_data.push(DataArray::new(
+        GMSH_PHYSICAL,
+        ValueType::I32,
+        1,
+        Values::Int(r.physical),
+    ));
+    raw.cell_data.push(DataArray::new(
+        GMSH_ELEMENTARY,
+        ValueType::I32,
+        1,
+        Values::Int(r.elementary),
+    ));
     Ok(raw)
 }
 
@@ -512,8 +524,14 @@ struct OutCell {
 /// elementary 1 otherwise).
 fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
     let tag = |a: Option<&DataArray>, i: usize, default: i32| a.map_or(default, |a| a.get_i64(i) as i32);
-    let (ep, ee) = (mesh.data.cell_array(GMSH_PHYSICAL), mesh.data.cell_array(GMSH_ELEMENTARY));
-    let (lp, le) = (mesh.data.lower_array(GMSH_PHYSICAL), mesh.data.lower_array(GMSH_ELEMENTARY));
+    let (ep, ee) = (
+        mesh.data.cell_array(GMSH_PHYSICAL),
+        mesh.data.cell_array(GMSH_ELEMENTARY),
+    );
+    let (lp, le) = (
+        mesh.data.lower_array(GMSH_PHYSICAL),
+        mesh.data.lower_array(GMSH_ELEMENTARY),
+    );
     let mut cells: Vec<OutCell> = (0..mesh.num_elements())
         .map(|e| OutCell {
             t: mesh.kinds[e].gmsh_id(),
@@ -788,7 +806,12 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     let mut tag = 0u64;
     for run in runs {
         let c0 = &cells[run.start];
-        nums(w, &mut buf, &[c0.dim as i32, c0.elementary, c0.t as i32], &[run.len() as u64])?;
+        nums(
+            w,
+            &mut buf,
+            &[c0.dim as i32, c0.elementary, c0.t as i32],
+            &[run.len() as u64],
+        )?;
         for c in &cells[run] {
             tag += 1;
             let mut row = vec![tag];

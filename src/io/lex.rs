@@ -411,7 +411,12 @@ impl Scalar {
             // VTK writes integers as integers; tolerate "3.0" from other writers
             t.parse::<i64>()
                 .ok()
-                .or_else(|| t.parse::<f64>().ok().filter(|x| x.fract() == 0.0 && x.abs() < 9.2e18).map(|x| x as i64))
+                .or_else(|| {
+                    t.parse::<f64>()
+                        .ok()
+                        .filter(|x| x.fract() == 0.0 && x.abs() < 9.2e18)
+                        .map(|x| x as i64)
+                })
                 .map(NumVal::I)
         }
     }

@@ -318,7 +318,12 @@ pub(crate) fn out_cell_arrays<'a>(mesh: &'a Mesh, cell_data: &[CellData]) -> Vec
         .map(std::borrow::Cow::Borrowed)
         .collect();
     out.extend(cell_data.iter().map(|c| {
-        std::borrow::Cow::Owned(DataArray::new(c.name, ValueType::F64, 1, Values::Float(c.values.to_vec())))
+        std::borrow::Cow::Owned(DataArray::new(
+            c.name,
+            ValueType::F64,
+            1,
+            Values::Float(c.values.to_vec()),
+        ))
     }));
     out
 }
@@ -409,7 +414,11 @@ impl RawMesh {
                 return Err(Error::parse(
                     path,
                     None,
-                    format!("point data '{}' has {} tuples but the file has {np} points", lex::clip(&a.name), a.tuples()),
+                    format!(
+                        "point data '{}' has {} tuples but the file has {np} points",
+                        lex::clip(&a.name),
+                        a.tuples()
+                    ),
                 ));
             }
         }
@@ -418,7 +427,11 @@ impl RawMesh {
                 return Err(Error::parse(
                     path,
                     None,
-                    format!("cell data '{}' has {} tuples but the file has {ncells} cells", lex::clip(&a.name), a.tuples()),
+                    format!(
+                        "cell data '{}' has {} tuples but the file has {ncells} cells",
+                        lex::clip(&a.name),
+                        a.tuples()
+                    ),
                 ));
             }
         }

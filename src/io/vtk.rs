@@ -119,7 +119,10 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         Some("ASCII") => false,
         Some("BINARY") => true,
         _ => {
-            return Err(c.err(format!("expected ASCII or BINARY on line 3, found '{}'", clip(&fmt.join(" ")))));
+            return Err(c.err(format!(
+                "expected ASCII or BINARY on line 3, found '{}'",
+                clip(&fmt.join(" "))
+            )));
         }
     };
     let mut r = Reader {
@@ -741,7 +744,13 @@ fn write_field(w: &mut dyn Write, arrays: &[&DataArray], binary: bool) -> WriteR
                 for row in v.chunks(a.components.clamp(1, 9)) {
                     let t: Vec<String> = row
                         .iter()
-                        .map(|&x| if a.ty == ValueType::U64 { (x as u64).to_string() } else { x.to_string() })
+                        .map(|&x| {
+                            if a.ty == ValueType::U64 {
+                                (x as u64).to_string()
+                            } else {
+                                x.to_string()
+                            }
+                        })
                         .collect();
                     writeln!(w, "{}", t.join(" "))?;
                 }
@@ -750,7 +759,13 @@ fn write_field(w: &mut dyn Write, arrays: &[&DataArray], binary: bool) -> WriteR
                 for row in v.chunks(a.components.clamp(1, 9)) {
                     let t: Vec<String> = row
                         .iter()
-                        .map(|&x| if a.ty == ValueType::F32 { format!("{:?}", x as f32) } else { fmt_f64(x) })
+                        .map(|&x| {
+                            if a.ty == ValueType::F32 {
+                                format!("{:?}", x as f32)
+                            } else {
+                                fmt_f64(x)
+                            }
+                        })
                         .collect();
                     writeln!(w, "{}", t.join(" "))?;
                 }

@@ -155,7 +155,11 @@ impl Ctx<'_> {
                 let Some(app) = &self.appended else {
                     return Err(self.err(
                         s.at,
-                        format!("{} '{}' is appended but the file has no <AppendedData>", tag_name(s), clip(&s.name)),
+                        format!(
+                            "{} '{}' is appended but the file has no <AppendedData>",
+                            tag_name(s),
+                            clip(&s.name)
+                        ),
                     ));
                 };
                 if offset > app.data.len() {
@@ -224,7 +228,11 @@ impl Ctx<'_> {
                     let v = t.parse_text(tok).ok_or_else(|| {
                         self.err(
                             s.text_at + pos,
-                            format!("expected a number in DataArray '{}', found '{}'", clip(&s.name), clip(tok)),
+                            format!(
+                                "expected a number in DataArray '{}', found '{}'",
+                                clip(&s.name),
+                                clip(tok)
+                            ),
                         )
                     })?;
                     push_val(&mut out, v);
@@ -239,7 +247,11 @@ impl Ctx<'_> {
                         _ => {
                             return Err(self.err(
                                 s.text_at + pos,
-                                format!("expected a character code in Array '{}', found '{}'", clip(&s.name), clip(tok)),
+                                format!(
+                                    "expected a character code in Array '{}', found '{}'",
+                                    clip(&s.name),
+                                    clip(tok)
+                                ),
                             ));
                         }
                     }
@@ -263,7 +275,11 @@ impl Ctx<'_> {
             if out.len() != want {
                 return Err(self.err(
                     s.at,
-                    format!("Array '{}' has {} strings, NumberOfTuples says {want}", clip(&s.name), out.len()),
+                    format!(
+                        "Array '{}' has {} strings, NumberOfTuples says {want}",
+                        clip(&s.name),
+                        out.len()
+                    ),
                 ));
             }
         }
@@ -312,14 +328,24 @@ fn split_appended<'a>(path: &Path, data: &'a [u8]) -> Result<(usize, Option<Appe
         .iter()
         .position(|&b| b == b'>')
         .map(|i| ap + i)
-        .ok_or_else(|| err(data.len(), "the file ends inside the <AppendedData> tag (truncated)".into()))?;
+        .ok_or_else(|| {
+            err(
+                data.len(),
+                "the file ends inside the <AppendedData> tag (truncated)".into(),
+            )
+        })?;
     let tag = std::str::from_utf8(&data[ap + 1..gt]).map_err(|_| err(ap, "<AppendedData> tag is not text".into()))?;
     let start = BytesStart::from_content(tag, "AppendedData".len());
     let encoding = attr(&start, "encoding").unwrap_or_else(|| "raw".into());
     let raw = match encoding.as_str() {
         "raw" => true,
         "base64" => false,
-        e => return Err(err(ap, format!("<AppendedData> encoding '{}' is not raw or base64", clip(e)))),
+        e => {
+            return Err(err(
+                ap,
+                format!("<AppendedData> encoding '{}' is not raw or base64", clip(e)),
+            ));
+        }
     };
     let mut u = gt + 1;
     while u < data.len() && data[u].is_ascii_whitespace() {
@@ -332,7 +358,10 @@ fn split_appended<'a>(path: &Path, data: &'a [u8]) -> Result<(usize, Option<Appe
     let end = rfind(&data[u..], b"</AppendedData>").map(|i| u + i).ok_or_else(|| {
         err(
             data.len(),
-            format!("the file ends inside <AppendedData> (no </AppendedData>; truncated at byte {})", data.len()),
+            format!(
+                "the file ends inside <AppendedData> (no </AppendedData>; truncated at byte {})",
+                data.len()
+            ),
         )
     })?;
     let tail = std::str::from_utf8(&data[end + "</AppendedData>".len()..]).unwrap_or("");
@@ -382,7 +411,10 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
     loop {
         let tag_pos = reader.buffer_position() as usize;
         let ev = reader.read_event().map_err(|e| {
-            ctx.err(reader.error_position() as usize, format!("malformed XML: {}", clip(&e.to_string())))
+            ctx.err(
+                reader.error_position() as usize,
+                format!("malformed XML: {}", clip(&e.to_string())),
+            )
         })?;
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
@@ -478,7 +510,10 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
             Some(t) => format!("<{}> is not closed", clip(t)),
             None => "no <VTKFile> element".into(),
         };
-        return Err(ctx.err(xml_len, format!("the file ends at byte {xml_len} but {what} (truncated file?)")));
+        return Err(ctx.err(
+            xml_len,
+            format!("the file ends at byte {xml_len} but {what} (truncated file?)"),
+        ));
     }
     assemble(&ctx, specs, data.len())
 }
@@ -553,14 +588,12 @@ fn array_spec(ctx: &Ctx, e: &BytesStart, section: Section, at: usize) -> Result<
     let storage = match attr(e, "format").as_deref().unwrap_or("ascii") {
         "ascii" => Storage::Ascii,
         "binary" => Storage::Binary,
-        "appended" => Storage::Appended(count("offset")?.ok_or_else(|| {
-            ctx.err(at, format!("DataArray '{}': appended without an offset", clip(&name)))
-        })?),
+        "appended" => Storage::Appended(
+            count("offset")?
+                .ok_or_else(|| ctx.err(at, format!("DataArray '{}': appended without an offset", clip(&name))))?,
+        ),
         f => {
-            return Err(ctx.err(
-                at,
-                format!("DataArray '{}': unknown format '{}'", clip(&name), clip(f)),
-            ));
+            return Err(ctx.err(at, format!("DataArray '{}': unknown format '{}'", clip(&name), clip(f))));
         }
     };
     if section == Section::Points && components != 3 {
@@ -690,7 +723,10 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
         ids.clear();
         for &v in &conn[start..end] {
             ids.push(as_index(v, np).ok_or_else(|| {
-                ctx.err(cat, format!("element {e} refers to vertex {v}, but the file has {np} points"))
+                ctx.err(
+                    cat,
+                    format!("element {e} refers to vertex {v}, but the file has {np} points"),
+                )
             })? as u32);
         }
         let t = types[e] as i64;
@@ -932,9 +968,15 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
     let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
     o.array_rows("        ", &conn, Some(&mesh.offsets))?;
     let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
-    o.array("        ", &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)))?;
+    o.array(
+        "        ",
+        &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)),
+    )?;
     let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
-    o.array("        ", &DataArray::new("types", ValueType::U8, 1, Values::Int(types)))?;
+    o.array(
+        "        ",
+        &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
+    )?;
     writeln!(o.w, "      </Cells>")?;
     check_cell_data(mesh, cell_data)?;
     let cells = out_cell_arrays(mesh, cell_data);

@@ -64,7 +64,9 @@ impl Values {
     /// Tuples `idx` (of `k` values each), in that order.
     fn gather(&self, k: usize, idx: &[usize]) -> Values {
         fn pick<T: Clone>(v: &[T], k: usize, idx: &[usize]) -> Vec<T> {
-            idx.iter().flat_map(|&i| v[i * k..(i + 1) * k].iter().cloned()).collect()
+            idx.iter()
+                .flat_map(|&i| v[i * k..(i + 1) * k].iter().cloned())
+                .collect()
         }
         match self {
             Values::Int(v) => Values::Int(pick(v, k, idx)),
@@ -200,7 +202,13 @@ impl MeshData {
                 a.components
             ))
         };
-        for a in self.point.iter().chain(&self.cell).chain(&self.lower).chain(&self.field) {
+        for a in self
+            .point
+            .iter()
+            .chain(&self.cell)
+            .chain(&self.lower)
+            .chain(&self.field)
+        {
             if a.components == 0 || a.values.len() % a.components != 0 {
                 return Err(bad("data", a, a.components * a.tuples()));
             }
@@ -216,9 +224,7 @@ impl MeshData {
             }
         }
         if lower > 0 && !self.lower.is_empty() {
-            if self.lower.len() != self.cell.len()
-                || self.lower.iter().zip(&self.cell).any(|(l, c)| l.name != c.name)
-            {
+            if self.lower.len() != self.cell.len() || self.lower.iter().zip(&self.cell).any(|(l, c)| l.name != c.name) {
                 return Err(Error::InvalidMesh(
                     "lower-cell arrays must have the names of the cell arrays, in the same order".into(),
                 ));
@@ -250,7 +256,8 @@ mod tests {
     #[test]
     fn check_counts_tuples() {
         let mut d = MeshData::default();
-        d.point.push(DataArray::new("t", ValueType::I32, 1, Values::Int(vec![1, 2, 3])));
+        d.point
+            .push(DataArray::new("t", ValueType::I32, 1, Values::Int(vec![1, 2, 3])));
         assert!(d.check(3, 0, 0).is_ok());
         assert!(d.check(4, 0, 0).is_err());
     }

@@ -165,8 +165,7 @@ impl Mesh {
                 )));
             }
         }
-        self.data
-            .check(n, self.num_elements(), self.lower.len())?;
+        self.data.check(n, self.num_elements(), self.lower.len())?;
         if let Some((a, b)) = self.duplicate_elements() {
             let mut vs = self.element(b).to_vec();
             vs.sort_unstable();
