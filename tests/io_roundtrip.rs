@@ -164,7 +164,7 @@ fn test_meshes() -> Vec<(&'static str, Mesh)> {
 fn ext(f: Format) -> &'static str {
     match f {
         Format::VtkAscii | Format::VtkBinary => "vtk",
-        Format::VtuAscii | Format::VtuBinary => "vtu",
+        Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
         Format::Medit => "mesh",
         _ => "msh",
     }
@@ -210,7 +210,7 @@ fn every_format_round_trips_every_mesh() {
             assert_eq!(got.conn, m.conn, "{ctx}: conn");
             assert_eq!(fixed(&got), fixed(&m), "{ctx}: fixed");
             match f {
-                Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary => {
+                Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => {
                     assert!(got.lower.is_empty(), "{ctx}: VTK must not carry lower cells")
                 }
                 Format::Medit => assert_eq!(got.lower, m.lower, "{ctx}: lower"),
@@ -257,7 +257,13 @@ fn cell_data_is_written_to_vtk_and_vtu() {
         name: "quality",
         values: &q,
     }];
-    for f in [Format::VtkAscii, Format::VtkBinary, Format::VtuAscii, Format::VtuBinary] {
+    for f in [
+        Format::VtkAscii,
+        Format::VtkBinary,
+        Format::VtuAscii,
+        Format::VtuBinary,
+        Format::VtuZlib,
+    ] {
         let p = dir.path().join(format!("cd-{f}.{}", ext(f)));
         io::write(&p, &m, f, &cd).unwrap();
         let bytes = std::fs::read(&p).unwrap();
@@ -266,8 +272,14 @@ fn cell_data_is_written_to_vtk_and_vtu() {
         if matches!(f, Format::VtkAscii | Format::VtuAscii) {
             assert!(text.contains(&format!("{:?}", q[1])), "{f}: {}", q[1]);
         }
-        // The file stays readable with the extra arrays.
-        assert_eq!(io::read(&p).unwrap().conn, m.conn, "{f}");
+        // The file stays readable, and the array reads back with its values.
+        let got = io::read(&p).unwrap();
+        assert_eq!(got.conn, m.conn, "{f}");
+        let a = got
+            .data
+            .cell_array("quality")
+            .unwrap_or_else(|| panic!("{f}: no quality array"));
+        assert_eq!(a.values, meshsmooth::mesh::Values::Float(q.clone()), "{f}");
     }
 }
 
@@ -352,8 +364,9 @@ fn real_meshes_read_with_documented_counts() {
 
 #[test]
 fn vtk_wedges_follow_vtk_orientation() {
-    // VTK: the base triangle (0,1,2) has its normal pointing away from (3,4,5);
-    // meshsmooth's own order points it toward them, so VTK files are permuted
+    // VTK 9's validator and vtkMeshQuality (ParaView) take a wedge's base
+    // triangle (0,1,2) with its normal toward (3,4,5), as meshsmooth and Gmsh
+    // do: VTK files are written in meshsmooth's own order.
     let mesh = meshsmooth::generate::prism_mesh(false, 1);
     let dir = tempfile::tempdir().unwrap();
     for (name, format) in [("p.vtk", Format::VtkAscii), ("p.vtu", Format::VtuAscii)] {
@@ -378,7 +391,10 @@ fn vtk_wedges_follow_vtk_orientation() {
             u[0] * v[1] - u[1] * v[0],
         ];
         let toward_top = normal[0] * w[0] + normal[1] * w[1] + normal[2] * w[2];
-        assert!(toward_top < 0.0, "{name}: base normal points toward the top triangle");
+        assert!(
+            toward_top > 0.0,
+            "{name}: base normal points away from the top triangle"
+        );
         assert_eq!(
             meshsmooth::io::read(&path).unwrap().conn,
             mesh.conn,

@@ -69,7 +69,7 @@ pub(super) fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
     match name {
         Some(n) => Format::from_name(n).ok_or_else(|| {
             Error::InvalidArgument(format!(
-                "unknown format '{n}' (expected vtk, vtk-binary, vtu, vtu-binary, msh2, msh2-binary, msh4, msh4-binary or medit)"
+                "unknown format '{n}' (expected vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary or medit)"
             ))
         }),
         None => Format::from_path(path),
@@ -190,10 +190,22 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     refuse_overwrite(&a.input, &a.output)?;
     if let Some(h) = &a.history {
         refuse_overwrite(&a.input, h)?;
+        for (other, what) in [(&a.output, "the output mesh (-o)"), (&a.input, "the input mesh")] {
+            if io::same_target(h, other) {
+                return Err(Error::InvalidArgument(format!(
+                    "--history {} is {what}; give the history its own file",
+                    h.display()
+                )));
+            }
+        }
     }
     let mut mesh = io::read(&a.input)?;
+    if a.drop_data {
+        mesh.data = Default::default();
+    }
     let start = mesh.points.clone();
-    let info = match run_solver(&mut mesh, &a.solver, a.quiet, a.save_partial) {
+    let solved = run_solver(&mut mesh, &a.solver, a.quiet, a.save_partial).map_err(|e| io::in_file(&a.input, e));
+    let info = match solved {
         Ok(info) => info,
         Err(e) => {
             if a.save_partial && mesh.points != start {

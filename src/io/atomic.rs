@@ -1,44 +1,116 @@
-//! Atomic file replacement: a crash or error never leaves a partial mesh file.
+//! Output files: a crash or error never leaves a partial mesh file, and what
+//! is not a regular file is never replaced.
+//!
+//! - a regular file (or a new path) is written to a temporary file beside it
+//!   and renamed over it; a new file gets mode 0666 minus the umask, a
+//!   replaced one keeps its mode;
+//! - a symbolic link is followed: its final target is replaced that way, the
+//!   link stays;
+//! - a character device, FIFO or socket (`/dev/null`, `/dev/stdout`, a pipe)
+//!   is written directly;
+//! - a directory is refused.
 
+use std::fs::{self, OpenOptions};
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::{WriteError, WriteResult};
 use crate::error::{Error, Result};
 
-/// Run `fill` on a temporary file in `path`'s directory, then rename it over
-/// `path`. On any error the temporary file is deleted (by `NamedTempFile`'s
-/// drop) and `path` keeps its previous content.
+fn not_found(path: &Path, msg: String) -> Error {
+    Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, msg))
+}
+
+/// Follow symbolic links from `path` to the path that is really written
+/// (which need not exist yet); gives up after 40 links, like the kernel.
+fn resolve_links(path: &Path) -> Result<PathBuf> {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = fs::read_link(&p).map_err(|e| Error::io(path, e))?;
+                p = match p.parent() {
+                    Some(dir) if target.is_relative() => dir.join(target),
+                    _ => target,
+                };
+            }
+            _ => return Ok(p),
+        }
+    }
+    Err(Error::io(
+        path,
+        std::io::Error::other("too many levels of symbolic links"),
+    ))
+}
+
+fn finish(path: &Path, filled: WriteResult) -> Result<()> {
+    match filled {
+        Ok(()) => Ok(()),
+        Err(WriteError::Io(e)) => Err(Error::io(path, e)),
+        Err(WriteError::Other(e)) => Err(e),
+    }
+}
+
+/// Write what `fill` produces to `path` (see the module doc): either the
+/// complete file replaces `path`, or `path` is left as it was. On any error
+/// the temporary file is deleted.
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResult) -> Result<()> {
-    let dir = match path.parent() {
+    let target = resolve_links(path)?;
+    let existing = match fs::metadata(&target) {
+        Ok(m) => Some(m),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    if let Some(m) = &existing {
+        if m.is_dir() {
+            return Err(Error::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory, not a file"),
+            ));
+        }
+        if !m.is_file() {
+            // a device, FIFO or socket: write through, never replace
+            let f = OpenOptions::new()
+                .write(true)
+                .open(&target)
+                .map_err(|e| Error::io(path, e))?;
+            let mut w = BufWriter::new(f);
+            let filled = fill(&mut w).and_then(|()| w.flush().map_err(WriteError::Io));
+            return finish(path, filled);
+        }
+    }
+    let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        return Err(Error::io(
+        return Err(not_found(
             path,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("output directory {} does not exist", dir.display()),
-            ),
+            format!("output directory {} does not exist", dir.display()),
         ));
     }
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".meshsmooth-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, e))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".meshsmooth-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        // created with 0666 & ~umask, as any tool would (the kernel applies the umask)
+        builder.permissions(fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
     let filled = {
         let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w).and_then(|()| w.flush().map_err(WriteError::Io))
     };
-    match filled {
-        Ok(()) => {}
-        Err(WriteError::Io(e)) => return Err(Error::io(path, e)),
-        Err(WriteError::Other(e)) => return Err(e),
+    finish(path, filled)?;
+    if let Some(m) = &existing {
+        // a replaced file keeps its mode
+        tmp.as_file()
+            .set_permissions(m.permissions())
+            .map_err(|e| Error::io(path, e))?;
     }
     tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    tmp.persist(&target).map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }
 
@@ -48,5 +120,26 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => false,
+    }
+}
+
+/// Whether writing to `a` and to `b` would write the same file, whether or
+/// not it exists yet (links and `..` resolved as far as they exist).
+pub fn same_target(a: &Path, b: &Path) -> bool {
+    fn norm(p: &Path) -> Option<PathBuf> {
+        let p = resolve_links(p).ok()?;
+        if let Ok(c) = p.canonicalize() {
+            return Some(c);
+        }
+        let name = p.file_name()?;
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        Some(dir.canonicalize().ok()?.join(name))
+    }
+    match (norm(a), norm(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
     }
 }

@@ -2,15 +2,22 @@
 //!
 //! Node tags are renumbered to dense 0-based ids in file order. Fixed flags
 //! are stored as point elements (type 15), so a round trip keeps them.
+//!
+//! Each element's physical and elementary tags become the cell arrays
+//! `gmsh:physical` and `gmsh:geometrical` (meshio's names; in 4.1 files the
+//! physical tag is the first of its entity's, from `$Entities`), and
+//! `$PhysicalNames` is kept; the writers put them back, with an `$Entities`
+//! section in 4.1 that names every entity the elements use.
 
 use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
-use super::lex::Cursor;
+use super::lex::{Cursor, clip};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
 use crate::error::{Error, Result};
-use crate::mesh::{ElementKind, LowerKind, Mesh};
+use crate::mesh::data::{GMSH_ELEMENTARY, GMSH_PHYSICAL};
+use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
 
 fn type_name(t: i64) -> &'static str {
     match t {
@@ -70,6 +77,11 @@ struct Reader<'a> {
     tags: HashMap<u64, u32>,
     has_nodes: bool,
     has_elements: bool,
+    /// Physical and elementary tag of every cell read.
+    physical: Vec<i64>,
+    elementary: Vec<i64>,
+    /// 4.1: the first physical tag of each (dim, entity tag).
+    entity_physical: HashMap<(i32, i32), i64>,
 }
 
 pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
@@ -128,12 +140,17 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         tags: HashMap::new(),
         has_nodes: false,
         has_elements: false,
+        physical: Vec::new(),
+        elementary: Vec::new(),
+        entity_physical: HashMap::new(),
     };
     r.end("$EndMeshFormat")?;
     while let Some((_, t)) = r.c.line_tokens() {
         match t[0] {
             "$Nodes" => r.nodes()?,
             "$Elements" => r.elements()?,
+            "$PhysicalNames" => r.physical_names()?,
+            "$Entities" if r.v4 => r.entities()?,
             s if s.starts_with('$') && !s.starts_with("$End") => {
                 let end = format!("$End{}", &s[1..]);
                 if !r.c.skip_past(end.as_bytes()) {
@@ -141,7 +158,9 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                 }
             }
             s => {
-                return Err(r.c.err(format!("expected a section such as $Nodes, found '{s}'")));
+                return Err(r
+                    .c
+                    .err(format!("expected a section such as $Nodes, found '{}'", clip(s))));
             }
         }
     }
@@ -152,7 +171,20 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
     if !r.has_elements {
         return Err(Error::parse(path, None, "missing $Elements section"));
     }
-    Ok(r.raw)
+    let mut raw = r.raw;
+    raw.cell_data.push(DataArray::new(
+        GMSH_PHYSICAL,
+        ValueType::I32,
+        1,
+        Values::Int(r.physical),
+    ));
+    raw.cell_data.push(DataArray::new(
+        GMSH_ELEMENTARY,
+        ValueType::I32,
+        1,
+        Values::Int(r.elementary),
+    ));
+    Ok(raw)
 }
 
 impl Reader<'_> {
@@ -306,7 +338,9 @@ impl Reader<'_> {
         self.end("$EndNodes")
     }
 
-    fn element(&mut self, tag: u64, t: i64, wide: bool) -> Result<()> {
+    fn element(&mut self, tag: u64, t: i64, wide: bool, physical: i64, elementary: i64) -> Result<()> {
+        self.physical.push(physical);
+        self.elementary.push(elementary);
         let shape = shape_of(tag, t).map_err(|m| self.err(m))?;
         let mut vs = [0u32; 8];
         let k = shape.num_vertices();
@@ -321,6 +355,73 @@ impl Reader<'_> {
         }
         self.raw.push(shape, &vs[..k]);
         Ok(())
+    }
+
+    /// A signed int (text, or 4 binary bytes): entity tags can be negative.
+    fn int(&mut self, what: &str) -> Result<i32> {
+        if !self.binary {
+            return self.c.parse(what);
+        }
+        Ok(self.uint(false, what)? as u32 as i32)
+    }
+
+    /// `$PhysicalNames` (text even in binary files): `dim tag "name"` lines.
+    fn physical_names(&mut self) -> Result<()> {
+        let n = self.c.count("the number of physical names")?;
+        for _ in 0..n {
+            let (_, t) = self.c.line_tokens().ok_or_else(|| self.c.eof("$PhysicalNames"))?;
+            let bad = || {
+                self.c.err(format!(
+                    "expected 'dim tag \"name\"' in $PhysicalNames, found '{}'",
+                    clip(&t.join(" "))
+                ))
+            };
+            if t.len() < 3 {
+                return Err(bad());
+            }
+            let dim: i32 = t[0].parse().map_err(|_| bad())?;
+            let tag: i32 = t[1].parse().map_err(|_| bad())?;
+            let name = t[2..].join(" ");
+            let name = name.trim_matches('"').to_string();
+            self.raw.physical_names.push(PhysicalName { dim, tag, name });
+        }
+        self.end("$EndPhysicalNames")
+    }
+
+    /// 4.1 `$Entities`: the physical tags of every entity.
+    fn entities(&mut self) -> Result<()> {
+        let mut counts = [0usize; 4];
+        for c in &mut counts {
+            *c = self.count(true, "the number of entities")?;
+        }
+        for (dim, &n) in counts.iter().enumerate() {
+            for _ in 0..n {
+                if self.eof_text() {
+                    return Err(self.c.eof("$Entities"));
+                }
+                let tag = self.int("entity tag")?;
+                let coords = if dim == 0 { 3 } else { 6 };
+                for _ in 0..coords {
+                    self.coord("entity bounds")?;
+                }
+                let np = self.count(true, "numPhysicalTags")?;
+                let mut first = 0;
+                for i in 0..np {
+                    let p = self.int("physical tag")?;
+                    if i == 0 {
+                        first = p as i64;
+                    }
+                }
+                if dim > 0 {
+                    let nb = self.count(true, "numBoundingEntities")?;
+                    for _ in 0..nb {
+                        self.int("bounding entity tag")?;
+                    }
+                }
+                self.entity_physical.insert((dim as i32, tag), first);
+            }
+        }
+        self.end("$EndEntities")
     }
 
     fn elements(&mut self) -> Result<()> {
@@ -344,20 +445,28 @@ impl Reader<'_> {
                     let ntags = self.count(false, "number of tags")?;
                     for _ in 0..k {
                         let tag = self.uint(false, "element tag")?;
-                        for _ in 0..ntags {
-                            self.uint(false, "element tags")?;
+                        let mut tags = [0i64, 0];
+                        for i in 0..ntags {
+                            let v = self.uint(false, "element tags")? as u32 as i32 as i64;
+                            if i < 2 {
+                                tags[i] = v;
+                            }
                         }
-                        self.element(tag, t, false)?;
+                        self.element(tag, t, false, tags[0], tags[1])?;
                     }
                     read += k.max(1);
                 } else {
                     let tag = self.uint(false, "element tag")?;
                     let t: i64 = self.c.parse("element type")?;
                     let ntags = self.count(false, "number of tags")?;
-                    for _ in 0..ntags {
-                        self.c.parse::<i64>("element tags")?;
+                    let mut tags = [0i64, 0];
+                    for i in 0..ntags {
+                        let v = self.c.parse::<i64>("element tags")?;
+                        if i < 2 {
+                            tags[i] = v;
+                        }
                     }
-                    self.element(tag, t, false)?;
+                    self.element(tag, t, false, tags[0], tags[1])?;
                     read += 1;
                 }
             }
@@ -376,8 +485,9 @@ impl Reader<'_> {
                 if self.eof_text() {
                     return Err(self.truncated("$Elements", m, read));
                 }
-                self.uint(false, "entityDim")?;
-                self.uint(false, "entityTag")?;
+                let dim = self.int("entityDim")?;
+                let entity = self.int("entityTag")?;
+                let physical = self.entity_physical.get(&(dim, entity)).copied().unwrap_or(0);
                 let t = self.uint(false, "elementType")? as i64;
                 let k = self.count(true, "numElementsInBlock")?;
                 for j in 0..k {
@@ -385,7 +495,7 @@ impl Reader<'_> {
                         return Err(self.truncated("$Elements", m, read + j));
                     }
                     let tag = self.uint(true, "element tag")?;
-                    self.element(tag, t, true)?;
+                    self.element(tag, t, true, physical, entity as i64)?;
                 }
                 read += k;
             }
@@ -399,15 +509,41 @@ impl Reader<'_> {
     }
 }
 
+/// One cell to write: Gmsh type, dimension, vertices, physical and elementary tag.
+struct OutCell {
+    t: u32,
+    dim: usize,
+    vs: Vec<u32>,
+    physical: i32,
+    elementary: i32,
+}
+
 /// Cells in output order: elements, lower cells, then point cells for fixed
-/// vertices that no lower cell covers. Consecutive cells of one type form a run.
-fn output_cells(mesh: &Mesh) -> Vec<(u32, usize, Vec<u32>)> {
-    let mut cells: Vec<(u32, usize, Vec<u32>)> = (0..mesh.num_elements())
-        .map(|e| (mesh.kinds[e].gmsh_id(), mesh.kinds[e].dim(), mesh.element(e).to_vec()))
+/// vertices that no lower cell covers. Tags come from the `gmsh:physical` /
+/// `gmsh:geometrical` arrays where the mesh has them (physical 0 = none,
+/// elementary 1 otherwise).
+fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
+    let tag = |a: Option<&DataArray>, i: usize, default: i32| a.map_or(default, |a| a.get_i64(i) as i32);
+    let (ep, ee) = (
+        mesh.data.cell_array(GMSH_PHYSICAL),
+        mesh.data.cell_array(GMSH_ELEMENTARY),
+    );
+    let (lp, le) = (
+        mesh.data.lower_array(GMSH_PHYSICAL),
+        mesh.data.lower_array(GMSH_ELEMENTARY),
+    );
+    let mut cells: Vec<OutCell> = (0..mesh.num_elements())
+        .map(|e| OutCell {
+            t: mesh.kinds[e].gmsh_id(),
+            dim: mesh.kinds[e].dim(),
+            vs: mesh.element(e).to_vec(),
+            physical: tag(ep, e, 0),
+            elementary: tag(ee, e, 1),
+        })
         .collect();
     let mut covered = vec![false; mesh.num_points()];
-    for (k, vs) in &mesh.lower {
-        let (t, d) = match k {
+    for (i, (k, vs)) in mesh.lower.iter().enumerate() {
+        let (t, dim) = match k {
             LowerKind::Vertex => (15, 0),
             LowerKind::Line => (1, 1),
             LowerKind::Triangle => (2, 2),
@@ -416,23 +552,93 @@ fn output_cells(mesh: &Mesh) -> Vec<(u32, usize, Vec<u32>)> {
         for &v in vs {
             covered[v as usize] = true;
         }
-        cells.push((t, d, vs.clone()));
+        cells.push(OutCell {
+            t,
+            dim,
+            vs: vs.clone(),
+            physical: tag(lp, i, 0),
+            elementary: tag(le, i, 1),
+        });
     }
     for (v, _) in mesh.fixed.iter().enumerate().filter(|&(v, &f)| f && !covered[v]) {
-        cells.push((15, 0, vec![v as u32]));
+        cells.push(OutCell {
+            t: 15,
+            dim: 0,
+            vs: vec![v as u32],
+            physical: 0,
+            elementary: 1,
+        });
     }
     cells
 }
 
-fn runs(cells: &[(u32, usize, Vec<u32>)]) -> Vec<std::ops::Range<usize>> {
+/// Runs of consecutive cells with the same type (and, for 4.1 blocks, the
+/// same elementary entity).
+fn runs(cells: &[OutCell], by_entity: bool) -> Vec<std::ops::Range<usize>> {
     let mut out = Vec::new();
     let mut start = 0;
     for i in 1..=cells.len() {
-        if i == cells.len() || cells[i].0 != cells[start].0 {
+        if i == cells.len()
+            || cells[i].t != cells[start].t
+            || (by_entity && cells[i].elementary != cells[start].elementary)
+        {
             out.push(start..i);
             start = i;
         }
     }
+    out
+}
+
+fn write_physical_names(w: &mut dyn Write, mesh: &Mesh) -> WriteResult {
+    let names = &mesh.data.physical_names;
+    if names.is_empty() {
+        return Ok(());
+    }
+    writeln!(w, "$PhysicalNames\n{}", names.len())?;
+    for p in names {
+        let name: String = p.name.chars().filter(|&c| c != '"' && c != '\n').collect();
+        writeln!(w, "{} {} \"{name}\"", p.dim, p.tag)?;
+    }
+    writeln!(w, "$EndPhysicalNames")?;
+    Ok(())
+}
+
+/// An entity of a 4.1 file: every (dim, elementary tag) the cells use.
+struct Entity {
+    dim: usize,
+    tag: i32,
+    physical: Vec<i32>,
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+fn entities(mesh: &Mesh, cells: &[OutCell]) -> Vec<Entity> {
+    let mut index: HashMap<(usize, i32), usize> = HashMap::new();
+    let mut out: Vec<Entity> = Vec::new();
+    for c in cells {
+        let i = *index.entry((c.dim, c.elementary)).or_insert_with(|| {
+            out.push(Entity {
+                dim: c.dim,
+                tag: c.elementary,
+                physical: Vec::new(),
+                lo: [f64::INFINITY; 3],
+                hi: [f64::NEG_INFINITY; 3],
+            });
+            out.len() - 1
+        });
+        let e = &mut out[i];
+        if c.physical != 0 && !e.physical.contains(&c.physical) {
+            e.physical.push(c.physical);
+        }
+        for &v in &c.vs {
+            let p = mesh.points[v as usize];
+            for k in 0..3 {
+                e.lo[k] = e.lo[k].min(p[k]);
+                e.hi[k] = e.hi[k].max(p[k]);
+            }
+        }
+    }
+    out.sort_by_key(|e| (e.dim, e.tag));
     out
 }
 
@@ -443,7 +649,9 @@ pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
         w.write_all(&1i32.to_le_bytes())?;
         writeln!(w)?;
     }
-    writeln!(w, "$EndMeshFormat\n$Nodes\n{n}")?;
+    writeln!(w, "$EndMeshFormat")?;
+    write_physical_names(w, mesh)?;
+    writeln!(w, "$Nodes\n{n}")?;
     let mut buf = Vec::new();
     for (i, p) in mesh.points.iter().enumerate() {
         if binary {
@@ -461,24 +669,24 @@ pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     let cells = output_cells(mesh);
     writeln!(w, "$EndNodes\n$Elements\n{}", cells.len())?;
     let mut tag = 0i32;
-    for run in runs(&cells) {
-        let t = cells[run.start].0 as i32;
+    for run in runs(&cells, false) {
+        let t = cells[run.start].t as i32;
         if binary {
             for x in [t, run.len() as i32, 2] {
                 buf.extend_from_slice(&x.to_le_bytes());
             }
         }
-        for (_, _, vs) in &cells[run] {
+        for c in &cells[run] {
             tag += 1;
             if binary {
-                for x in [tag, 0, 1] {
+                for x in [tag, c.physical, c.elementary] {
                     buf.extend_from_slice(&x.to_le_bytes());
                 }
-                vs.iter()
+                c.vs.iter()
                     .for_each(|&v| buf.extend_from_slice(&(v as i32 + 1).to_le_bytes()));
             } else {
-                write!(w, "{tag} {t} 2 0 1")?;
-                for v in vs {
+                write!(w, "{tag} {t} 2 {} {}", c.physical, c.elementary)?;
+                for v in &c.vs {
                     write!(w, " {}", v + 1)?;
                 }
                 writeln!(w)?;
@@ -497,7 +705,8 @@ pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
 pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
     let n = mesh.num_points();
     let mut buf: Vec<u8> = Vec::new();
-    // Header numbers go to `buf` in binary (as i32 or u64), else as text.
+    // Numbers go to `buf` in binary (ints as i32, sizes as u64, reals as f64),
+    // else as one text line.
     let nums = |w: &mut dyn Write, buf: &mut Vec<u8>, ints: &[i32], sizes: &[u64]| -> std::io::Result<()> {
         if binary {
             ints.iter().for_each(|x| buf.extend_from_slice(&x.to_le_bytes()));
@@ -512,16 +721,72 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
             writeln!(w, "{}", all.join(" "))
         }
     };
+    let flush = |w: &mut dyn Write, buf: &mut Vec<u8>| -> std::io::Result<()> {
+        if binary {
+            w.write_all(buf)?;
+            writeln!(w)?;
+            buf.clear();
+        }
+        Ok(())
+    };
     writeln!(w, "$MeshFormat\n4.1 {} 8", binary as u8)?;
     if binary {
         w.write_all(&1i32.to_le_bytes())?;
         writeln!(w)?;
     }
-    writeln!(w, "$EndMeshFormat\n$Nodes")?;
+    writeln!(w, "$EndMeshFormat")?;
+    write_physical_names(w, mesh)?;
+    let cells = output_cells(mesh);
+    let ents = entities(mesh, &cells);
+    // $Entities: Gmsh refuses element blocks whose entity it does not know.
+    writeln!(w, "$Entities")?;
+    let count = |d: usize| ents.iter().filter(|e| e.dim == d).count() as u64;
+    nums(w, &mut buf, &[], &[count(0), count(1), count(2), count(3)])?;
+    for e in &ents {
+        let mut line = String::new();
+        if binary {
+            buf.extend_from_slice(&e.tag.to_le_bytes());
+        } else {
+            line.push_str(&e.tag.to_string());
+        }
+        let reals: Vec<f64> = if e.dim == 0 {
+            e.lo.to_vec()
+        } else {
+            e.lo.iter().chain(&e.hi).copied().collect()
+        };
+        for x in reals {
+            if binary {
+                buf.extend_from_slice(&x.to_le_bytes());
+            } else {
+                line.push(' ');
+                line.push_str(&fmt_f64(x));
+            }
+        }
+        if binary {
+            buf.extend_from_slice(&(e.physical.len() as u64).to_le_bytes());
+            e.physical.iter().for_each(|p| buf.extend_from_slice(&p.to_le_bytes()));
+            if e.dim > 0 {
+                buf.extend_from_slice(&0u64.to_le_bytes());
+            }
+        } else {
+            line.push_str(&format!(" {}", e.physical.len()));
+            for p in &e.physical {
+                line.push_str(&format!(" {p}"));
+            }
+            if e.dim > 0 {
+                line.push_str(" 0");
+            }
+            writeln!(w, "{line}")?;
+        }
+    }
+    flush(w, &mut buf)?;
+    writeln!(w, "$EndEntities\n$Nodes")?;
+    // every node in one block, on the entity of the first element
+    let (ndim, ntag) = cells.first().map_or((mesh.dim(), 1), |c| (c.dim, c.elementary));
     let nblocks = u64::from(n > 0);
     nums(w, &mut buf, &[], &[nblocks, n as u64, 1.min(n as u64), n as u64])?;
     if n > 0 {
-        nums(w, &mut buf, &[mesh.dim() as i32, 1, 0], &[n as u64])?;
+        nums(w, &mut buf, &[ndim as i32, ntag, 0], &[n as u64])?;
         for i in 1..=n as u64 {
             nums(w, &mut buf, &[], &[i])?;
         }
@@ -533,31 +798,28 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
             }
         }
     }
-    if binary {
-        w.write_all(&buf)?;
-        writeln!(w)?;
-        buf.clear();
-    }
+    flush(w, &mut buf)?;
     writeln!(w, "$EndNodes\n$Elements")?;
-    let cells = output_cells(mesh);
-    let runs = runs(&cells);
+    let runs = runs(&cells, true);
     let m = cells.len() as u64;
     nums(w, &mut buf, &[], &[runs.len() as u64, m, 1.min(m), m])?;
     let mut tag = 0u64;
     for run in runs {
-        let (t, dim, _) = &cells[run.start];
-        nums(w, &mut buf, &[*dim as i32, 1, *t as i32], &[run.len() as u64])?;
-        for (_, _, vs) in &cells[run] {
+        let c0 = &cells[run.start];
+        nums(
+            w,
+            &mut buf,
+            &[c0.dim as i32, c0.elementary, c0.t as i32],
+            &[run.len() as u64],
+        )?;
+        for c in &cells[run] {
             tag += 1;
             let mut row = vec![tag];
-            row.extend(vs.iter().map(|&v| v as u64 + 1));
+            row.extend(c.vs.iter().map(|&v| v as u64 + 1));
             nums(w, &mut buf, &[], &row)?;
         }
     }
-    if binary {
-        w.write_all(&buf)?;
-        writeln!(w)?;
-    }
+    flush(w, &mut buf)?;
     check_cell_data(mesh, cell_data)?;
     writeln!(w, "$EndElements")?;
     Ok(())

@@ -37,12 +37,6 @@ impl<'a> Cursor<'a> {
         }
     }
 
-    /// Number lines from `line` (for text embedded in a larger file).
-    pub fn set_line(&mut self, line: usize) {
-        self.line = line;
-        self.tok_line = line;
-    }
-
     pub fn pos(&self) -> usize {
         self.pos
     }
@@ -132,14 +126,14 @@ impl<'a> Cursor<'a> {
     pub fn parse<T: FromStr>(&mut self, what: &str) -> crate::Result<T> {
         let t = self.expect_token(what)?;
         t.parse()
-            .map_err(|_| self.err(format!("expected a number ({what}), found '{t}'")))
+            .map_err(|_| self.err(format!("expected a number ({what}), found '{}'", clip(t))))
     }
 
     /// Parse a count: a non-negative integer.
     pub fn count(&mut self, what: &str) -> crate::Result<usize> {
         let t = self.expect_token(what)?;
         t.parse()
-            .map_err(|_| self.err(format!("expected a non-negative integer ({what}), found '{t}'")))
+            .map_err(|_| self.err(format!("expected a non-negative integer ({what}), found '{}'", clip(t))))
     }
 
     /// `n` numbers, with a truncation error that says how many were found.
@@ -156,7 +150,7 @@ impl<'a> Cursor<'a> {
                 }
                 Some(t) => out.push(
                     t.parse()
-                        .map_err(|_| self.err(format!("expected a number ({what}), found '{t}'")))?,
+                        .map_err(|_| self.err(format!("expected a number ({what}), found '{}'", clip(t))))?,
                 ),
             }
         }
@@ -182,6 +176,24 @@ impl<'a> Cursor<'a> {
             self.bump();
         }
         Some((line, toks))
+    }
+
+    /// The next line as it is (no whitespace skipped, newline consumed), or
+    /// None at end of file; VTK's ASCII string arrays hold one string a line.
+    pub fn raw_line(&mut self) -> Option<String> {
+        if self.pos >= self.data.len() {
+            return None;
+        }
+        self.tok_line = self.line;
+        let start = self.pos;
+        while self.pos < self.data.len() && self.data[self.pos] != b'\n' {
+            self.pos += 1;
+        }
+        let s = String::from_utf8_lossy(&self.data[start..self.pos]).into_owned();
+        if self.pos < self.data.len() {
+            self.bump();
+        }
+        Some(s)
     }
 
     /// Consume the rest of the current line including its newline: binary
@@ -326,4 +338,114 @@ impl Scalar {
 /// A value read as f64 that must be an index or count below `limit`.
 pub(crate) fn as_index(v: f64, limit: usize) -> Option<usize> {
     (v >= 0.0 && v.fract() == 0.0 && v < limit as f64).then_some(v as usize)
+}
+
+/// At most ~80 characters of `s` for an error message (a corrupt file can put
+/// megabytes in one token).
+pub(crate) fn clip(s: &str) -> String {
+    const MAX: usize = 80;
+    match s.char_indices().nth(MAX) {
+        None => s.to_string(),
+        Some((i, _)) => format!("{}... ({} bytes)", &s[..i], s.len()),
+    }
+}
+
+impl Scalar {
+    pub fn is_float(self) -> bool {
+        matches!(self, Scalar::F32 | Scalar::F64)
+    }
+
+    /// The data-model type of arrays of this scalar.
+    pub fn value_type(self) -> crate::mesh::ValueType {
+        use crate::mesh::ValueType as V;
+        match self {
+            Scalar::I8 => V::I8,
+            Scalar::U8 => V::U8,
+            Scalar::I16 => V::I16,
+            Scalar::U16 => V::U16,
+            Scalar::I32 => V::I32,
+            Scalar::U32 => V::U32,
+            Scalar::I64 => V::I64,
+            Scalar::U64 => V::U64,
+            Scalar::F32 => V::F32,
+            Scalar::F64 => V::F64,
+        }
+    }
+
+    /// One integer value from `c` (`u64` above `i64::MAX` wraps).
+    pub fn get_i64(self, e: Endian, c: &[u8]) -> i64 {
+        match self {
+            Scalar::I8 => e.i8(c) as i64,
+            Scalar::U8 => e.u8(c) as i64,
+            Scalar::I16 => e.i16(c) as i64,
+            Scalar::U16 => e.u16(c) as i64,
+            Scalar::I32 => e.i32(c) as i64,
+            Scalar::U32 => e.u32(c) as i64,
+            Scalar::I64 => e.i64(c),
+            Scalar::U64 => e.u64(c) as i64,
+            Scalar::F32 => e.f32(c) as i64,
+            Scalar::F64 => e.f64(c) as i64,
+        }
+    }
+
+    /// Values of `bytes` (a whole number of values) as typed values.
+    pub fn decode_all(self, e: Endian, bytes: &[u8]) -> crate::mesh::Values {
+        let s = self.size();
+        if self.is_float() {
+            crate::mesh::Values::Float(bytes.chunks_exact(s).map(|c| self.get(e, c)).collect())
+        } else {
+            crate::mesh::Values::Int(bytes.chunks_exact(s).map(|c| self.get_i64(e, c)).collect())
+        }
+    }
+
+    /// Parse one text value of this type.
+    pub fn parse_text(self, t: &str) -> Option<NumVal> {
+        if self == Scalar::F32 {
+            // the value a float array holds: the text rounded to f32
+            t.parse::<f32>().ok().map(|x| NumVal::F(x as f64))
+        } else if self.is_float() {
+            t.parse::<f64>().ok().map(NumVal::F)
+        } else if self == Scalar::U64 {
+            t.parse::<u64>().ok().map(|v| NumVal::I(v as i64))
+        } else {
+            // VTK writes integers as integers; tolerate "3.0" from other writers
+            t.parse::<i64>()
+                .ok()
+                .or_else(|| {
+                    t.parse::<f64>()
+                        .ok()
+                        .filter(|x| x.fract() == 0.0 && x.abs() < 9.2e18)
+                        .map(|x| x as i64)
+                })
+                .map(NumVal::I)
+        }
+    }
+}
+
+/// A parsed text value.
+#[derive(Clone, Copy)]
+pub(crate) enum NumVal {
+    I(i64),
+    F(f64),
+}
+
+/// Collects text values into typed storage.
+pub(crate) fn push_val(out: &mut crate::mesh::Values, v: NumVal) {
+    use crate::mesh::Values;
+    match (out, v) {
+        (Values::Int(o), NumVal::I(x)) => o.push(x),
+        (Values::Float(o), NumVal::F(x)) => o.push(x),
+        (Values::Float(o), NumVal::I(x)) => o.push(x as f64),
+        (Values::Int(o), NumVal::F(x)) => o.push(x as i64),
+        (Values::Str(_), _) => {}
+    }
+}
+
+/// Empty storage for values of `s`.
+pub(crate) fn empty_values(s: Scalar, cap: usize) -> crate::mesh::Values {
+    if s.is_float() {
+        crate::mesh::Values::Float(Vec::with_capacity(cap))
+    } else {
+        crate::mesh::Values::Int(Vec::with_capacity(cap))
+    }
 }

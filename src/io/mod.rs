@@ -12,9 +12,15 @@
 //!   point data; Gmsh stores fixed vertices not covered by lower cells as
 //!   point elements (type 15), which read back as lower `Vertex` cells; Medit
 //!   stores them as RequiredVertices and groups elements by kind;
+//! - the input's point, cell and field arrays live in `Mesh::data` and are
+//!   written to VTK/VTU (all of them, after the `cell_data` quality arrays of
+//!   [`write`] replace any input array of the same name); Gmsh keeps the
+//!   `gmsh:physical`/`gmsh:geometrical` cell arrays as element tags and its
+//!   `$PhysicalNames`; Medit keeps nothing but the mesh;
 //! - `cell_data` is written to VTK/VTU only (other formats check its length).
 
 mod atomic;
+mod codec;
 mod gmsh;
 mod lex;
 mod medit;
@@ -22,14 +28,14 @@ mod smoothed;
 mod vtk;
 mod vtu;
 
-pub use atomic::{same_file, write_atomic};
+pub use atomic::{same_file, same_target, write_atomic};
 pub use smoothed::{eta_field, write_mesh};
 
 use std::fmt;
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::mesh::{ElementKind, LowerKind, Mesh};
+use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
 
 /// File formats meshsmooth reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -39,6 +45,8 @@ pub enum Format {
     VtuAscii,
     /// Inline base64, uncompressed.
     VtuBinary,
+    /// Inline base64, zlib-compressed in VTK's block format (`vtkZLibDataCompressor`).
+    VtuZlib,
     Msh22Ascii,
     Msh22Binary,
     Msh41Ascii,
@@ -49,11 +57,12 @@ pub enum Format {
 const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
 
 impl Format {
-    pub const ALL: [Format; 9] = [
+    pub const ALL: [Format; 10] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
         Format::VtuBinary,
+        Format::VtuZlib,
         Format::Msh22Ascii,
         Format::Msh22Binary,
         Format::Msh41Ascii,
@@ -91,6 +100,7 @@ impl Format {
             Format::VtkBinary => "vtk-binary",
             Format::VtuAscii => "vtu",
             Format::VtuBinary => "vtu-binary",
+            Format::VtuZlib => "vtu-zlib",
             Format::Msh22Ascii => "msh2",
             Format::Msh22Binary => "msh2-binary",
             Format::Msh41Ascii => "msh4",
@@ -104,7 +114,7 @@ impl Format {
     pub fn keeps_lower_cells(self) -> bool {
         !matches!(
             self,
-            Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary
+            Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib
         )
     }
 
@@ -166,7 +176,7 @@ pub fn read(path: &Path) -> Result<Mesh> {
         Some(f) => f,
         None => match Format::from_path(path)? {
             Format::VtkAscii | Format::VtkBinary => Family::Vtk,
-            Format::VtuAscii | Format::VtuBinary => Family::Vtu,
+            Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => Family::Vtu,
             Format::Medit => Family::Medit,
             _ => Family::Gmsh,
         },
@@ -178,22 +188,79 @@ pub fn read(path: &Path) -> Result<Mesh> {
         Family::Medit => medit::read(path, &data)?,
     };
     let mesh = raw.into_mesh(path)?;
-    mesh.validate().map_err(|e| match e {
-        Error::InvalidMesh(msg) => Error::parse(path, None, msg),
-        other => other,
-    })?;
+    mesh.validate().map_err(|e| in_file(path, e))?;
+    if matches!(family, Family::Vtk | Family::Vtu) {
+        check_wedge_convention(path, &mesh)?;
+    }
     Ok(mesh)
+}
+
+/// Errors about a mesh read from `path` (invalid, inverted, unsupported)
+/// name the file; errors that already do are returned as they are.
+pub fn in_file(path: &Path, e: Error) -> Error {
+    match e {
+        Error::InvalidMesh(msg) => Error::parse(path, None, msg),
+        e @ (Error::Inverted { .. } | Error::Unsupported(_)) => Error::parse(path, None, e.to_string()),
+        other => other,
+    }
+}
+
+/// VTK's wedge, as VTK 9.7's vtkCellValidator and vtkMeshQuality (and so
+/// ParaView) judge it, has its base triangle (0,1,2) ordered with its normal
+/// toward the top (3,4,5) — meshsmooth's and Gmsh's order, so VTK files need
+/// no permutation. meshio 5.3 reverses the base when it writes VTK. When every
+/// wedge of a VTK file is inverted in VTK's order but valid reversed, the file
+/// follows meshio's convention: say so.
+fn check_wedge_convention(path: &Path, mesh: &Mesh) -> Result<()> {
+    let prisms = mesh.count_kind(ElementKind::Prism);
+    if prisms == 0 {
+        return Ok(());
+    }
+    let bad = crate::metric::inverted_elements(mesh, &mesh.points);
+    let bad_prisms = bad.iter().filter(|&&e| mesh.kinds[e] == ElementKind::Prism).count();
+    if bad_prisms != prisms {
+        return Ok(());
+    }
+    let mut flipped = mesh.clone();
+    for e in 0..mesh.num_elements() {
+        if mesh.kinds[e] == ElementKind::Prism {
+            let vs = &mut flipped.conn[mesh.offsets[e]..mesh.offsets[e + 1]];
+            vs.swap(1, 2);
+            vs.swap(4, 5);
+        }
+    }
+    let still = crate::metric::inverted_elements(&flipped, &flipped.points);
+    if still.iter().any(|&e| mesh.kinds[e] == ElementKind::Prism) {
+        return Ok(());
+    }
+    Err(Error::parse(
+        path,
+        None,
+        format!(
+            "all {prisms} wedges are inverted in VTK's vertex order (base triangle 0,1,2 with its normal \
+             toward the top 3,4,5, as VTK 9 and ParaView judge them) but valid with the base reversed: \
+             the file follows meshio's wedge convention (meshio 5.3 reverses the base triangle when it \
+             writes VTK). Reorder each wedge as (0,2,1,3,5,4), or write the file from Gmsh or VTK"
+        ),
+    ))
 }
 
 /// Write `mesh` atomically: either the complete file replaces `path`, or
 /// `path` is left as it was.
 pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -> Result<()> {
     check_structure(mesh)?;
+    mesh.data
+        .check(mesh.num_points(), mesh.num_elements(), mesh.lower.len())
+        .map_err(|e| match e {
+            Error::InvalidMesh(m) => Error::InvalidMesh(format!("cannot write: {m}")),
+            other => other,
+        })?;
     write_atomic(path, |w| match format {
         Format::VtkAscii => vtk::write(w, mesh, cell_data, false),
         Format::VtkBinary => vtk::write(w, mesh, cell_data, true),
-        Format::VtuAscii => vtu::write(w, mesh, cell_data, false),
-        Format::VtuBinary => vtu::write(w, mesh, cell_data, true),
+        Format::VtuAscii => vtu::write(w, mesh, cell_data, vtu::Encoding::Ascii),
+        Format::VtuBinary => vtu::write(w, mesh, cell_data, vtu::Encoding::Base64),
+        Format::VtuZlib => vtu::write(w, mesh, cell_data, vtu::Encoding::Zlib),
         Format::Msh22Ascii => gmsh::write22(w, mesh, cell_data, false),
         Format::Msh22Binary => gmsh::write22(w, mesh, cell_data, true),
         Format::Msh41Ascii => gmsh::write41(w, mesh, cell_data, false),
@@ -242,6 +309,27 @@ impl From<Error> for WriteError {
 
 pub type WriteResult = std::result::Result<(), WriteError>;
 
+/// The cell arrays a VTK/VTU writer writes: the input's, except those a
+/// quality array of the same name replaces, then the quality arrays.
+pub(crate) fn out_cell_arrays<'a>(mesh: &'a Mesh, cell_data: &[CellData]) -> Vec<std::borrow::Cow<'a, DataArray>> {
+    let mut out: Vec<std::borrow::Cow<DataArray>> = mesh
+        .data
+        .cell
+        .iter()
+        .filter(|a| !cell_data.iter().any(|c| c.name == a.name))
+        .map(std::borrow::Cow::Borrowed)
+        .collect();
+    out.extend(cell_data.iter().map(|c| {
+        std::borrow::Cow::Owned(DataArray::new(
+            c.name,
+            ValueType::F64,
+            1,
+            Values::Float(c.values.to_vec()),
+        ))
+    }));
+    out
+}
+
 /// Checked by every writer right before it writes cell data, so a bad array
 /// fails the write midway and exercises the atomic clean-up.
 fn check_cell_data(mesh: &Mesh, cell_data: &[CellData]) -> Result<()> {
@@ -268,13 +356,6 @@ pub(crate) enum Shape {
 }
 
 impl Shape {
-    pub fn kind(self) -> Option<ElementKind> {
-        match self {
-            Shape::Elem(k) => Some(k),
-            _ => None,
-        }
-    }
-
     pub fn num_vertices(self) -> usize {
         match self {
             Shape::Vertex => 1,
@@ -294,6 +375,13 @@ pub(crate) struct RawMesh {
     /// Fixed flags from the file (VTK `fixed` data, Medit RequiredVertices);
     /// empty when the file has none.
     pub fixed: Vec<bool>,
+    /// Arrays with one tuple per point.
+    pub point_data: Vec<DataArray>,
+    /// Arrays with one tuple per cell (every cell, in file order).
+    pub cell_data: Vec<DataArray>,
+    /// Arrays of the whole data set.
+    pub field_data: Vec<DataArray>,
+    pub physical_names: Vec<PhysicalName>,
 }
 
 impl RawMesh {
@@ -321,6 +409,36 @@ impl RawMesh {
             return Err(Error::parse(path, None, "the file has no points"));
         }
         let has3d = self.shapes.iter().any(|s| matches!(s, Shape::Elem(k) if k.dim() == 3));
+        let ncells = self.shapes.len();
+        let np = self.points.len();
+        for a in &self.point_data {
+            if a.tuples() != np || a.values.len() % a.components != 0 {
+                return Err(Error::parse(
+                    path,
+                    None,
+                    format!(
+                        "point data '{}' has {} tuples but the file has {np} points",
+                        lex::clip(&a.name),
+                        a.tuples()
+                    ),
+                ));
+            }
+        }
+        for a in &self.cell_data {
+            if a.tuples() != ncells || a.values.len() % a.components != 0 {
+                return Err(Error::parse(
+                    path,
+                    None,
+                    format!(
+                        "cell data '{}' has {} tuples but the file has {ncells} cells",
+                        lex::clip(&a.name),
+                        a.tuples()
+                    ),
+                ));
+            }
+        }
+        let mut elem_ids = Vec::with_capacity(ncells);
+        let mut lower_ids = Vec::new();
         let mut mesh = Mesh::new(self.points);
         let n = mesh.points.len();
         let mut fixed = self.fixed;
@@ -337,6 +455,7 @@ impl RawMesh {
             let lower = match shape {
                 Shape::Elem(k) if k.dim() == 3 || !has3d => {
                     mesh.push_element(k, vs);
+                    elem_ids.push(c);
                     continue;
                 }
                 Shape::Elem(ElementKind::Triangle) => LowerKind::Triangle,
@@ -348,7 +467,15 @@ impl RawMesh {
                 fixed[v as usize] = true;
             }
             mesh.lower.push((lower, vs.to_vec()));
+            lower_ids.push(c);
         }
+        mesh.data.point = self.point_data;
+        mesh.data.cell = self.cell_data.iter().map(|a| a.select(&elem_ids)).collect();
+        if !lower_ids.is_empty() {
+            mesh.data.lower = self.cell_data.iter().map(|a| a.select(&lower_ids)).collect();
+        }
+        mesh.data.field = self.field_data;
+        mesh.data.physical_names = self.physical_names;
         if fixed.iter().any(|&f| f) {
             mesh.fixed = fixed;
         }
@@ -372,16 +499,4 @@ pub(crate) fn fmt_f64(x: f64) -> String {
 /// Elements are 2D only when no element is 3D; used to pick 2D output.
 pub(crate) fn is_planar_z0(mesh: &Mesh) -> bool {
     mesh.dim() == 2 && mesh.points.iter().all(|p| p[2].to_bits() == 0)
-}
-
-/// VTK orders a wedge's base triangle (0,1,2) with its normal pointing away
-/// from (3,4,5); meshsmooth, Gmsh and Medit toward it. Swapping the second and
-/// third vertex of both triangles converts either way.
-pub(crate) fn vtk_order(kind: Option<crate::mesh::ElementKind>, vs: &[u32]) -> std::borrow::Cow<'_, [u32]> {
-    match kind {
-        Some(crate::mesh::ElementKind::Prism) if vs.len() == 6 => {
-            std::borrow::Cow::Owned(vec![vs[0], vs[2], vs[1], vs[3], vs[5], vs[4]])
-        }
-        _ => std::borrow::Cow::Borrowed(vs),
-    }
 }

@@ -2,14 +2,17 @@
 //!
 //! Both the classic `CELLS n size` layout and VTK 5.1's OFFSETS/CONNECTIVITY
 //! layout are read; the classic layout is written (every VTK reader takes it).
+//! Point, cell and field arrays of every attribute kind (SCALARS, VECTORS,
+//! FIELD arrays of numbers or strings, ...) are kept; they are written back
+//! as FIELD arrays with their names, types and components.
 
 use std::io::Write;
 use std::path::Path;
 
-use super::lex::{Cursor, Endian, Scalar, as_index};
-use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
+use super::lex::{Cursor, Endian, Scalar, as_index, clip, empty_values, push_val};
+use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
 use crate::error::{Error, Result};
-use crate::mesh::{ElementKind, Mesh};
+use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
 
 /// Human name of a VTK cell type, for error messages.
 pub(crate) fn vtk_type_name(t: i64) -> &'static str {
@@ -86,7 +89,10 @@ fn scalar_type(name: &str) -> Option<Scalar> {
 
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Attach {
+    /// Field data of the data set.
     None,
+    /// Read and dropped (lookup tables).
+    Discard,
     Points,
     Cells,
 }
@@ -113,7 +119,10 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         Some("ASCII") => false,
         Some("BINARY") => true,
         _ => {
-            return Err(c.err(format!("expected ASCII or BINARY on line 3, found '{}'", fmt.join(" "))));
+            return Err(c.err(format!(
+                "expected ASCII or BINARY on line 3, found '{}'",
+                clip(&fmt.join(" "))
+            )));
         }
     };
     let mut r = Reader {
@@ -148,7 +157,7 @@ impl Reader<'_> {
             if !dataset && key != "DATASET" && key != "FIELD" {
                 return Err(self.c.err(format!(
                     "expected 'DATASET UNSTRUCTURED_GRID', found '{}'",
-                    toks.join(" ")
+                    clip(&toks.join(" "))
                 )));
             }
             match key.as_str() {
@@ -156,7 +165,7 @@ impl Reader<'_> {
                     if !arg(1).eq_ignore_ascii_case("UNSTRUCTURED_GRID") {
                         return Err(self.c.err(format!(
                             "DATASET {} is not supported; only UNSTRUCTURED_GRID is",
-                            arg(1)
+                            clip(arg(1))
                         )));
                     }
                     dataset = true;
@@ -192,8 +201,9 @@ impl Reader<'_> {
         let t = toks.get(i).copied().unwrap_or("");
         t.parse().map_err(|_| {
             self.c.err(format!(
-                "{}: expected a count, found '{t}'",
-                toks.first().copied().unwrap_or("header")
+                "{}: expected a count, found '{}'",
+                clip(toks.first().copied().unwrap_or("header")),
+                clip(t)
             ))
         })
     }
@@ -202,8 +212,9 @@ impl Reader<'_> {
         let t = toks.get(i).copied().unwrap_or("");
         scalar_type(t).ok_or_else(|| {
             self.c.err(format!(
-                "{}: unsupported or missing data type '{t}'",
-                toks.first().copied().unwrap_or("header")
+                "{}: unsupported or missing data type '{}'",
+                clip(toks.first().copied().unwrap_or("header")),
+                clip(t)
             ))
         })
     }
@@ -241,7 +252,7 @@ impl Reader<'_> {
                 };
                 let v: f64 = t
                     .parse()
-                    .map_err(|_| self.c.err(format!("expected a number in {what}, found '{t}'")))?;
+                    .map_err(|_| self.c.err(format!("expected a number in {what}, found '{}'", clip(t))))?;
                 f(i, v).map_err(|m| self.c.err(m))?;
             }
         }
@@ -383,7 +394,7 @@ impl Reader<'_> {
                     shape.num_vertices()
                 ));
             }
-            raw.push(shape, &super::vtk_order(shape.kind(), vs));
+            raw.push(shape, vs);
             Ok(())
         })?;
         self.raw = raw;
@@ -396,7 +407,7 @@ impl Reader<'_> {
         match attach {
             Attach::Points => Ok(self.npoints.unwrap_or(0)),
             Attach::Cells => Ok(self.cells.as_ref().map_or(0, |c| c.0.len() - 1)),
-            Attach::None => Err(self.c.err(format!("{key} outside POINT_DATA or CELL_DATA"))),
+            Attach::None | Attach::Discard => Err(self.c.err(format!("{key} outside POINT_DATA or CELL_DATA"))),
         }
     }
 
@@ -406,45 +417,45 @@ impl Reader<'_> {
     }
 
     fn attribute(&mut self, key: &str, toks: &[&str], attach: Attach) -> Result<()> {
-        let name = toks.get(1).copied().unwrap_or(key);
+        let name = decode_name(toks.get(1).copied().unwrap_or(key));
         match key {
             "SCALARS" => {
                 let n = self.count_for(attach, key)?;
-                let ty = self.header_type(toks, 2)?;
+                let ty = self.data_type(toks, 2)?;
                 let ncomp = if toks.len() > 3 { self.header_count(toks, 3)? } else { 1 };
                 if self.c.looking_at("LOOKUP_TABLE") {
                     self.c.line_tokens();
                 }
                 let is_fixed = attach == Attach::Points && name == "fixed" && ncomp == 1;
-                self.data_array(ty, self.mul(n, ncomp, key)?, name, is_fixed)
+                self.data_array(ty, n, ncomp.max(1), &name, attach, is_fixed)
             }
             "LOOKUP_TABLE" => {
                 let size = self.header_count(toks, 2)?;
                 let ty = if self.binary { Scalar::U8 } else { Scalar::F64 };
-                self.data_array(ty, self.mul(size, 4, key)?, "LOOKUP_TABLE", false)
+                self.data_array(Some(ty), size, 4, "LOOKUP_TABLE", Attach::Discard, false)
             }
             "COLOR_SCALARS" => {
                 let n = self.count_for(attach, key)?;
                 let k = self.header_count(toks, 2)?;
-                let ty = if self.binary { Scalar::U8 } else { Scalar::F64 };
-                self.data_array(ty, self.mul(n, k, key)?, name, false)
+                let ty = if self.binary { Scalar::U8 } else { Scalar::F32 };
+                self.data_array(Some(ty), n, k.max(1), &name, attach, false)
             }
             "VECTORS" | "NORMALS" | "TENSORS" | "TENSORS6" | "GLOBAL_IDS" | "PEDIGREE_IDS" => {
                 let n = self.count_for(attach, key)?;
-                let ty = self.header_type(toks, 2)?;
+                let ty = self.data_type(toks, 2)?;
                 let k = match key {
                     "VECTORS" | "NORMALS" => 3,
                     "TENSORS" => 9,
                     "TENSORS6" => 6,
                     _ => 1,
                 };
-                self.data_array(ty, self.mul(n, k, key)?, name, false)
+                self.data_array(ty, n, k, &name, attach, false)
             }
             "TEXTURE_COORDINATES" => {
                 let n = self.count_for(attach, key)?;
                 let k = self.header_count(toks, 2)?;
-                let ty = self.header_type(toks, 3)?;
-                self.data_array(ty, self.mul(n, k, key)?, name, false)
+                let ty = self.data_type(toks, 3)?;
+                self.data_array(ty, n, k.max(1), &name, attach, false)
             }
             "FIELD" => {
                 let narrays = self.header_count(toks, 2)?;
@@ -456,46 +467,312 @@ impl Reader<'_> {
                     if t.len() < 4 {
                         return Err(self.c.err(format!(
                             "expected 'name components tuples type' in FIELD, found '{}'",
-                            t.join(" ")
+                            clip(&t.join(" "))
                         )));
                     }
                     let k = self.header_count(&t, 1)?;
                     let tuples = self.header_count(&t, 2)?;
-                    let ty = self.header_type(&t, 3)?;
-                    let is_fixed =
-                        attach == Attach::Points && t[0] == "fixed" && k == 1 && Some(tuples) == self.npoints;
-                    self.data_array(ty, self.mul(k, tuples, key)?, t[0], is_fixed)?;
+                    let ty = self.data_type(&t, 3)?;
+                    let aname = decode_name(t[0]);
+                    if let Some(want) = match attach {
+                        Attach::Points => self.npoints,
+                        Attach::Cells => self.cells.as_ref().map(|c| c.0.len() - 1),
+                        Attach::None | Attach::Discard => None,
+                    } && tuples != want
+                    {
+                        return Err(self.c.err(format!(
+                            "FIELD array '{}' has {tuples} tuples, but the data section has {want}",
+                            clip(&aname)
+                        )));
+                    }
+                    let is_fixed = attach == Attach::Points && aname == "fixed" && k == 1;
+                    self.data_array(ty, tuples, k.max(1), &aname, attach, is_fixed)?;
+                }
+                if self.c.looking_at("METADATA") {
+                    self.c.line_tokens();
+                    self.c.skip_to_blank_line();
                 }
                 Ok(())
             }
-            _ => Err(self.c.err(format!("unknown keyword '{}'", toks[0]))),
+            _ => Err(self.c.err(format!("unknown keyword '{}'", clip(toks[0])))),
         }
     }
 
-    /// Read (and mostly discard) a data array; a point array named `fixed`
-    /// sets the fixed flags.
-    fn data_array(&mut self, ty: Scalar, n: usize, name: &str, is_fixed: bool) -> Result<()> {
-        let what = format!("data array '{name}'");
-        let mut fixed = Vec::new();
-        self.array(ty, n, &what, |_, v| {
-            if is_fixed {
-                fixed.push(v != 0.0);
+    /// A data type name; `None` for strings.
+    fn data_type(&self, toks: &[&str], i: usize) -> Result<Option<Scalar>> {
+        let t = toks.get(i).copied().unwrap_or("");
+        if t.eq_ignore_ascii_case("string") || t.eq_ignore_ascii_case("utf8_string") {
+            return Ok(None);
+        }
+        self.header_type(toks, i).map(Some)
+    }
+
+    /// Read an array of `tuples` x `k` values and keep it with the points,
+    /// the cells or the data set; a point array named `fixed` sets the fixed
+    /// flags instead.
+    fn data_array(
+        &mut self,
+        ty: Option<Scalar>,
+        tuples: usize,
+        k: usize,
+        name: &str,
+        attach: Attach,
+        is_fixed: bool,
+    ) -> Result<()> {
+        let n = self.mul(tuples, k, name)?;
+        let what = format!("data array '{}'", clip(name));
+        let values = match ty {
+            None => Values::Str(self.strings(n, &what)?),
+            Some(ty) => {
+                let mut out = empty_values(ty, self.c.cap(n, 2));
+                if self.binary {
+                    let size = ty.size();
+                    let have = self.c.remaining() / size;
+                    if have < n {
+                        return Err(self.c.err_byte(format!(
+                            "unexpected end of file while reading {what}: expected {n} values, found {have}"
+                        )));
+                    }
+                    let bytes = self.c.bytes(n * size, &what)?;
+                    out = ty.decode_all(Endian::Big, bytes);
+                } else {
+                    for i in 0..n {
+                        let Some(t) = self.c.token() else {
+                            return Err(Error::parse(
+                                self.c.path,
+                                None,
+                                format!("unexpected end of file while reading {what}: expected {n} values, found {i}"),
+                            ));
+                        };
+                        let v = ty
+                            .parse_text(t)
+                            .ok_or_else(|| self.c.err(format!("expected a number in {what}, found '{}'", clip(t))))?;
+                        push_val(&mut out, v);
+                    }
+                }
+                out
             }
-            Ok(())
-        })?;
+        };
         if is_fixed {
-            for (v, _) in fixed.iter().enumerate().filter(|(_, f)| **f) {
-                self.raw.fix(v);
+            if let Values::Int(v) = &values {
+                for (i, _) in v.iter().enumerate().filter(|(_, x)| **x != 0) {
+                    self.raw.fix(i);
+                }
+            } else if let Values::Float(v) = &values {
+                for (i, _) in v.iter().enumerate().filter(|(_, x)| **x != 0.0) {
+                    self.raw.fix(i);
+                }
             }
+            return Ok(());
+        }
+        let vt = ty.map_or(ValueType::Str, |t| t.value_type());
+        let a = DataArray::new(name, vt, k, values);
+        match attach {
+            Attach::Points => self.raw.point_data.push(a),
+            Attach::Cells => self.raw.cell_data.push(a),
+            Attach::None => self.raw.field_data.push(a),
+            Attach::Discard => {}
         }
         Ok(())
     }
+
+    /// `n` strings: one %-encoded string a line (ASCII), or each with VTK's
+    /// length prefix (binary: 1, 2, 4 or 8 big-endian bytes whose top two
+    /// bits say which).
+    fn strings(&mut self, n: usize, what: &str) -> Result<Vec<String>> {
+        let mut out = Vec::with_capacity(self.c.cap(n, 1));
+        if !self.binary {
+            for i in 0..n {
+                let s = self.c.raw_line().ok_or_else(|| {
+                    Error::parse(
+                        self.c.path,
+                        None,
+                        format!("unexpected end of file while reading {what}: expected {n} strings, found {i}"),
+                    )
+                })?;
+                out.push(decode_name(s.trim_end_matches('\r')));
+            }
+            return Ok(out);
+        }
+        // the line break after the header line is consumed by line_tokens
+        for _ in 0..n {
+            let b0 = self.c.bytes(1, what)?[0];
+            let len = match b0 >> 6 {
+                3 => (b0 & 0x3f) as u64,
+                2 => {
+                    let b1 = self.c.bytes(1, what)?[0];
+                    (u16::from_be_bytes([b0, b1]) & 0x3fff) as u64
+                }
+                1 => {
+                    let r = self.c.bytes(3, what)?;
+                    (u32::from_be_bytes([b0, r[0], r[1], r[2]]) & 0x3fff_ffff) as u64
+                }
+                _ => {
+                    let r = self.c.bytes(7, what)?;
+                    u64::from_be_bytes([b0, r[0], r[1], r[2], r[3], r[4], r[5], r[6]])
+                }
+            };
+            let len = usize::try_from(len).unwrap_or(usize::MAX);
+            let s = self.c.bytes(len, what)?;
+            out.push(String::from_utf8_lossy(s).into_owned());
+        }
+        Ok(out)
+    }
 }
 
-fn vtk_name(name: &str) -> String {
-    // Legacy VTK names are single tokens.
-    let s: String = name.chars().map(|c| if c.is_whitespace() { '_' } else { c }).collect();
-    if s.is_empty() { "data".into() } else { s }
+/// VTK (4.2 and later) %-encodes whitespace and unprintable bytes in names
+/// and ASCII strings.
+fn decode_name(s: &str) -> String {
+    let b = s.as_bytes();
+    if !b.contains(&b'%') {
+        return s.to_string();
+    }
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%'
+            && let Some(h) = b.get(i + 1..i + 3)
+            && let Ok(v) = u8::from_str_radix(std::str::from_utf8(h).unwrap_or("zz"), 16)
+        {
+            out.push(v);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// The inverse of [`decode_name`]: what VTK's reader decodes back.
+fn encode_name(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for b in s.bytes() {
+        if b.is_ascii_graphic() && b != b'%' && b != b'"' {
+            out.push(b as char);
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
+fn legacy_type(t: ValueType) -> &'static str {
+    match t {
+        ValueType::I8 => "signed_char",
+        ValueType::U8 => "unsigned_char",
+        ValueType::I16 => "short",
+        ValueType::U16 => "unsigned_short",
+        ValueType::I32 => "int",
+        ValueType::U32 => "unsigned_int",
+        ValueType::I64 => "vtktypeint64",
+        ValueType::U64 => "vtktypeuint64",
+        ValueType::F32 => "float",
+        ValueType::F64 => "double",
+        ValueType::Str => "string",
+    }
+}
+
+/// Big-endian bytes of an array in its own type.
+fn be_bytes(a: &DataArray) -> Vec<u8> {
+    let mut out = Vec::with_capacity(a.values.len() * a.ty.size().max(1));
+    let int = |out: &mut Vec<u8>, x: i64| match a.ty {
+        ValueType::I8 | ValueType::U8 => out.push(x as u8),
+        ValueType::I16 | ValueType::U16 => out.extend_from_slice(&(x as u16).to_be_bytes()),
+        ValueType::I32 | ValueType::U32 => out.extend_from_slice(&(x as u32).to_be_bytes()),
+        ValueType::F32 => out.extend_from_slice(&(x as f32).to_be_bytes()),
+        ValueType::F64 => out.extend_from_slice(&(x as f64).to_be_bytes()),
+        _ => out.extend_from_slice(&x.to_be_bytes()),
+    };
+    match &a.values {
+        Values::Int(v) => v.iter().for_each(|&x| int(&mut out, x)),
+        Values::Float(v) => {
+            for &x in v {
+                match a.ty {
+                    ValueType::F32 => out.extend_from_slice(&(x as f32).to_be_bytes()),
+                    ValueType::F64 => out.extend_from_slice(&x.to_be_bytes()),
+                    _ => int(&mut out, x as i64),
+                }
+            }
+        }
+        Values::Str(v) => {
+            for s in v {
+                let len = s.len() as u64;
+                if len < 1 << 6 {
+                    out.push(0xc0 | len as u8);
+                } else if len < 1 << 14 {
+                    out.extend_from_slice(&(0x8000 | len as u16).to_be_bytes());
+                } else if len < 1 << 30 {
+                    out.extend_from_slice(&(0x4000_0000 | len as u32).to_be_bytes());
+                } else {
+                    out.extend_from_slice(&len.to_be_bytes());
+                }
+                out.extend_from_slice(s.as_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// `FIELD FieldData n` with every array of `arrays`.
+fn write_field(w: &mut dyn Write, arrays: &[&DataArray], binary: bool) -> WriteResult {
+    if arrays.is_empty() {
+        return Ok(());
+    }
+    writeln!(w, "FIELD FieldData {}", arrays.len())?;
+    for a in arrays {
+        writeln!(
+            w,
+            "{} {} {} {}",
+            encode_name(&a.name),
+            a.components,
+            a.tuples(),
+            legacy_type(a.ty)
+        )?;
+        if binary {
+            w.write_all(&be_bytes(a))?;
+            writeln!(w)?;
+            continue;
+        }
+        match &a.values {
+            Values::Str(v) => {
+                for s in v {
+                    writeln!(w, "{}", encode_name(s))?;
+                }
+            }
+            Values::Int(v) => {
+                for row in v.chunks(a.components.clamp(1, 9)) {
+                    let t: Vec<String> = row
+                        .iter()
+                        .map(|&x| {
+                            if a.ty == ValueType::U64 {
+                                (x as u64).to_string()
+                            } else {
+                                x.to_string()
+                            }
+                        })
+                        .collect();
+                    writeln!(w, "{}", t.join(" "))?;
+                }
+            }
+            Values::Float(v) => {
+                for row in v.chunks(a.components.clamp(1, 9)) {
+                    let t: Vec<String> = row
+                        .iter()
+                        .map(|&x| {
+                            if a.ty == ValueType::F32 {
+                                format!("{:?}", x as f32)
+                            } else {
+                                fmt_f64(x)
+                            }
+                        })
+                        .collect();
+                    writeln!(w, "{}", t.join(" "))?;
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
@@ -505,6 +782,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
     writeln!(w, "written by meshsmooth")?;
     writeln!(w, "{}", if binary { "BINARY" } else { "ASCII" })?;
     writeln!(w, "DATASET UNSTRUCTURED_GRID")?;
+    write_field(w, &mesh.data.field.iter().collect::<Vec<_>>(), binary)?;
     writeln!(w, "POINTS {n} double")?;
     if binary {
         let mut buf = Vec::with_capacity(24 * n);
@@ -521,7 +799,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
     writeln!(w, "CELLS {ne} {}", ne + mesh.conn.len())?;
     let mut buf = Vec::new();
     for e in 0..ne {
-        let vs = super::vtk_order(Some(mesh.kinds[e]), mesh.element(e));
+        let vs = mesh.element(e);
         if binary {
             buf.extend_from_slice(&(vs.len() as i32).to_be_bytes());
             for &v in vs.iter() {
@@ -541,28 +819,22 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
     }
     writeln!(w, "CELL_TYPES {ne}")?;
     write_ints(w, binary, mesh.kinds.iter().map(|k| k.vtk_id() as i32))?;
-    if !mesh.fixed.is_empty() {
+    let point_arrays: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
+    if !mesh.fixed.is_empty() || !point_arrays.is_empty() {
         writeln!(w, "POINT_DATA {n}")?;
+    }
+    if !mesh.fixed.is_empty() {
         writeln!(w, "SCALARS fixed int 1")?;
         writeln!(w, "LOOKUP_TABLE default")?;
         write_ints(w, binary, mesh.fixed.iter().map(|&f| f as i32))?;
     }
+    write_field(w, &point_arrays, binary)?;
     check_cell_data(mesh, cell_data)?;
-    if !cell_data.is_empty() {
+    let cells = out_cell_arrays(mesh, cell_data);
+    if !cells.is_empty() {
         writeln!(w, "CELL_DATA {ne}")?;
-        for cd in cell_data {
-            writeln!(w, "SCALARS {} double 1", vtk_name(cd.name))?;
-            writeln!(w, "LOOKUP_TABLE default")?;
-            if binary {
-                let buf: Vec<u8> = cd.values.iter().flat_map(|v| v.to_be_bytes()).collect();
-                w.write_all(&buf)?;
-                writeln!(w)?;
-            } else {
-                for &v in cd.values {
-                    writeln!(w, "{}", fmt_f64(v))?;
-                }
-            }
-        }
+        let refs: Vec<&DataArray> = cells.iter().map(|c| c.as_ref()).collect();
+        write_field(w, &refs, binary)?;
     }
     Ok(())
 }

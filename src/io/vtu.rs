@@ -1,7 +1,14 @@
-//! VTK XML unstructured grids (`.vtu`): inline ASCII or base64 DataArrays.
+//! VTK XML unstructured grids (`.vtu`), one Piece.
 //!
-//! Compressed and appended data are refused with a clear message; one Piece
-//! only.
+//! Read: every mode VTK writes — ascii, inline binary (base64), appended raw
+//! and appended base64 — uncompressed or with VTK's zlib, LZ4 or LZMA block
+//! compression, UInt32 or UInt64 headers, either byte order, any integer
+//! type for the cells. Point, cell and field arrays (numbers and strings)
+//! are kept; `<InformationKey>` elements inside arrays are skipped. The XML
+//! is streamed (linear in the file size) and must be complete: a file cut
+//! anywhere is refused with the byte offset.
+//!
+//! Written: ascii, inline base64, or inline base64 with zlib blocks.
 
 use std::io::Write;
 use std::path::Path;
@@ -11,129 +18,284 @@ use base64::engine::general_purpose::STANDARD as B64;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::reader::Reader;
 
-use super::lex::{Cursor, Endian, Scalar, as_index};
+use super::codec::{B64Source, Codec, Layout, RawSource, Source, zlib_blocks};
+use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
 use super::vtk::{vtk_shape, vtk_type_name};
-use super::{CellData, RawMesh, WriteResult, check_cell_data, fmt_f64};
+use super::{CellData, RawMesh, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
 use crate::error::{Error, Location, Result};
-use crate::mesh::Mesh;
+use crate::mesh::{DataArray, Mesh, ValueType, Values};
 
-fn xml_type(name: &str) -> Option<Scalar> {
-    Some(match name {
+/// Element type of an XML array.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Ty {
+    Num(Scalar),
+    Str,
+}
+
+fn xml_type(name: &str) -> Option<Ty> {
+    Some(Ty::Num(match name {
         "Int8" | "Char" => Scalar::I8,
         "UInt8" => Scalar::U8,
         "Int16" => Scalar::I16,
         "UInt16" => Scalar::U16,
         "Int32" => Scalar::I32,
         "UInt32" => Scalar::U32,
-        "Int64" => Scalar::I64,
+        "Int64" | "IdType" => Scalar::I64,
         "UInt64" => Scalar::U64,
         "Float32" => Scalar::F32,
         "Float64" => Scalar::F64,
+        "String" => return Some(Ty::Str),
         _ => return None,
-    })
+    }))
 }
 
-/// Which arrays of the file we keep.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Role {
+fn xml_type_name(t: ValueType) -> &'static str {
+    match t {
+        ValueType::I8 => "Int8",
+        ValueType::U8 => "UInt8",
+        ValueType::I16 => "Int16",
+        ValueType::U16 => "UInt16",
+        ValueType::I32 => "Int32",
+        ValueType::U32 => "UInt32",
+        ValueType::I64 => "Int64",
+        ValueType::U64 => "UInt64",
+        ValueType::F32 => "Float32",
+        ValueType::F64 => "Float64",
+        ValueType::Str => "String",
+    }
+}
+
+/// Where an array sits in the file.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Section {
     Points,
-    Connectivity,
-    Offsets,
-    Types,
-    Fixed,
-    Ignored,
+    Cells,
+    PointData,
+    CellData,
+    FieldData,
+    Other,
 }
 
-struct Pending {
-    role: Role,
-    ty: Scalar,
-    binary: bool,
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Storage {
+    Ascii,
+    Binary,
+    Appended(usize),
+}
+
+/// An array as declared by its tag, with its inline text once read.
+struct Spec {
+    section: Section,
     name: String,
-    /// Line of the `<DataArray` tag, for errors about its content.
-    line: usize,
+    ty: Ty,
+    components: usize,
+    tuples: Option<usize>,
+    storage: Storage,
+    /// File offset of the tag.
+    at: usize,
+    /// File offset of the inline text.
+    text_at: usize,
     text: String,
 }
 
-#[derive(Default)]
-struct Arrays {
-    points: Option<(Vec<f64>, usize)>,
-    conn: Option<(Vec<f64>, usize)>,
-    offsets: Option<(Vec<f64>, usize)>,
-    types: Option<(Vec<f64>, usize)>,
-    fixed: Option<Vec<f64>>,
+/// A decoded array.
+enum Decoded {
+    Num(Scalar, Values),
+    Str(Vec<String>),
+}
+
+struct Appended<'a> {
+    raw: bool,
+    data: &'a [u8],
+    base: usize,
 }
 
 struct Ctx<'a> {
     path: &'a Path,
-    text: &'a str,
-    header: Scalar,
-    endian: Endian,
+    layout: Layout,
+    appended: Option<Appended<'a>>,
+    counts: Option<(usize, usize)>,
 }
 
 impl Ctx<'_> {
-    fn line_of(&self, pos: u64) -> usize {
-        let pos = (pos as usize).min(self.text.len());
-        1 + self.text.as_bytes()[..pos].iter().filter(|&&b| b == b'\n').count()
+    fn err(&self, at: usize, msg: impl Into<String>) -> Error {
+        Error::parse(self.path, Some(Location::Byte(at as u64)), msg)
     }
 
-    fn err(&self, line: usize, msg: impl Into<String>) -> Error {
-        Error::parse(self.path, Some(Location::Line(line)), msg)
-    }
-
-    fn decode(&self, p: &Pending) -> Result<Vec<f64>> {
-        if !p.binary {
-            let mut c = Cursor::new(self.path, p.text.as_bytes());
-            c.set_line(p.line);
-            let mut out = Vec::new();
-            while let Some(t) = c.token() {
-                out.push(
-                    t.parse()
-                        .map_err(|_| c.err(format!("expected a number in DataArray '{}', found '{t}'", p.name)))?,
-                );
-            }
-            return Ok(out);
+    /// Most values the array can hold: what its section implies, else what
+    /// the file could encode.
+    fn max_values(&self, s: &Spec, file_len: usize) -> usize {
+        let k = s.components;
+        let implied = match (s.section, self.counts) {
+            (Section::Points | Section::PointData, Some((np, _))) => Some(np.saturating_mul(k)),
+            (Section::CellData, Some((_, nc))) => Some(nc.saturating_mul(k)),
+            (Section::Cells, Some((_, nc))) if s.name != "connectivity" => Some(nc),
+            _ => None,
+        };
+        let implied = implied.or(s.tuples.map(|t| t.saturating_mul(k)));
+        match (implied, s.ty) {
+            (Some(n), Ty::Num(_)) => n,
+            // strings and connectivity: bounded by what zlib could inflate the file to
+            _ => file_len.saturating_mul(1100).saturating_add(1 << 16),
         }
-        let b64: Vec<u8> = p.text.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
-        let bad = |what: &str| self.err(p.line, format!("DataArray '{}': invalid base64 data ({what})", p.name));
-        let hsize = self.header.size();
-        // VTK encodes the byte-count header and the data as two base64 runs;
-        // some writers encode them as one. A padded header run tells them apart.
-        let hchars = hsize.div_ceil(3) * 4;
-        let (header, payload) = match b64.get(..hchars) {
-            Some(h) if h.ends_with(b"=") => {
-                let head = B64.decode(h).map_err(|e| bad(&e.to_string()))?;
-                let body = B64.decode(&b64[hchars..]).map_err(|e| bad(&e.to_string()))?;
-                (head, body)
+    }
+
+    fn decode(&self, s: &Spec, file_len: usize) -> Result<Decoded> {
+        let at_err = |(at, m): (usize, String)| self.err(at, format!("{} '{}': {m}", tag_name(s), clip(&s.name)));
+        let bytes = match s.storage {
+            Storage::Ascii => return self.decode_ascii(s),
+            Storage::Binary => {
+                let max = self.max_values(s, file_len).saturating_mul(elem_size(s.ty));
+                let mut src = B64Source::new(s.text.as_bytes(), 0, s.text_at);
+                let b = self.layout.read(&mut src, max).map_err(at_err)?;
+                // nothing but padding or whitespace may follow
+                b
             }
-            _ => {
-                let mut all = B64.decode(&b64).map_err(|e| bad(&e.to_string()))?;
-                if all.len() < hsize {
-                    return Err(bad("shorter than its header"));
+            Storage::Appended(offset) => {
+                let Some(app) = &self.appended else {
+                    return Err(self.err(
+                        s.at,
+                        format!(
+                            "{} '{}' is appended but the file has no <AppendedData>",
+                            tag_name(s),
+                            clip(&s.name)
+                        ),
+                    ));
+                };
+                if offset > app.data.len() {
+                    return Err(self.err(
+                        s.at,
+                        format!(
+                            "{} '{}': offset {offset} is past the end of the appended data ({} bytes; truncated file?)",
+                            tag_name(s),
+                            clip(&s.name),
+                            app.data.len()
+                        ),
+                    ));
                 }
-                let body = all.split_off(hsize);
-                (all, body)
+                let max = self.max_values(s, file_len).saturating_mul(elem_size(s.ty));
+                let mut src: Box<dyn Source> = if app.raw {
+                    Box::new(RawSource {
+                        data: app.data,
+                        pos: offset,
+                        base: app.base,
+                    })
+                } else {
+                    Box::new(B64Source::new(app.data, offset, app.base))
+                };
+                self.layout.read(src.as_mut(), max).map_err(at_err)?
             }
         };
-        if header.len() < hsize {
-            return Err(bad("header too short"));
+        match s.ty {
+            Ty::Num(t) => {
+                if bytes.len() % t.size() != 0 {
+                    return Err(self.err(
+                        s.at,
+                        format!(
+                            "DataArray '{}': {} bytes is not a whole number of {}-byte values",
+                            clip(&s.name),
+                            bytes.len(),
+                            t.size()
+                        ),
+                    ));
+                }
+                Ok(Decoded::Num(t, t.decode_all(self.layout.endian, &bytes)))
+            }
+            Ty::Str => self.strings(s, &bytes),
         }
-        let nbytes = self.header.get(self.endian, &header);
-        if nbytes != payload.len() as f64 {
-            return Err(self.err(
-                p.line,
-                format!(
-                    "DataArray '{}': header says {nbytes} bytes but {} bytes follow (truncated?)",
-                    p.name,
-                    payload.len()
-                ),
-            ));
-        }
-        let size = p.ty.size();
-        if payload.len() % size != 0 {
-            return Err(bad("byte count is not a multiple of the value size"));
-        }
-        Ok(payload.chunks_exact(size).map(|c| p.ty.get(self.endian, c)).collect())
     }
+
+    fn decode_ascii(&self, s: &Spec) -> Result<Decoded> {
+        let text = s.text.as_bytes();
+        let mut i = 0;
+        let mut tokens = std::iter::from_fn(|| {
+            while i < text.len() && text[i].is_ascii_whitespace() {
+                i += 1;
+            }
+            if i >= text.len() {
+                return None;
+            }
+            let start = i;
+            while i < text.len() && !text[i].is_ascii_whitespace() {
+                i += 1;
+            }
+            Some((start, &s.text[start..i]))
+        });
+        match s.ty {
+            Ty::Num(t) => {
+                let mut out = empty_values(t, 0);
+                for (pos, tok) in tokens.by_ref() {
+                    let v = t.parse_text(tok).ok_or_else(|| {
+                        self.err(
+                            s.text_at + pos,
+                            format!(
+                                "expected a number in DataArray '{}', found '{}'",
+                                clip(&s.name),
+                                clip(tok)
+                            ),
+                        )
+                    })?;
+                    push_val(&mut out, v);
+                }
+                Ok(Decoded::Num(t, out))
+            }
+            Ty::Str => {
+                let mut bytes = Vec::new();
+                for (pos, tok) in tokens.by_ref() {
+                    match Scalar::U8.parse_text(tok) {
+                        Some(NumVal::I(b)) if (0..256).contains(&b) => bytes.push(b as u8),
+                        _ => {
+                            return Err(self.err(
+                                s.text_at + pos,
+                                format!(
+                                    "expected a character code in Array '{}', found '{}'",
+                                    clip(&s.name),
+                                    clip(tok)
+                                ),
+                            ));
+                        }
+                    }
+                }
+                self.strings(s, &bytes)
+            }
+        }
+    }
+
+    /// VTK stores a string array as its strings, each followed by a NUL.
+    fn strings(&self, s: &Spec, bytes: &[u8]) -> Result<Decoded> {
+        let mut out = Vec::new();
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            let end = rest.iter().position(|&b| b == 0).unwrap_or(rest.len());
+            out.push(String::from_utf8_lossy(&rest[..end]).into_owned());
+            rest = rest.get(end + 1..).unwrap_or(&[]);
+        }
+        if let Some(n) = s.tuples {
+            let want = n.saturating_mul(s.components);
+            if out.len() != want {
+                return Err(self.err(
+                    s.at,
+                    format!(
+                        "Array '{}' has {} strings, NumberOfTuples says {want}",
+                        clip(&s.name),
+                        out.len()
+                    ),
+                ));
+            }
+        }
+        Ok(Decoded::Str(out))
+    }
+}
+
+fn elem_size(t: Ty) -> usize {
+    match t {
+        Ty::Num(s) => s.size(),
+        Ty::Str => 1,
+    }
+}
+
+fn tag_name(s: &Spec) -> &'static str {
+    if s.ty == Ty::Str { "Array" } else { "DataArray" }
 }
 
 fn attr(e: &BytesStart, key: &str) -> Option<String> {
@@ -147,8 +309,84 @@ fn attr(e: &BytesStart, key: &str) -> Option<String> {
         })
 }
 
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+fn rfind(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).rposition(|w| w == needle)
+}
+
+/// Split off `<AppendedData>`: its payload is binary (raw) and no XML parser
+/// may look at it. Returns the length of the XML part.
+fn split_appended<'a>(path: &Path, data: &'a [u8]) -> Result<(usize, Option<Appended<'a>>)> {
+    let Some(ap) = find(data, b"<AppendedData") else {
+        return Ok((data.len(), None));
+    };
+    let err = |at: usize, m: String| Error::parse(path, Some(Location::Byte(at as u64)), m);
+    let gt = data[ap..]
+        .iter()
+        .position(|&b| b == b'>')
+        .map(|i| ap + i)
+        .ok_or_else(|| {
+            err(
+                data.len(),
+                "the file ends inside the <AppendedData> tag (truncated)".into(),
+            )
+        })?;
+    let tag = std::str::from_utf8(&data[ap + 1..gt]).map_err(|_| err(ap, "<AppendedData> tag is not text".into()))?;
+    let start = BytesStart::from_content(tag, "AppendedData".len());
+    let encoding = attr(&start, "encoding").unwrap_or_else(|| "raw".into());
+    let raw = match encoding.as_str() {
+        "raw" => true,
+        "base64" => false,
+        e => {
+            return Err(err(
+                ap,
+                format!("<AppendedData> encoding '{}' is not raw or base64", clip(e)),
+            ));
+        }
+    };
+    let mut u = gt + 1;
+    while u < data.len() && data[u].is_ascii_whitespace() {
+        u += 1;
+    }
+    if data.get(u) != Some(&b'_') {
+        return Err(err(u, "<AppendedData> must start with '_'".into()));
+    }
+    u += 1;
+    let end = rfind(&data[u..], b"</AppendedData>").map(|i| u + i).ok_or_else(|| {
+        err(
+            data.len(),
+            format!(
+                "the file ends inside <AppendedData> (no </AppendedData>; truncated at byte {})",
+                data.len()
+            ),
+        )
+    })?;
+    let tail = std::str::from_utf8(&data[end + "</AppendedData>".len()..]).unwrap_or("");
+    if tail.trim() != "</VTKFile>" {
+        return Err(err(
+            end,
+            format!(
+                "expected </VTKFile> after </AppendedData>, found '{}' (truncated file?)",
+                clip(tail.trim())
+            ),
+        ));
+    }
+    Ok((
+        ap,
+        Some(Appended {
+            raw,
+            data: &data[u..end],
+            base: u,
+        }),
+    ))
+}
+
 pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
-    let text = std::str::from_utf8(data).map_err(|e| {
+    let (xml_len, appended) = split_appended(path, data)?;
+    let text = std::str::from_utf8(&data[..xml_len]).map_err(|e| {
         Error::parse(
             path,
             Some(Location::Byte(e.valid_up_to() as u64)),
@@ -157,127 +395,65 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
     })?;
     let mut ctx = Ctx {
         path,
-        text,
-        header: Scalar::U32,
-        endian: Endian::Little,
+        layout: Layout {
+            header: Scalar::U32,
+            endian: Endian::Little,
+            codec: None,
+        },
+        appended,
+        counts: None,
     };
     let mut reader = Reader::from_str(text);
     let mut stack: Vec<String> = Vec::new();
-    let mut pending: Option<Pending> = None;
-    let mut arrays = Arrays::default();
-    let mut counts: Option<(usize, usize)> = None;
+    let mut pending: Option<Spec> = None;
+    let mut specs: Vec<Spec> = Vec::new();
+    let mut seen_root = false;
     loop {
-        let tag_pos = reader.buffer_position();
-        let ev = reader
-            .read_event()
-            .map_err(|e| ctx.err(ctx.line_of(reader.error_position()), format!("malformed XML: {e}")))?;
-        let line = ctx.line_of(tag_pos);
+        let tag_pos = reader.buffer_position() as usize;
+        let ev = reader.read_event().map_err(|e| {
+            ctx.err(
+                reader.error_position() as usize,
+                format!("malformed XML: {}", clip(&e.to_string())),
+            )
+        })?;
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
                 let name = e.local_name().as_ref().to_string();
+                let parent = stack.last().map(String::as_str).unwrap_or("");
+                if stack.is_empty() && (name != "VTKFile" || seen_root) {
+                    return Err(ctx.err(tag_pos, format!("expected <VTKFile>, found <{}>", clip(&name))));
+                }
                 match name.as_str() {
                     "VTKFile" => {
-                        if let Some(t) = attr(e, "type")
-                            && t != "UnstructuredGrid"
-                        {
-                            return Err(ctx.err(
-                                line,
-                                format!("VTKFile type '{t}' is not supported; only UnstructuredGrid is"),
-                            ));
-                        }
-                        if attr(e, "compressor").is_some_and(|c| !c.is_empty()) {
-                            return Err(ctx.err(
-                                line,
-                                "compressed VTU files are not supported; write them uncompressed (e.g. ParaView: Data Mode ascii or binary, Compressor None)",
-                            ));
-                        }
-                        if attr(e, "byte_order").as_deref() == Some("BigEndian") {
-                            ctx.endian = Endian::Big;
-                        }
-                        if let Some(h) = attr(e, "header_type") {
-                            ctx.header = match h.as_str() {
-                                "UInt32" => Scalar::U32,
-                                "UInt64" => Scalar::U64,
-                                _ => {
-                                    return Err(
-                                        ctx.err(line, format!("header_type '{h}' is not supported (UInt32 or UInt64)"))
-                                    );
-                                }
-                            };
-                        }
+                        seen_root = true;
+                        vtkfile(&mut ctx, e, tag_pos)?;
                     }
                     "Piece" => {
-                        if counts.is_some() {
-                            return Err(ctx.err(line, "files with several Pieces are not supported"));
+                        if ctx.counts.is_some() {
+                            return Err(ctx.err(tag_pos, "files with several Pieces are not supported"));
                         }
                         let num = |k: &str| {
                             let v = attr(e, k).unwrap_or_default();
-                            v.trim()
-                                .parse::<usize>()
-                                .map_err(|_| ctx.err(line, format!("Piece: {k} must be a count, found '{v}'")))
+                            v.trim().parse::<usize>().map_err(|_| {
+                                ctx.err(tag_pos, format!("Piece: {k} must be a count, found '{}'", clip(&v)))
+                            })
                         };
-                        counts = Some((num("NumberOfPoints")?, num("NumberOfCells")?));
+                        ctx.counts = Some((num("NumberOfPoints")?, num("NumberOfCells")?));
                     }
-                    "AppendedData" => {
-                        return Err(ctx.err(
-                            line,
-                            "appended data is not supported; write the file with inline (ascii or binary) DataArrays",
-                        ));
-                    }
-                    "DataArray" => {
-                        let parent = stack.last().map(String::as_str).unwrap_or("");
-                        let aname = attr(e, "Name").unwrap_or_default();
-                        let role = match (parent, aname.as_str()) {
-                            ("Points", _) => Role::Points,
-                            ("Cells", "connectivity") => Role::Connectivity,
-                            ("Cells", "offsets") => Role::Offsets,
-                            ("Cells", "types") => Role::Types,
-                            ("PointData", "fixed") => Role::Fixed,
-                            _ => Role::Ignored,
+                    "DataArray" | "Array" if pending.is_none() => {
+                        let section = match parent {
+                            "Points" => Section::Points,
+                            "Cells" => Section::Cells,
+                            "PointData" => Section::PointData,
+                            "CellData" => Section::CellData,
+                            "FieldData" => Section::FieldData,
+                            _ => Section::Other,
                         };
-                        let format = attr(e, "format").unwrap_or_else(|| "ascii".into());
-                        let binary = match format.as_str() {
-                            "ascii" => false,
-                            "binary" => true,
-                            "appended" => {
-                                return Err(ctx.err(
-                                    line,
-                                    format!("DataArray '{aname}': appended data is not supported; write the file with inline (ascii or binary) DataArrays"),
-                                ));
-                            }
-                            f => {
-                                return Err(ctx.err(line, format!("DataArray '{aname}': unknown format '{f}'")));
-                            }
-                        };
-                        let tyname = attr(e, "type").unwrap_or_default();
-                        let ty = match xml_type(&tyname) {
-                            Some(t) => t,
-                            None if role == Role::Ignored => Scalar::U8,
-                            None => {
-                                return Err(ctx.err(line, format!("DataArray '{aname}': unsupported type '{tyname}'")));
-                            }
-                        };
-                        if role == Role::Points {
-                            let nc = attr(e, "NumberOfComponents").unwrap_or_else(|| "1".into());
-                            if nc.trim() != "3" {
-                                return Err(ctx.err(
-                                    line,
-                                    format!("Points must have NumberOfComponents=\"3\", found \"{nc}\""),
-                                ));
-                            }
-                        }
-                        let p = Pending {
-                            role,
-                            ty,
-                            binary,
-                            name: aname,
-                            line,
-                            text: String::new(),
-                        };
+                        let spec = array_spec(&ctx, e, section, tag_pos)?;
                         if matches!(ev, Event::Empty(_)) {
-                            finish(&ctx, p, &mut arrays)?;
+                            specs.push(spec);
                         } else {
-                            pending = Some(p);
+                            pending = Some(spec);
                         }
                     }
                     _ => {}
@@ -287,79 +463,245 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                 }
             }
             Event::Text(t) => {
-                if let Some(p) = pending.as_mut() {
-                    if p.text.is_empty() {
-                        p.line = line;
+                // text of the array itself, not of an <InformationKey> inside it
+                if let Some(p) = pending.as_mut()
+                    && matches!(stack.last().map(String::as_str), Some("DataArray" | "Array"))
+                {
+                    if p.text.trim().is_empty() {
+                        p.text.clear();
+                        p.text_at = tag_pos;
                     }
                     p.text.push_str(&t);
                 }
             }
             Event::CData(t) => {
-                if let Some(p) = pending.as_mut() {
+                if let Some(p) = pending.as_mut()
+                    && matches!(stack.last().map(String::as_str), Some("DataArray" | "Array"))
+                {
                     p.text.push_str(&t);
                 }
             }
-            Event::GeneralRef(_) if pending.as_ref().is_some_and(|p| p.role != Role::Ignored) => {
-                return Err(ctx.err(line, "unexpected XML entity inside numeric data"));
+            Event::GeneralRef(_) if pending.is_some() => {
+                return Err(ctx.err(tag_pos, "unexpected XML entity inside array data"));
             }
             Event::End(_) => {
-                if stack.pop().as_deref() == Some("DataArray")
+                let closed = stack.pop();
+                if matches!(closed.as_deref(), Some("DataArray" | "Array"))
+                    && !matches!(stack.last().map(String::as_str), Some("DataArray" | "Array"))
                     && let Some(p) = pending.take()
                 {
-                    finish(&ctx, p, &mut arrays)?;
+                    specs.push(p);
                 }
             }
             Event::Eof => break,
             _ => {}
         }
     }
-    assemble(&ctx, counts, arrays)
+    // With appended data, the XML part ends inside <VTKFile> (the rest was checked
+    // by split_appended); without, every element must be closed.
+    let open: Vec<&str> = stack.iter().map(String::as_str).collect();
+    let complete = if ctx.appended.is_some() {
+        open == ["VTKFile"]
+    } else {
+        open.is_empty() && seen_root
+    };
+    if !complete {
+        let what = match open.last() {
+            Some(t) => format!("<{}> is not closed", clip(t)),
+            None => "no <VTKFile> element".into(),
+        };
+        return Err(ctx.err(
+            xml_len,
+            format!("the file ends at byte {xml_len} but {what} (truncated file?)"),
+        ));
+    }
+    assemble(&ctx, specs, data.len())
 }
 
-fn finish(ctx: &Ctx, p: Pending, arrays: &mut Arrays) -> Result<()> {
-    if p.role == Role::Ignored {
-        return Ok(());
+fn vtkfile(ctx: &mut Ctx, e: &BytesStart, at: usize) -> Result<()> {
+    if let Some(t) = attr(e, "type")
+        && t != "UnstructuredGrid"
+    {
+        return Err(ctx.err(
+            at,
+            format!("VTKFile type '{}' is not supported; only UnstructuredGrid is", clip(&t)),
+        ));
     }
-    let line = p.line;
-    let values = ctx.decode(&p)?;
-    let slot = match p.role {
-        Role::Points => &mut arrays.points,
-        Role::Connectivity => &mut arrays.conn,
-        Role::Offsets => &mut arrays.offsets,
-        Role::Types => &mut arrays.types,
-        Role::Fixed => {
-            arrays.fixed = Some(values);
-            return Ok(());
-        }
-        Role::Ignored => return Ok(()),
-    };
-    *slot = Some((values, line));
+    if let Some(c) = attr(e, "compressor")
+        && !c.is_empty()
+    {
+        ctx.layout.codec = Some(Codec::from_vtk(&c).ok_or_else(|| {
+            ctx.err(
+                at,
+                format!(
+                    "compressor '{}' is not supported (vtkZLibDataCompressor, vtkLZ4DataCompressor, vtkLZMADataCompressor are)",
+                    clip(&c)
+                ),
+            )
+        })?);
+    }
+    match attr(e, "byte_order").as_deref() {
+        None | Some("LittleEndian") => ctx.layout.endian = Endian::Little,
+        Some("BigEndian") => ctx.layout.endian = Endian::Big,
+        Some(b) => return Err(ctx.err(at, format!("byte_order '{}' is not LittleEndian or BigEndian", clip(b)))),
+    }
+    if let Some(h) = attr(e, "header_type") {
+        ctx.layout.header = match h.as_str() {
+            "UInt32" => Scalar::U32,
+            "UInt64" => Scalar::U64,
+            _ => {
+                return Err(ctx.err(
+                    at,
+                    format!("header_type '{}' is not supported (UInt32 or UInt64)", clip(&h)),
+                ));
+            }
+        };
+    }
     Ok(())
 }
 
-fn assemble(ctx: &Ctx, counts: Option<(usize, usize)>, a: Arrays) -> Result<RawMesh> {
+fn array_spec(ctx: &Ctx, e: &BytesStart, section: Section, at: usize) -> Result<Spec> {
+    let name = attr(e, "Name").unwrap_or_default();
+    let tyname = attr(e, "type").unwrap_or_default();
+    let ty = xml_type(&tyname).ok_or_else(|| {
+        ctx.err(
+            at,
+            format!("DataArray '{}': unsupported type '{}'", clip(&name), clip(&tyname)),
+        )
+    })?;
+    let count = |k: &str| -> Result<Option<usize>> {
+        match attr(e, k) {
+            None => Ok(None),
+            Some(v) => v.trim().parse::<usize>().map(Some).map_err(|_| {
+                ctx.err(
+                    at,
+                    format!("DataArray '{}': {k} must be a count, found '{}'", clip(&name), clip(&v)),
+                )
+            }),
+        }
+    };
+    let components = count("NumberOfComponents")?.unwrap_or(1);
+    if components == 0 {
+        return Err(ctx.err(at, format!("DataArray '{}': NumberOfComponents is 0", clip(&name))));
+    }
+    let tuples = count("NumberOfTuples")?;
+    let storage = match attr(e, "format").as_deref().unwrap_or("ascii") {
+        "ascii" => Storage::Ascii,
+        "binary" => Storage::Binary,
+        "appended" => Storage::Appended(
+            count("offset")?
+                .ok_or_else(|| ctx.err(at, format!("DataArray '{}': appended without an offset", clip(&name))))?,
+        ),
+        f => {
+            return Err(ctx.err(at, format!("DataArray '{}': unknown format '{}'", clip(&name), clip(f))));
+        }
+    };
+    if section == Section::Points && components != 3 {
+        return Err(ctx.err(
+            at,
+            format!("Points must have NumberOfComponents=\"3\", found \"{components}\""),
+        ));
+    }
+    Ok(Spec {
+        section,
+        name,
+        ty,
+        components,
+        tuples,
+        storage,
+        at,
+        text_at: at,
+        text: String::new(),
+    })
+}
+
+fn data_array(s: &Spec, d: Decoded) -> DataArray {
+    match d {
+        Decoded::Num(t, v) => DataArray::new(s.name.clone(), t.value_type(), s.components, v),
+        Decoded::Str(v) => DataArray::new(s.name.clone(), ValueType::Str, s.components, Values::Str(v)),
+    }
+}
+
+fn numbers(ctx: &Ctx, s: &Spec, d: Decoded) -> Result<Vec<f64>> {
+    match d {
+        Decoded::Num(_, Values::Int(v)) => Ok(v.into_iter().map(|x| x as f64).collect()),
+        Decoded::Num(_, Values::Float(v)) => Ok(v),
+        _ => Err(ctx.err(s.at, format!("'{}' must hold numbers, not strings", clip(&s.name)))),
+    }
+}
+
+fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
     let missing = |what: &str| Error::parse(ctx.path, None, format!("missing {what}"));
-    let (np, nc) = counts.ok_or_else(|| missing("<Piece> element (is this an UnstructuredGrid?)"))?;
-    let (pts, pline) = a.points.ok_or_else(|| missing("<Points> DataArray"))?;
-    let (conn, cline) = a.conn.ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
-    let (offs, oline) = a.offsets.ok_or_else(|| missing("Cells DataArray 'offsets'"))?;
-    let (types, tline) = a.types.ok_or_else(|| missing("Cells DataArray 'types'"))?;
-    let count_err = |line: usize, what: &str, want: usize, got: usize| {
-        ctx.err(line, format!("{what}: expected {want} values, found {got}"))
+    let (np, nc) = ctx
+        .counts
+        .ok_or_else(|| missing("<Piece> element (is this an UnstructuredGrid?)"))?;
+    let mut raw = RawMesh::default();
+    let (mut pts, mut conn, mut offs, mut types) = (None, None, None, None);
+    let mut fixed = None;
+    for s in &specs {
+        if s.section == Section::Other || (s.section == Section::Cells && s.name.starts_with("face")) {
+            continue; // polyhedron faces and arrays outside the grid: not ours
+        }
+        let d = ctx.decode(s, file_len)?;
+        match s.section {
+            Section::Points => pts = Some((numbers(ctx, s, d)?, s.at)),
+            Section::Cells => {
+                let slot = match s.name.as_str() {
+                    "connectivity" => &mut conn,
+                    "offsets" => &mut offs,
+                    "types" => &mut types,
+                    _ => continue,
+                };
+                *slot = Some((numbers(ctx, s, d)?, s.at));
+            }
+            Section::PointData if s.name == "fixed" && s.components == 1 && s.ty != Ty::Str => {
+                fixed = Some((numbers(ctx, s, d)?, s.at));
+            }
+            Section::PointData => raw.point_data.push(data_array(s, d)),
+            Section::CellData => raw.cell_data.push(data_array(s, d)),
+            Section::FieldData => raw.field_data.push(data_array(s, d)),
+            Section::Other => {}
+        }
+    }
+    let (pts, pat) = pts.ok_or_else(|| missing("<Points> DataArray"))?;
+    let (conn, cat) = conn.ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
+    let (offs, oat) = offs.ok_or_else(|| missing("Cells DataArray 'offsets'"))?;
+    let (types, tat) = types.ok_or_else(|| missing("Cells DataArray 'types'"))?;
+    let count_err = |at: usize, what: &str, want: usize, got: usize| {
+        ctx.err(at, format!("{what}: expected {want} values, found {got}"))
     };
     if pts.len() != 3 * np {
-        return Err(count_err(pline, "Points", 3 * np, pts.len()));
+        return Err(count_err(pat, "Points", 3 * np, pts.len()));
     }
     if offs.len() != nc {
-        return Err(count_err(oline, "offsets", nc, offs.len()));
+        return Err(count_err(oat, "offsets", nc, offs.len()));
     }
     if types.len() != nc {
-        return Err(count_err(tline, "types", nc, types.len()));
+        return Err(count_err(tat, "types", nc, types.len()));
     }
-    let mut raw = RawMesh::default();
+    for a in raw.point_data.iter().chain(&raw.cell_data) {
+        let (want, what) = if raw.point_data.iter().any(|p| std::ptr::eq(p, a)) {
+            (np, "points")
+        } else {
+            (nc, "cells")
+        };
+        if a.values.len() != want * a.components {
+            return Err(Error::parse(
+                ctx.path,
+                None,
+                format!(
+                    "array '{}' has {} values, expected {} ({want} {what} x {} components)",
+                    clip(&a.name),
+                    a.values.len(),
+                    want * a.components,
+                    a.components
+                ),
+            ));
+        }
+    }
     for (i, p) in pts.chunks_exact(3).enumerate() {
         if p.iter().any(|c| !c.is_finite()) {
-            return Err(ctx.err(pline, format!("point {i} has a non-finite coordinate {p:?}")));
+            return Err(ctx.err(pat, format!("point {i} has a non-finite coordinate {p:?}")));
         }
         raw.points.push([p[0], p[1], p[2]]);
     }
@@ -370,7 +712,7 @@ fn assemble(ctx: &Ctx, counts: Option<(usize, usize)>, a: Arrays) -> Result<RawM
             .filter(|&o| o >= start)
             .ok_or_else(|| {
                 ctx.err(
-                    oline,
+                    oat,
                     format!(
                         "offset {e} is {}; offsets must increase up to the connectivity size {}",
                         offs[e],
@@ -382,16 +724,16 @@ fn assemble(ctx: &Ctx, counts: Option<(usize, usize)>, a: Arrays) -> Result<RawM
         for &v in &conn[start..end] {
             ids.push(as_index(v, np).ok_or_else(|| {
                 ctx.err(
-                    cline,
+                    cat,
                     format!("element {e} refers to vertex {v}, but the file has {np} points"),
                 )
             })? as u32);
         }
         let t = types[e] as i64;
-        let shape = vtk_shape(e, t).map_err(|m| ctx.err(tline, m))?;
+        let shape = vtk_shape(e, t).map_err(|m| ctx.err(tat, m))?;
         if ids.len() != shape.num_vertices() {
             return Err(ctx.err(
-                tline,
+                tat,
                 format!(
                     "element {e} is a {} (VTK type {t}) but has {} vertices instead of {}",
                     vtk_type_name(t),
@@ -400,16 +742,12 @@ fn assemble(ctx: &Ctx, counts: Option<(usize, usize)>, a: Arrays) -> Result<RawM
                 ),
             ));
         }
-        raw.push(shape, &super::vtk_order(shape.kind(), &ids));
+        raw.push(shape, &ids);
         start = end;
     }
-    if let Some(f) = a.fixed {
+    if let Some((f, fat)) = fixed {
         if f.len() != np {
-            return Err(Error::parse(
-                ctx.path,
-                None,
-                format!("PointData 'fixed' has {} values for {np} points", f.len()),
-            ));
+            return Err(ctx.err(fat, format!("PointData 'fixed' has {} values for {np} points", f.len())));
         }
         for (v, _) in f.iter().enumerate().filter(|(_, x)| **x != 0.0) {
             raw.fix(v);
@@ -426,148 +764,226 @@ fn xml_attr(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// How the writer encodes arrays.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Encoding {
+    Ascii,
+    Base64,
+    Zlib,
+}
+
+/// Little-endian bytes of an array in its own type (strings NUL-terminated).
+fn array_bytes(a: &DataArray) -> Vec<u8> {
+    let mut out = Vec::with_capacity(a.values.len() * a.ty.size().max(1));
+    match &a.values {
+        Values::Str(v) => {
+            for s in v {
+                out.extend_from_slice(s.as_bytes());
+                out.push(0);
+            }
+        }
+        Values::Int(v) => {
+            for &x in v {
+                push_int(&mut out, a.ty, x);
+            }
+        }
+        Values::Float(v) => {
+            for &x in v {
+                match a.ty {
+                    ValueType::F32 => out.extend_from_slice(&(x as f32).to_le_bytes()),
+                    ValueType::F64 => out.extend_from_slice(&x.to_le_bytes()),
+                    t => push_int(&mut out, t, x as i64),
+                }
+            }
+        }
+    }
+    out
+}
+
+fn push_int(out: &mut Vec<u8>, t: ValueType, x: i64) {
+    match t {
+        ValueType::I8 | ValueType::U8 => out.push(x as u8),
+        ValueType::I16 | ValueType::U16 => out.extend_from_slice(&(x as u16).to_le_bytes()),
+        ValueType::I32 | ValueType::U32 => out.extend_from_slice(&(x as u32).to_le_bytes()),
+        ValueType::F32 => out.extend_from_slice(&(x as f32).to_le_bytes()),
+        ValueType::F64 => out.extend_from_slice(&(x as f64).to_le_bytes()),
+        ValueType::I64 | ValueType::U64 | ValueType::Str => out.extend_from_slice(&x.to_le_bytes()),
+    }
+}
+
+/// The ASCII form of an array: a tuple a line, or (`rows`, CSR offsets) a
+/// cell a line.
+fn array_text(w: &mut dyn Write, a: &DataArray, rows: Option<&[usize]>) -> std::io::Result<()> {
+    let mut line = String::new();
+    let mut i = 0;
+    let mut row = 1;
+    let mut push = |w: &mut dyn Write, s: &str| -> std::io::Result<()> {
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(s);
+        i += 1;
+        let end = match rows {
+            Some(r) => {
+                while row < r.len() && r[row] < i {
+                    row += 1;
+                }
+                row < r.len() && r[row] == i
+            }
+            None => i % a.components.max(1) == 0,
+        };
+        if end {
+            writeln!(w, "{line}")?;
+            line.clear();
+        }
+        Ok(())
+    };
+    match &a.values {
+        Values::Str(v) => {
+            // character codes, each string closed by 0
+            for s in v {
+                let codes: Vec<String> = s.bytes().chain([0]).map(|b| b.to_string()).collect();
+                writeln!(w, "{}", codes.join(" "))?;
+            }
+        }
+        Values::Int(v) => {
+            for &x in v {
+                let s = if a.ty == ValueType::U64 {
+                    (x as u64).to_string()
+                } else {
+                    x.to_string()
+                };
+                push(w, &s)?;
+            }
+        }
+        Values::Float(v) => {
+            for &x in v {
+                let s = if a.ty == ValueType::F32 {
+                    format!("{:?}", x as f32)
+                } else {
+                    fmt_f64(x)
+                };
+                push(w, &s)?;
+            }
+        }
+    }
+    if !line.is_empty() {
+        writeln!(w, "{line}")?;
+    }
+    Ok(())
+}
+
 struct Out<'w> {
     w: &'w mut dyn Write,
-    binary: bool,
+    enc: Encoding,
 }
 
 impl Out<'_> {
-    /// One DataArray; `bytes` is the little-endian payload, `text` the ASCII form.
-    fn array(
-        &mut self,
-        ty: &str,
-        name: &str,
-        ncomp: usize,
-        bytes: impl FnOnce() -> Vec<u8>,
-        text: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-    ) -> WriteResult {
-        let fmt = if self.binary { "binary" } else { "ascii" };
+    fn array(&mut self, indent: &str, a: &DataArray) -> WriteResult {
+        self.array_rows(indent, a, None)
+    }
+
+    fn array_rows(&mut self, indent: &str, a: &DataArray, rows: Option<&[usize]>) -> WriteResult {
+        let fmt = if self.enc == Encoding::Ascii { "ascii" } else { "binary" };
+        let tag = if a.ty == ValueType::Str { "Array" } else { "DataArray" };
         writeln!(
             self.w,
-            "        <DataArray type=\"{ty}\" Name=\"{}\" NumberOfComponents=\"{ncomp}\" format=\"{fmt}\">",
-            xml_attr(name)
+            "{indent}<{tag} type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" NumberOfTuples=\"{}\" format=\"{fmt}\">",
+            xml_type_name(a.ty),
+            xml_attr(&a.name),
+            a.components,
+            a.tuples()
         )?;
-        if self.binary {
-            let data = bytes();
-            let header = (data.len() as u64).to_le_bytes();
-            writeln!(self.w, "{}{}", B64.encode(header), B64.encode(&data))?;
-        } else {
-            text(self.w)?;
+        match self.enc {
+            Encoding::Ascii => array_text(self.w, a, rows)?,
+            Encoding::Base64 => {
+                let data = array_bytes(a);
+                let header = (data.len() as u64).to_le_bytes();
+                writeln!(self.w, "{}{}", B64.encode(header), B64.encode(&data))?;
+            }
+            Encoding::Zlib => {
+                let (header, body) = zlib_blocks(&array_bytes(a));
+                writeln!(self.w, "{}{}", B64.encode(header), B64.encode(body))?;
+            }
         }
-        writeln!(self.w, "        </DataArray>")?;
+        writeln!(self.w, "{indent}</{tag}>")?;
         Ok(())
     }
 }
 
-pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
+pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc: Encoding) -> WriteResult {
     let n = mesh.num_points();
     let ne = mesh.num_elements();
     writeln!(w, "<?xml version=\"1.0\"?>")?;
+    let compressor = if enc == Encoding::Zlib {
+        " compressor=\"vtkZLibDataCompressor\""
+    } else {
+        ""
+    };
     writeln!(
         w,
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>"
     )?;
     writeln!(w, "  <UnstructuredGrid>")?;
-    writeln!(w, "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{ne}\">")?;
-    let mut o = Out { w, binary };
-    if !mesh.fixed.is_empty() {
-        writeln!(o.w, "      <PointData Scalars=\"fixed\">")?;
-        o.array(
-            "Int32",
-            "fixed",
-            1,
-            || mesh.fixed.iter().flat_map(|&f| (f as i32).to_le_bytes()).collect(),
-            |w| {
-                for &f in &mesh.fixed {
-                    writeln!(w, "{}", f as i32)?;
-                }
-                Ok(())
-            },
-        )?;
+    let mut o = Out { w, enc };
+    if !mesh.data.field.is_empty() {
+        writeln!(o.w, "    <FieldData>")?;
+        for a in &mesh.data.field {
+            o.array("      ", a)?;
+        }
+        writeln!(o.w, "    </FieldData>")?;
+    }
+    writeln!(o.w, "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{ne}\">")?;
+    let points_data: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
+    if !mesh.fixed.is_empty() || !points_data.is_empty() {
+        writeln!(o.w, "      <PointData>")?;
+        if !mesh.fixed.is_empty() {
+            let f = DataArray::new(
+                "fixed",
+                ValueType::I32,
+                1,
+                Values::Int(mesh.fixed.iter().map(|&f| f as i64).collect()),
+            );
+            o.array("        ", &f)?;
+        }
+        for a in points_data {
+            o.array("        ", a)?;
+        }
         writeln!(o.w, "      </PointData>")?;
     }
     writeln!(o.w, "      <Points>")?;
-    o.array(
-        "Float64",
+    let pts = DataArray::new(
         "Points",
+        ValueType::F64,
         3,
-        || mesh.points.iter().flatten().flat_map(|c| c.to_le_bytes()).collect(),
-        |w| {
-            for p in &mesh.points {
-                writeln!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
-            }
-            Ok(())
-        },
-    )?;
+        Values::Float(mesh.points.iter().flatten().copied().collect()),
+    );
+    o.array("        ", &pts)?;
     writeln!(o.w, "      </Points>")?;
     writeln!(o.w, "      <Cells>")?;
+    let conn: Vec<i64> = (0..ne)
+        .flat_map(|e| mesh.element(e).iter().copied())
+        .map(|v| v as i64)
+        .collect();
+    let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
+    o.array_rows("        ", &conn, Some(&mesh.offsets))?;
+    let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
     o.array(
-        "Int64",
-        "connectivity",
-        1,
-        || {
-            (0..ne)
-                .flat_map(|e| super::vtk_order(Some(mesh.kinds[e]), mesh.element(e)).into_owned())
-                .flat_map(|v| (v as i64).to_le_bytes())
-                .collect()
-        },
-        |w| {
-            for e in 0..ne {
-                let vs: Vec<String> = super::vtk_order(Some(mesh.kinds[e]), mesh.element(e))
-                    .iter()
-                    .map(|v| v.to_string())
-                    .collect();
-                writeln!(w, "{}", vs.join(" "))?;
-            }
-            Ok(())
-        },
+        "        ",
+        &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)),
     )?;
+    let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
     o.array(
-        "Int64",
-        "offsets",
-        1,
-        || {
-            mesh.offsets[1..]
-                .iter()
-                .flat_map(|&x| (x as i64).to_le_bytes())
-                .collect()
-        },
-        |w| {
-            for x in &mesh.offsets[1..] {
-                writeln!(w, "{x}")?;
-            }
-            Ok(())
-        },
-    )?;
-    o.array(
-        "UInt8",
-        "types",
-        1,
-        || mesh.kinds.iter().map(|k| k.vtk_id()).collect(),
-        |w| {
-            for k in &mesh.kinds {
-                writeln!(w, "{}", k.vtk_id())?;
-            }
-            Ok(())
-        },
+        "        ",
+        &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
     )?;
     writeln!(o.w, "      </Cells>")?;
     check_cell_data(mesh, cell_data)?;
-    if !cell_data.is_empty() {
+    let cells = out_cell_arrays(mesh, cell_data);
+    if !cells.is_empty() {
         writeln!(o.w, "      <CellData>")?;
-        for cd in cell_data {
-            o.array(
-                "Float64",
-                cd.name,
-                1,
-                || cd.values.iter().flat_map(|v| v.to_le_bytes()).collect(),
-                |w| {
-                    for &v in cd.values {
-                        writeln!(w, "{}", fmt_f64(v))?;
-                    }
-                    Ok(())
-                },
-            )?;
+        for a in &cells {
+            o.array("        ", a)?;
         }
         writeln!(o.w, "      </CellData>")?;
     }

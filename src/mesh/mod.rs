@@ -1,10 +1,12 @@
 //! The mesh model: coordinates and elements, nothing about metrics or devices.
 
 pub mod color;
+pub mod data;
 pub mod element;
 pub mod order;
 pub mod topology;
 
+pub use data::{DataArray, MeshData, PhysicalName, ValueType, Values};
 pub use element::ElementKind;
 
 use crate::error::{Error, Result};
@@ -47,6 +49,9 @@ pub struct Mesh {
     pub lower: Vec<(LowerKind, Vec<u32>)>,
     /// Vertices the user marked fixed (empty means none).
     pub fixed: Vec<bool>,
+    /// The input file's point, cell and field arrays and Gmsh group names,
+    /// written back where the output format can hold them.
+    pub data: MeshData,
 }
 
 impl Mesh {
@@ -160,6 +165,14 @@ impl Mesh {
                 )));
             }
         }
+        self.data.check(n, self.num_elements(), self.lower.len())?;
+        if let Some((a, b)) = self.duplicate_elements() {
+            let mut vs = self.element(b).to_vec();
+            vs.sort_unstable();
+            return Err(Error::InvalidMesh(format!(
+                "elements {a} and {b} are duplicates: both have the vertices {vs:?}"
+            )));
+        }
         let unused: Vec<usize> = (0..n).filter(|&v| !used[v]).collect();
         if !unused.is_empty() {
             return Err(Error::InvalidMesh(format!(
@@ -183,5 +196,19 @@ impl Mesh {
             )));
         }
         Ok(())
+    }
+
+    /// The first pair of elements (in file order) with the same vertex set.
+    pub fn duplicate_elements(&self) -> Option<(usize, usize)> {
+        let mut seen = std::collections::HashMap::with_capacity(self.num_elements());
+        for e in 0..self.num_elements() {
+            let mut key = self.element(e).to_vec();
+            key.sort_unstable();
+            if let Some(&first) = seen.get(&key) {
+                return Some((first, e));
+            }
+            seen.insert(key, e);
+        }
+        None
     }
 }

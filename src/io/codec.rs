@@ -1,0 +1,371 @@
+//! Binary payloads of VTK XML files: raw or base64 bytes, with a byte-count
+//! header or VTK's compressed-block header (`vtkZLibDataCompressor`,
+//! `vtkLZ4DataCompressor`, `vtkLZMADataCompressor`).
+//!
+//! Compressed layout: `[nblocks, blocksize, lastsize, csize_0 .. csize_{n-1}]`
+//! in the file's header type (UInt32 or UInt64), then the compressed blocks
+//! back to back; every block but the last inflates to `blocksize` bytes, the
+//! last to `lastsize` (or `blocksize` when `lastsize` is 0).
+
+use std::io::{Read, Write};
+
+use super::lex::{Endian, Scalar};
+
+/// The compressors VTK ships.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Codec {
+    Zlib,
+    Lz4,
+    Lzma,
+}
+
+impl Codec {
+    pub fn from_vtk(name: &str) -> Option<Codec> {
+        match name {
+            "vtkZLibDataCompressor" => Some(Codec::Zlib),
+            "vtkLZ4DataCompressor" => Some(Codec::Lz4),
+            "vtkLZMADataCompressor" => Some(Codec::Lzma),
+            _ => None,
+        }
+    }
+
+    /// Inflate `input` to exactly `size` bytes.
+    fn inflate(self, input: &[u8], size: usize) -> Result<Vec<u8>, String> {
+        let out = match self {
+            Codec::Zlib => {
+                let mut out = Vec::with_capacity(size);
+                flate2::read::ZlibDecoder::new(input)
+                    .take(size as u64 + 1)
+                    .read_to_end(&mut out)
+                    .map_err(|e| format!("zlib: {e}"))?;
+                out
+            }
+            Codec::Lz4 => lz4_flex::block::decompress(input, size).map_err(|e| format!("LZ4: {e}"))?,
+            Codec::Lzma => {
+                let mut out = Limited {
+                    buf: Vec::with_capacity(size),
+                    limit: size,
+                };
+                lzma_rs::xz_decompress(&mut std::io::BufReader::new(input), &mut out)
+                    .map_err(|e| format!("LZMA: {e}"))?;
+                out.buf
+            }
+        };
+        if out.len() != size {
+            return Err(format!(
+                "a block inflates to {} bytes, its header says {size}",
+                out.len()
+            ));
+        }
+        Ok(out)
+    }
+}
+
+/// A `Write` that refuses to grow past `limit` bytes (a forged LZMA stream
+/// must not fill the memory).
+struct Limited {
+    buf: Vec<u8>,
+    limit: usize,
+}
+
+impl Write for Limited {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        if self.buf.len() + b.len() > self.limit {
+            return Err(std::io::Error::other("more data than the block header says"));
+        }
+        self.buf.extend_from_slice(b);
+        Ok(b.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Error inside a payload: a message and the file offset it refers to.
+pub(crate) type PResult<T> = Result<T, (usize, String)>;
+
+/// Bytes of a payload, read front to back.
+pub(crate) trait Source {
+    /// The next `n` bytes; fails (without allocating `n`) if fewer are left.
+    fn take(&mut self, n: usize) -> PResult<Vec<u8>>;
+    /// File offset of the next byte, for errors.
+    fn at(&self) -> usize;
+    /// An upper bound on the bytes left.
+    fn left(&self) -> usize;
+}
+
+/// Raw bytes (appended `encoding="raw"`).
+pub(crate) struct RawSource<'a> {
+    pub data: &'a [u8],
+    pub pos: usize,
+    /// File offset of `data[0]`.
+    pub base: usize,
+}
+
+impl Source for RawSource<'_> {
+    fn take(&mut self, n: usize) -> PResult<Vec<u8>> {
+        if n > self.left() {
+            return Err((
+                self.at(),
+                format!("the data ends {} bytes too early (truncated file?)", n - self.left()),
+            ));
+        }
+        let s = self.data[self.pos..self.pos + n].to_vec();
+        self.pos += n;
+        Ok(s)
+    }
+
+    fn at(&self) -> usize {
+        self.base + self.pos
+    }
+
+    fn left(&self) -> usize {
+        self.data.len().saturating_sub(self.pos)
+    }
+}
+
+/// Base64 text decoded as one byte stream. VTK encodes the header and the
+/// data as separate padded runs, other writers as one; decoding quantum by
+/// quantum (4 characters to at most 3 bytes) reads both the same way.
+/// Whitespace is skipped.
+pub(crate) struct B64Source<'a> {
+    pub text: &'a [u8],
+    pub pos: usize,
+    pub base: usize,
+    pending: Vec<u8>,
+}
+
+fn b64_value(c: u8) -> Option<u8> {
+    Some(match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        b'/' => 63,
+        _ => return None,
+    })
+}
+
+impl<'a> B64Source<'a> {
+    pub fn new(text: &'a [u8], pos: usize, base: usize) -> Self {
+        B64Source {
+            text,
+            pos,
+            base,
+            pending: Vec::new(),
+        }
+    }
+
+    /// Decode the next quantum into `pending`; false at the end of the text.
+    fn quantum(&mut self) -> PResult<bool> {
+        let mut q = [0u8; 4];
+        let mut k = 0;
+        let start = self.at();
+        while k < 4 {
+            let Some(&c) = self.text.get(self.pos) else {
+                if k == 0 {
+                    return Ok(false);
+                }
+                return Err((start, "base64 data ends inside a 4-character group (truncated?)".into()));
+            };
+            self.pos += 1;
+            if c.is_ascii_whitespace() {
+                continue;
+            }
+            q[k] = c;
+            k += 1;
+        }
+        let pad = q.iter().rev().take_while(|&&c| c == b'=').count();
+        if pad > 2 {
+            return Err((start, "invalid base64 padding".into()));
+        }
+        let mut bits = 0u32;
+        for (i, &c) in q.iter().enumerate() {
+            let v = if i >= 4 - pad {
+                0
+            } else {
+                b64_value(c).ok_or_else(|| {
+                    (
+                        start,
+                        format!(
+                            "invalid base64 character {:?}",
+                            char::from(c).escape_default().to_string()
+                        ),
+                    )
+                })?
+            };
+            bits = (bits << 6) | v as u32;
+        }
+        let bytes = bits.to_be_bytes();
+        self.pending.extend_from_slice(&bytes[1..4 - pad]);
+        Ok(true)
+    }
+}
+
+impl Source for B64Source<'_> {
+    fn take(&mut self, n: usize) -> PResult<Vec<u8>> {
+        if n > self.left() {
+            return Err((
+                self.at(),
+                format!(
+                    "the base64 data holds at most {} more bytes, {n} are needed (truncated file?)",
+                    self.left()
+                ),
+            ));
+        }
+        while self.pending.len() < n {
+            if !self.quantum()? {
+                return Err((
+                    self.at(),
+                    format!(
+                        "the base64 data ends {} bytes too early (truncated file?)",
+                        n - self.pending.len()
+                    ),
+                ));
+            }
+        }
+        let rest = self.pending.split_off(n);
+        Ok(std::mem::replace(&mut self.pending, rest))
+    }
+
+    fn at(&self) -> usize {
+        self.base + self.pos
+    }
+
+    fn left(&self) -> usize {
+        self.pending.len() + self.text.len().saturating_sub(self.pos) / 4 * 3 + 3
+    }
+}
+
+/// How the payload of a binary array is laid out.
+#[derive(Clone, Copy)]
+pub(crate) struct Layout {
+    pub header: Scalar,
+    pub endian: Endian,
+    pub codec: Option<Codec>,
+}
+
+impl Layout {
+    fn word(&self, src: &mut dyn Source, what: &str) -> PResult<usize> {
+        let at = src.at();
+        let b = src.take(self.header.size())?;
+        let v = self.header.get_i64(self.endian, &b);
+        usize::try_from(v).map_err(|_| (at, format!("{what} {} is not a size", v as u64)))
+    }
+
+    /// One array's bytes: header, then the (possibly compressed) data. `max`
+    /// bounds the inflated size (what the array can hold at most).
+    pub fn read(&self, src: &mut dyn Source, max: usize) -> PResult<Vec<u8>> {
+        let Some(codec) = self.codec else {
+            let at = src.at();
+            let n = self.word(src, "the byte count")?;
+            if n > max {
+                return Err((
+                    at,
+                    format!("the header says {n} bytes, more than the array can hold ({max})"),
+                ));
+            }
+            return src.take(n);
+        };
+        let at = src.at();
+        let nb = self.word(src, "the block count")?;
+        let bs = self.word(src, "the block size")?;
+        let last = self.word(src, "the last block size")?;
+        if nb.saturating_mul(self.header.size()) > src.left() {
+            return Err((
+                at,
+                format!("{nb} compressed blocks announced, the file is too short for them (truncated?)"),
+            ));
+        }
+        let total = match nb {
+            0 => 0,
+            _ => (nb - 1)
+                .saturating_mul(bs)
+                .saturating_add(if last == 0 { bs } else { last }),
+        };
+        if total > max || (nb > 1 && last > bs) {
+            return Err((
+                at,
+                format!(
+                    "compression header: {nb} blocks of {bs} bytes (last {last}) do not fit the array ({max} bytes at most)"
+                ),
+            ));
+        }
+        let mut sizes = Vec::with_capacity(nb);
+        for _ in 0..nb {
+            sizes.push(self.word(src, "a compressed block size")?);
+        }
+        let mut out = Vec::with_capacity(total);
+        for (i, &cs) in sizes.iter().enumerate() {
+            let at = src.at();
+            let block = src.take(cs)?;
+            let size = if i + 1 == nb && last != 0 { last } else { bs };
+            let bytes = codec
+                .inflate(&block, size)
+                .map_err(|m| (at, format!("compressed block {i} of {nb} is corrupt or truncated: {m}")))?;
+            out.extend_from_slice(&bytes);
+        }
+        Ok(out)
+    }
+}
+
+/// VTK's zlib block format with a UInt64 header, as one buffer of header
+/// words and one of compressed data (base64-encoded separately by the writer).
+pub(crate) fn zlib_blocks(data: &[u8]) -> (Vec<u8>, Vec<u8>) {
+    const BS: usize = 1 << 15;
+    let blocks: Vec<&[u8]> = data.chunks(BS).collect();
+    let last = data.len() % BS;
+    let mut header: Vec<u64> = vec![blocks.len() as u64, BS as u64, last as u64];
+    let mut body = Vec::new();
+    for b in &blocks {
+        let mut enc = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+        enc.write_all(b).expect("writing to a Vec cannot fail");
+        let c = enc.finish().expect("writing to a Vec cannot fail");
+        header.push(c.len() as u64);
+        body.extend_from_slice(&c);
+    }
+    (header.iter().flat_map(|w| w.to_le_bytes()).collect(), body)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine;
+    use base64::engine::general_purpose::STANDARD as B64;
+
+    #[test]
+    fn base64_runs_decode_as_one_stream() {
+        let (a, b) = (B64.encode([1u8, 2, 3, 4]), B64.encode([5u8, 6]));
+        let text = format!("{a}\n {b}");
+        let mut s = B64Source::new(text.as_bytes(), 0, 0);
+        assert_eq!(s.take(5).unwrap(), vec![1, 2, 3, 4, 5]);
+        assert_eq!(s.take(1).unwrap(), vec![6]);
+        assert!(s.take(1).is_err());
+    }
+
+    #[test]
+    fn zlib_blocks_read_back() {
+        let data: Vec<u8> = (0..100_000u32).map(|i| (i % 251) as u8).collect();
+        let (h, body) = zlib_blocks(&data);
+        let all = [h, body].concat();
+        let layout = Layout {
+            header: Scalar::U64,
+            endian: Endian::Little,
+            codec: Some(Codec::Zlib),
+        };
+        let mut src = RawSource {
+            data: &all,
+            pos: 0,
+            base: 0,
+        };
+        assert_eq!(layout.read(&mut src, data.len()).unwrap(), data);
+        // a bound below the real size is refused before inflating
+        let mut src = RawSource {
+            data: &all,
+            pos: 0,
+            base: 0,
+        };
+        assert!(layout.read(&mut src, data.len() - 1).is_err());
+    }
+}

@@ -1,0 +1,480 @@
+//! Files written by other tools: VTK 9.7 (ParaView's writers), meshio 5.3 and
+//! Gmsh 4.8. Each is read with the counts its manifest gives, written in every
+//! output format, read back, and its data arrays compared; Gmsh reads back
+//! every `.msh` meshsmooth writes with its physical groups intact.
+//!
+//! `tests/data/interop/` holds a few of the files so the tests run anywhere;
+//! the whole set is `../shared/interop/` (skipped with a message if absent).
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use meshsmooth::io::{self, Format};
+use meshsmooth::mesh::data::{GMSH_ELEMENTARY, GMSH_PHYSICAL};
+use meshsmooth::mesh::{DataArray, ElementKind, LowerKind, Mesh, ValueType, Values};
+
+fn local_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop")
+}
+
+fn shared_dir() -> Option<PathBuf> {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/interop");
+    if d.join("MANIFEST.tsv").is_file() {
+        Some(d)
+    } else {
+        eprintln!(
+            "skipping the shared interop set: {} not found (it is beside the repository in CI)",
+            d.display()
+        );
+        None
+    }
+}
+
+/// One manifest row.
+struct Row {
+    file: String,
+    points: usize,
+    cells: BTreeMap<String, usize>,
+    misoriented: bool,
+    arrays: Vec<String>,
+    groups: Vec<String>,
+}
+
+fn manifest(dir: &Path) -> Vec<Row> {
+    let text = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap();
+    text.lines()
+        .skip(1)
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            let cells = f[3]
+                .trim_matches(|c| c == '{' || c == '}')
+                .split(',')
+                .map(|kv| {
+                    let (k, v) = kv.split_once(':').unwrap();
+                    (k.trim().trim_matches('\'').to_string(), v.trim().parse().unwrap())
+                })
+                .collect();
+            let list = |key: &str, sep: &str| -> Vec<String> {
+                f[5].split(key)
+                    .nth(1)
+                    .map(|rest| {
+                        rest.trim()
+                            .trim_start_matches('[')
+                            .split(']')
+                            .next()
+                            .unwrap()
+                            .split(sep)
+                            .map(|s| s.trim().trim_matches('\'').to_string())
+                            .filter(|s| !s.is_empty())
+                            .collect()
+                    })
+                    .unwrap_or_default()
+            };
+            Row {
+                file: f[0].to_string(),
+                points: f[2].parse().unwrap(),
+                cells,
+                misoriented: f[4].starts_with("no"),
+                arrays: list("arrays:", ","),
+                groups: list("physical groups:", ","),
+            }
+        })
+        .collect()
+}
+
+fn ext(f: Format) -> &'static str {
+    match f {
+        Format::VtkAscii | Format::VtkBinary => "vtk",
+        Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
+        Format::Medit => "mesh",
+        _ => "msh",
+    }
+}
+
+fn is_vtk(f: Format) -> bool {
+    ext(f) == "vtk" || ext(f) == "vtu"
+}
+
+/// Cell counts by VTK type name, as VTK and meshio count them.
+fn cell_counts(m: &Mesh) -> BTreeMap<String, usize> {
+    let mut out = BTreeMap::new();
+    for k in &m.kinds {
+        let name = match k {
+            ElementKind::Triangle => "triangle",
+            ElementKind::Quadrilateral => "quad",
+            ElementKind::Tetrahedron => "tetra",
+            ElementKind::Hexahedron => "hexahedron",
+            ElementKind::Prism => "wedge",
+        };
+        *out.entry(name.to_string()).or_insert(0) += 1;
+    }
+    for (k, _) in &m.lower {
+        let name = match k {
+            LowerKind::Vertex => "vertex",
+            LowerKind::Line => "line",
+            LowerKind::Triangle => "triangle",
+            LowerKind::Quadrilateral => "quad",
+        };
+        *out.entry(name.to_string()).or_insert(0) += 1;
+    }
+    out
+}
+
+/// Arrays equal in name, type, components and every value (bit for bit);
+/// the message shows the first difference, not the whole array.
+fn assert_arrays_eq(ctx: &str, got: &[DataArray], want: &[DataArray]) {
+    let names = |a: &[DataArray]| a.iter().map(|x| x.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(got), names(want), "{ctx}: array names");
+    for (g, w) in got.iter().zip(want) {
+        assert_eq!(
+            (g.ty, g.components),
+            (w.ty, w.components),
+            "{ctx}: '{}' type/components",
+            w.name
+        );
+        assert_eq!(g.values.len(), w.values.len(), "{ctx}: '{}' length", w.name);
+        if g.values != w.values {
+            let i = (0..w.values.len())
+                .find(|&i| match (&g.values, &w.values) {
+                    (Values::Str(a), Values::Str(b)) => a[i] != b[i],
+                    _ => g.get_f64(i).to_bits() != w.get_f64(i).to_bits(),
+                })
+                .unwrap_or(0);
+            let show = |a: &DataArray| match &a.values {
+                Values::Str(v) => format!("{:?}", v[i]),
+                Values::Int(v) => format!("int {}", v[i]),
+                Values::Float(v) => format!("float {:?}", v[i]),
+            };
+            panic!("{ctx}: '{}' value {i}: got {}, want {}", w.name, show(g), show(w));
+        }
+    }
+}
+
+fn all_arrays(m: &Mesh) -> impl Iterator<Item = &DataArray> {
+    m.data.point.iter().chain(&m.data.cell).chain(&m.data.field)
+}
+
+/// Read every file of a manifest, write it in every format, read it back and
+/// compare geometry and data; returns how many files were checked.
+fn check_folder(dir: &Path) -> usize {
+    let rows = manifest(dir);
+    assert!(!rows.is_empty(), "{}: empty manifest", dir.display());
+    let out = tempfile::tempdir().unwrap();
+    for row in &rows {
+        let path = dir.join(&row.file);
+        let name = &row.file;
+        if row.misoriented {
+            // meshio's reversed wedges: refused, and the message says why
+            let e = io::read(&path).expect_err(name).to_string();
+            assert!(e.contains(name) && e.contains("meshio") && e.contains("wedge"), "{e}");
+            continue;
+        }
+        let m = io::read(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.num_points(), row.points, "{name}: points");
+        assert_eq!(cell_counts(&m), row.cells, "{name}: cells by type");
+        for a in &row.arrays {
+            assert!(all_arrays(&m).any(|x| &x.name == a), "{name}: array '{a}' not kept");
+        }
+        if !row.groups.is_empty() {
+            let names: Vec<&str> = m.data.physical_names.iter().map(|p| p.name.as_str()).collect();
+            for g in &row.groups {
+                assert!(names.contains(&g.as_str()), "{name}: group {g} not in {names:?}");
+            }
+            let phys = m.data.cell_array(GMSH_PHYSICAL).expect("gmsh:physical");
+            assert!(
+                (0..m.num_elements()).all(|e| phys.get_i64(e) != 0),
+                "{name}: untagged element"
+            );
+        }
+        check_known_values(name, &m);
+        for f in Format::ALL {
+            let p = out.path().join(format!("{name}.{f}.{}", ext(f)));
+            io::write(&p, &m, f, &[]).unwrap_or_else(|e| panic!("{name} as {f}: {e}"));
+            let got = io::read(&p).unwrap_or_else(|e| panic!("{name} as {f}: {e}"));
+            let ctx = format!("{name} as {f}");
+            assert_eq!(got.points, m.points, "{ctx}: points");
+            assert_eq!(got.kinds, m.kinds, "{ctx}: kinds");
+            assert_eq!(got.conn, m.conn, "{ctx}: connectivity");
+            if is_vtk(f) {
+                // every array, exactly: names, types, components, values
+                assert_arrays_eq(&format!("{ctx}: point data"), &got.data.point, &m.data.point);
+                assert_arrays_eq(&format!("{ctx}: cell data"), &got.data.cell, &m.data.cell);
+                assert_arrays_eq(&format!("{ctx}: field data"), &got.data.field, &m.data.field);
+            } else if f != Format::Medit {
+                assert_eq!(got.data.physical_names, m.data.physical_names, "{ctx}: physical names");
+                for tag in [GMSH_PHYSICAL, GMSH_ELEMENTARY] {
+                    let want: Vec<i64> = match m.data.cell_array(tag) {
+                        Some(a) => (0..m.num_elements()).map(|e| a.get_i64(e)).collect(),
+                        None => vec![if tag == GMSH_PHYSICAL { 0 } else { 1 }; m.num_elements()],
+                    };
+                    let a = got.data.cell_array(tag).unwrap();
+                    let have: Vec<i64> = (0..got.num_elements()).map(|e| a.get_i64(e)).collect();
+                    assert_eq!(have, want, "{ctx}: {tag} of the elements");
+                    if let Some(a) = m.data.lower_array(tag) {
+                        let b = got.data.lower_array(tag).unwrap();
+                        for i in 0..m.lower.len() {
+                            assert_eq!(b.get_i64(i), a.get_i64(i), "{ctx}: {tag} of lower cell {i}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    rows.len()
+}
+
+/// Values VTK's files are known to hold (see the shared README): a
+/// 3-component velocity (1, 2, 3), a region id per cell, a string note.
+fn check_known_values(name: &str, m: &Mesh) {
+    if !name.contains("_x_") {
+        return;
+    }
+    let v = m.data.point.iter().find(|a| a.name == "velocity").unwrap();
+    assert_eq!((v.components, v.ty), (3, ValueType::F64), "{name}");
+    let Values::Float(vals) = &v.values else {
+        panic!("{name}: velocity")
+    };
+    assert!(vals.chunks(3).all(|c| c == [1.0, 2.0, 3.0]), "{name}: velocity values");
+    let r = m.data.cell_array("region").unwrap();
+    assert_eq!(r.ty, ValueType::I32, "{name}");
+    assert_eq!(
+        r.values,
+        Values::Int((0..m.num_elements() as i64).collect()),
+        "{name}: region"
+    );
+    let t = m.data.point.iter().find(|a| a.name == "temperature").unwrap();
+    assert_eq!(t.ty, ValueType::F32, "{name}");
+    let note = m.data.field.iter().find(|a| a.name == "note").unwrap();
+    assert_eq!(note.values, Values::Str(vec!["made by vtk".into()]), "{name}: note");
+    let time = m.data.field.iter().find(|a| a.name == "TimeValue").unwrap();
+    assert_eq!(time.values, Values::Float(vec![0.5]), "{name}: TimeValue");
+}
+
+#[test]
+fn local_copies_of_other_tools_files_round_trip_with_their_data() {
+    assert_eq!(check_folder(&local_dir()), 7);
+}
+
+#[test]
+fn every_shared_interop_file_round_trips_with_its_data() {
+    if let Some(dir) = shared_dir() {
+        assert!(check_folder(&dir) >= 38);
+    }
+}
+
+#[test]
+fn parsing_is_linear_in_the_number_of_elements() {
+    // 100k sibling DataArrays used to take 17 s (a line count from the start per tag)
+    let mut text = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\">\n<UnstructuredGrid>\n\
+         <Piece NumberOfPoints=\"4\" NumberOfCells=\"1\">\n<FieldData>\n",
+    );
+    for i in 0..100_000 {
+        text.push_str(&format!(
+            "<DataArray type=\"Int32\" Name=\"f{i}\" NumberOfTuples=\"1\" format=\"ascii\">{i}</DataArray>\n"
+        ));
+    }
+    text.push_str(
+        "</FieldData>\n<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\
+         0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points>\n<Cells>\
+         <DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">0 1 2 3</DataArray>\
+         <DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">4</DataArray>\
+         <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">10</DataArray></Cells>\n\
+         </Piece>\n</UnstructuredGrid>\n</VTKFile>\n",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("many.vtu");
+    std::fs::write(&p, &text).unwrap();
+    let t = std::time::Instant::now();
+    let m = io::read(&p).unwrap();
+    let secs = t.elapsed().as_secs_f64();
+    assert_eq!(m.data.field.len(), 100_000);
+    assert_eq!(m.data.field[99_999].values, Values::Int(vec![99_999]));
+    assert!(secs < 5.0, "reading 100k arrays took {secs:.1} s");
+}
+
+/// Cells keyed by their vertices' coordinates (node numbering may change;
+/// Gmsh prints 16 significant digits, so compare to 1e-9), with their
+/// physical tag; cells without a group are left out.
+fn groups_by_geometry(m: &Mesh) -> HashMap<Vec<[i64; 3]>, i64> {
+    let key = |vs: &[u32]| {
+        let mut k: Vec<[i64; 3]> = vs
+            .iter()
+            .map(|&v| m.points[v as usize].map(|x| (x * 1e9).round() as i64))
+            .collect();
+        k.sort_unstable();
+        k
+    };
+    let mut out = HashMap::new();
+    if let Some(a) = m.data.cell_array(GMSH_PHYSICAL) {
+        for e in 0..m.num_elements() {
+            if a.get_i64(e) != 0 {
+                out.insert(key(m.element(e)), a.get_i64(e));
+            }
+        }
+    }
+    if let Some(a) = m.data.lower_array(GMSH_PHYSICAL) {
+        for (i, (_, vs)) in m.lower.iter().enumerate() {
+            if a.get_i64(i) != 0 {
+                out.insert(key(vs), a.get_i64(i));
+            }
+        }
+    }
+    out
+}
+
+fn gmsh_available() -> bool {
+    let ok = Command::new("gmsh")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success() || !o.stderr.is_empty() || !o.stdout.is_empty());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "gmsh is not installed, and CI must run the Gmsh read-back test (see .ci/install-test-deps)"
+        );
+        eprintln!("skipping the Gmsh read-back test: gmsh is not installed (apt-get install gmsh)");
+    }
+    ok
+}
+
+/// Gmsh loads every `.msh` meshsmooth writes (`-check`), and saves it again
+/// with the same physical groups on the same cells.
+#[test]
+fn gmsh_reads_back_every_msh_meshsmooth_writes() {
+    if !gmsh_available() {
+        return;
+    }
+    let mut sources = vec![local_dir().join("gmsh_box_phys_msh41a.msh")];
+    if let Some(d) = shared_dir() {
+        for f in [
+            "gmsh_box_phys_msh22a.msh",
+            "gmsh_box_phys_msh41b.msh",
+            "meshio_tetbox_vtu_zlib.vtu",
+            "meshio_trirect_vtu_zlib.vtu",
+        ] {
+            sources.push(d.join(f));
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for src in &sources {
+        let m = io::read(src).unwrap();
+        let want = groups_by_geometry(&m);
+        assert!(!want.is_empty(), "{}: no groups", src.display());
+        for f in [
+            Format::Msh22Ascii,
+            Format::Msh22Binary,
+            Format::Msh41Ascii,
+            Format::Msh41Binary,
+        ] {
+            let name = src.file_name().unwrap().to_string_lossy().to_string();
+            let out = dir.path().join(format!("{name}.{f}.msh"));
+            io::write(&out, &m, f, &[]).unwrap();
+            let check = Command::new("gmsh").arg(&out).arg("-check").output().unwrap();
+            let log = String::from_utf8_lossy(&check.stdout).to_string() + &String::from_utf8_lossy(&check.stderr);
+            assert!(
+                check.status.success() && !log.contains("Error"),
+                "{name} as {f}: gmsh -check failed:\n{log}"
+            );
+            let resaved = dir.path().join(format!("{name}.{f}.resaved.msh"));
+            let save = Command::new("gmsh")
+                .arg(&out)
+                .args(["-save", "-format", "msh22", "-o"])
+                .arg(&resaved)
+                .output()
+                .unwrap();
+            let log = String::from_utf8_lossy(&save.stdout).to_string() + &String::from_utf8_lossy(&save.stderr);
+            assert!(
+                save.status.success() && !log.contains("Error"),
+                "{name} as {f}: gmsh -save:\n{log}"
+            );
+            let back = io::read(&resaved).unwrap_or_else(|e| panic!("{name} as {f}, saved by Gmsh: {e}"));
+            assert_eq!(groups_by_geometry(&back), want, "{name} as {f}: groups after Gmsh");
+            let mut names = back.data.physical_names.clone();
+            let mut want_names = m.data.physical_names.clone();
+            names.sort_by_key(|p| (p.dim, p.tag));
+            want_names.sort_by_key(|p| (p.dim, p.tag));
+            assert_eq!(names, want_names, "{name} as {f}: physical names after Gmsh");
+        }
+    }
+}
+
+fn meshsmooth(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The arrays of a VTK file survive a smoothing run, next to the quality
+/// array; `--drop-data` writes the bare mesh.
+#[test]
+fn smoothing_keeps_every_array_unless_told_not_to() {
+    let src = local_dir().join("vtk_tri_x_xml_default.vtu");
+    let m = io::read(&src).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for (fmt, ext) in [("vtu-zlib", "vtu"), ("vtk-binary", "vtk"), ("vtu", "vtu")] {
+        let out = dir.path().join(format!("out-{fmt}.{ext}"));
+        let o = meshsmooth(&[
+            "smooth".as_ref(),
+            src.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--format".as_ref(),
+            fmt.as_ref(),
+            "--device".as_ref(),
+            "cpu".as_ref(),
+            "--max-iter".as_ref(),
+            "3".as_ref(),
+            "-q".as_ref(),
+        ]);
+        assert!(o.status.success(), "{fmt}: {}", String::from_utf8_lossy(&o.stderr));
+        let got = io::read(&out).unwrap();
+        assert_arrays_eq(&format!("{fmt}: point data"), &got.data.point, &m.data.point);
+        assert_arrays_eq(&format!("{fmt}: field data"), &got.data.field, &m.data.field);
+        assert_arrays_eq(&format!("{fmt}: cell data"), &got.data.cell[..1], &m.data.cell);
+        let q = got.data.cell_array("inverse_mean_ratio").expect("quality array");
+        assert!(
+            (0..got.num_elements()).all(|e| q.get_f64(e) >= 1.0),
+            "{fmt}: quality values"
+        );
+        assert_ne!(got.points, m.points, "{fmt}: the mesh was smoothed");
+    }
+    let bare = dir.path().join("bare.vtu");
+    let o = meshsmooth(&[
+        "smooth".as_ref(),
+        src.as_os_str(),
+        "-o".as_ref(),
+        bare.as_os_str(),
+        "--drop-data".as_ref(),
+        "--device".as_ref(),
+        "cpu".as_ref(),
+        "--max-iter".as_ref(),
+        "1".as_ref(),
+        "-q".as_ref(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got = io::read(&bare).unwrap();
+    assert!(got.data.point.is_empty() && got.data.field.is_empty());
+    let names: Vec<&str> = got.data.cell.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["inverse_mean_ratio"]);
+}
+
+#[test]
+fn data_arrays_follow_a_reordering() {
+    let mut m = io::read(&local_dir().join("vtk_tri_x_leg42b.vtk")).unwrap();
+    let n = m.num_points();
+    let order: Vec<usize> = (0..n).rev().collect();
+    let before = m.data.point.clone();
+    m.data.permute_points(&order);
+    for (a, b) in m.data.point.iter().zip(&before) {
+        let k = a.components;
+        for i in 0..n {
+            for c in 0..k {
+                assert_eq!(a.get_f64(i * k + c).to_bits(), b.get_f64((n - 1 - i) * k + c).to_bits());
+            }
+        }
+    }
+}
