@@ -2,7 +2,7 @@
 //! write it. Run: cargo run --release --example smooth_file -- IN.vtk OUT.vtk
 //! (without arguments it writes and smooths a perturbed box in a temp folder).
 
-use meshsmooth::solve::{self, Method, Params};
+use meshsmooth::solve::{self, Method, Options, Params};
 
 fn main() -> meshsmooth::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -25,19 +25,16 @@ fn main() -> meshsmooth::Result<()> {
     // -- the README example --
     let mut mesh = meshsmooth::io::read(&input)?;
     let before = meshsmooth::report::quality_report(&mesh, &mesh.points);
-    let info = solve::smooth_mesh(
-        &mut mesh,
-        &Default::default(),
-        &solve::Options::cpu(Method::Newton, &Params::default()),
-        &mut |rec| {
-            eprintln!("iteration {}: F = {:.8}", rec.iteration, rec.objective);
-            true // return false to stop early
-        },
-    )?;
+    let opts = Options::cpu(Method::Newton, &Params::default());
+    let info = solve::smooth_mesh(&mut mesh, &Default::default(), &opts, &mut |rec| {
+        eprintln!("iteration {}: F = {:.8}", rec.iteration, rec.objective);
+        true // return false to stop early
+    })?;
     let after = meshsmooth::report::quality_report(&mesh, &mesh.points);
     println!(
         "{before}\n{after}\n{:?} after {} iterations",
         info.stop, info.iterations
     );
-    meshsmooth::io::write(&output, &mesh, meshsmooth::io::Format::VtkAscii, &[])
+    // refuses to write an inverted element; adds the quality as cell data
+    meshsmooth::io::write_mesh(&output, &mesh, meshsmooth::io::Format::VtkAscii)
 }
