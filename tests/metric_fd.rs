@@ -1,11 +1,9 @@
 //! Finite-difference checks of the analytic metric derivatives, known values,
 //! and invariances of the inverse mean ratio.
 
+mod common;
+use common::Tet;
 use meshsmooth::metric::{TetShape, tet_det};
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-
-type Tet = [[f64; 3]; 4];
 
 fn regular_tet() -> Tet {
     [
@@ -16,28 +14,10 @@ fn regular_tet() -> Tet {
     ]
 }
 
-/// Random positively oriented tets; `flatten` squeezes z to make poor shapes.
+/// Random positively oriented tets; `flatten` squeezes z to make poor shapes:
+/// badly shaped, but not so close to degenerate that finite differences lose all digits.
 fn random_tets(seed: u64, count: usize, flatten: f64) -> Vec<Tet> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut out = Vec::new();
-    while out.len() < count {
-        let mut t: Tet = [[0.0; 3]; 4];
-        for v in t.iter_mut() {
-            for c in v.iter_mut() {
-                *c = rng.random_range(-1.0..1.0);
-            }
-            v[2] *= flatten;
-        }
-        if tet_det(&t) < 0.0 {
-            t.swap(1, 2);
-        }
-        // badly shaped, but not so close to degenerate that finite differences lose all digits
-        let eta = TetShape::equilateral().value(&t).unwrap_or(f64::INFINITY);
-        if eta < 200.0 {
-            out.push(t);
-        }
-    }
-    out
+    common::random_tets(seed, count, flatten, 200.0)
 }
 
 fn max_edge_sq(x: &Tet) -> f64 {

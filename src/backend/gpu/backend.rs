@@ -193,13 +193,17 @@ impl<'c> GpuBackend<'c> {
         ctx.dispatch(&mut pass, v, &self.groups[&key], Some(offset as u32), threads)
     }
 
-    fn copy(&mut self, src: Buf, dst: Buf) {
+    /// The encoder operations are recorded into, started on first use.
+    fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
         let ctx = self.ctx;
+        self.encoder
+            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()))
+    }
+
+    fn copy(&mut self, src: Buf, dst: Buf) {
         let size = self.buf(src).size().min(self.buf(dst).size());
-        let enc = self
-            .encoder
-            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
-        enc.copy_buffer_to_buffer(&self.bufs[&src], 0, &self.bufs[&dst], 0, size);
+        let (src, dst) = (self.bufs[&src].clone(), self.bufs[&dst].clone());
+        self.encoder().copy_buffer_to_buffer(&src, 0, &dst, 0, size);
     }
 
     /// Submits what was recorded (the `Op` records go first).
@@ -430,11 +434,8 @@ impl Backend for GpuBackend<'_> {
         )?;
         self.reduce(None, None, Some(out), None, groups_of(nv))?;
         // "since the last call": the next colours start from no move
-        let ctx = self.ctx;
-        let enc = self
-            .encoder
-            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
-        enc.clear_buffer(&self.bufs[&Buf::Moves], 0, None);
+        let moves = self.bufs[&Buf::Moves].clone();
+        self.encoder().clear_buffer(&moves, 0, None);
         Ok(())
     }
 
@@ -588,10 +589,8 @@ impl Backend for GpuBackend<'_> {
     fn flush(&mut self) -> Result<[f64; N_SLOTS]> {
         let ctx = self.ctx;
         let size = N_SLOTS as u64 * ctx.real_size();
-        let enc = self
-            .encoder
-            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
-        enc.copy_buffer_to_buffer(&self.bufs[&Buf::Scalars], 0, &self.staging, 0, size);
+        let (scalars, staging) = (self.bufs[&Buf::Scalars].clone(), self.staging.clone());
+        self.encoder().copy_buffer_to_buffer(&scalars, 0, &staging, 0, size);
         self.submit()?;
         let v = ctx.map_read(&self.staging, N_SLOTS)?;
         let mut out = [0.0; N_SLOTS];
