@@ -235,6 +235,31 @@ fn check_block_jacobi(pair: &mut Pair, c: &Case, tol: f64) {
     assert!(e <= tol, "{}: M^-1 u differs by {e:.1e}", c.name);
 }
 
+fn check_block_jacobi_factor(pair: &mut Pair, c: &Case, tol: f64) {
+    assembled(pair, c);
+    pair.both(|be| be.factor_precond().unwrap());
+    let g = pair.gpu.block_jacobi_factors().unwrap();
+    let cf = pair.cpu.block_jacobi_factors().unwrap();
+    assert_eq!(g.len(), cf.len());
+    // each factor against the largest of its block's (l and 1/d scale differently)
+    for (i, (a, b)) in g.iter().zip(cf).enumerate() {
+        for k in 0..6 {
+            let scale = if k < 3 {
+                1.0f64.max(b[..3].iter().fold(0.0, |m, v| m.max(v.abs())))
+            } else {
+                b[k].abs()
+            };
+            assert!(
+                (a[k] - b[k]).abs() <= tol * scale,
+                "{}: block {i} factor {k}: {} vs {}",
+                c.name,
+                a[k],
+                b[k]
+            );
+        }
+    }
+}
+
 fn check_dot(pair: &mut Pair, c: &Case, tol: f64) {
     let n = c.p.free_vertices.len();
     let v = pair.vectors(&[random_vec(n, 4), random_vec(n, 5)]);
@@ -364,6 +389,7 @@ kernel_tests! {
     check_hessian_assemble: hessian_assemble_matches_cpu_f32(1e-4), hessian_assemble_matches_cpu_f64(1e-12);
     check_hessian_gather: hessian_gather_matches_cpu_f32(1e-4), hessian_gather_matches_cpu_f64(1e-12);
     check_bsr_spmv: bsr_spmv_matches_cpu_f32(1e-4), bsr_spmv_matches_cpu_f64(1e-12);
+    check_block_jacobi_factor: block_jacobi_factor_matches_cpu_f32(1e-3), block_jacobi_factor_matches_cpu_f64(1e-11);
     check_block_jacobi: block_jacobi_matches_cpu_f32(1e-3), block_jacobi_matches_cpu_f64(1e-11);
     check_dot: dot_matches_cpu_f32(1e-6), dot_matches_cpu_f64(1e-15);
     check_axpby: axpby_matches_cpu_f32(1e-6), axpby_matches_cpu_f64(1e-15);

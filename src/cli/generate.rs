@@ -1,7 +1,7 @@
 //! `meshsmooth generate`: the test meshes of the papers, written to a file.
 
 use super::commands::output_format;
-use super::{GenerateCommand, OutputArgs, PerturbArgs};
+use super::{BoxType, GenerateCommand, GridType, OutputArgs, PerturbArgs};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::write_mesh;
 use meshsmooth::{ElementKind, Error, Mesh, Result};
@@ -64,7 +64,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             positive(&a.cells, "--cells")?;
             let [nx, ny, nz] = [a.cells[0], a.cells[1], a.cells[2]];
             let lengths = [nx as f64, ny as f64, nz as f64];
-            let mut mesh = if a.kind == "hex" {
+            let mut mesh = if a.kind == BoxType::Hex {
                 generate::hex_box(nx, ny, nz, lengths)
             } else {
                 generate::tet_box(nx, ny, nz, lengths)
@@ -76,7 +76,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             positive(&a.cells, "--cells")?;
             let (nx, ny) = (a.cells[0], a.cells[1]);
             let lengths = [nx as f64, ny as f64];
-            let mut mesh = if a.kind == "tri" {
+            let mut mesh = if a.kind == GridType::Tri {
                 generate::tri_grid(nx, ny, lengths)
             } else {
                 generate::quad_grid(nx, ny, lengths)
@@ -91,8 +91,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             save(&a.out, &mesh)
         }
         GenerateCommand::Horseshoe(a) => {
-            let kind: generate::HorseshoeKind = a.kind.parse()?;
-            let (mesh, reference) = generate::horseshoe(kind, a.free.max(1));
+            let (mesh, reference) = generate::horseshoe(a.kind, a.free.max(1));
             save(&a.out, &mesh)?;
             if let Some(r) = &a.reference_output {
                 save(

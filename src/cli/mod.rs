@@ -9,6 +9,7 @@ mod progress;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use meshsmooth::backend::gpu::Precision;
+use meshsmooth::generate::HorseshoeKind;
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::Ordering;
@@ -100,6 +101,20 @@ pub struct SolverArgs {
     /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
     #[arg(long, value_enum, default_value_t = NewtonParams::default().negative_curvature)]
     pub negative_curvature: NegativeCurvature,
+}
+
+/// Cells of a generated box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BoxType {
+    Tet,
+    Hex,
+}
+
+/// Cells of a generated grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GridType {
+    Quad,
+    Tri,
 }
 
 /// Where a solve runs.
@@ -239,8 +254,8 @@ pub struct BoxArgs {
     #[arg(long, num_args = 3, value_names = ["NX", "NY", "NZ"], required = true)]
     pub cells: Vec<usize>,
     /// Element kind.
-    #[arg(long = "type", default_value = "tet", value_parser = ["tet", "hex"])]
-    pub kind: String,
+    #[arg(long = "type", value_enum, default_value_t = BoxType::Tet)]
+    pub kind: BoxType,
     #[command(flatten)]
     pub perturb: PerturbArgs,
     #[command(flatten)]
@@ -251,8 +266,8 @@ pub struct BoxArgs {
 pub struct GridArgs {
     #[arg(long, num_args = 2, value_names = ["NX", "NY"], required = true)]
     pub cells: Vec<usize>,
-    #[arg(long = "type", default_value = "quad", value_parser = ["quad", "tri"])]
-    pub kind: String,
+    #[arg(long = "type", value_enum, default_value_t = GridType::Quad)]
+    pub kind: GridType,
     #[command(flatten)]
     pub perturb: PerturbArgs,
     #[command(flatten)]
@@ -272,8 +287,8 @@ pub struct DuctArgs {
 #[derive(Args, Debug)]
 pub struct HorseshoeArgs {
     /// sqi, sqii, sqiv (structured quads 1:1, 1:5, biased 1:5), uti, utiv (triangles, biased).
-    #[arg(long, default_value = "sqi")]
-    pub kind: String,
+    #[arg(long, value_enum, default_value_t = HorseshoeKind::SqI)]
+    pub kind: HorseshoeKind,
     /// About this many free vertices.
     #[arg(long, default_value_t = 20_000)]
     pub free: usize,

@@ -78,17 +78,22 @@ const MIN_ALONG: usize = 8;
 const R_CENTRE: f64 = R_IN + 0.5 * WIDTH;
 
 /// The five mesh types of the paper's Table 1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum HorseshoeKind {
     /// Structured quads, 1:1 cells.
+    #[value(name = "sqi")]
     SqI,
     /// Structured quads, 1:5 cells.
+    #[value(name = "sqii")]
     SqII,
     /// Structured quads, 1:5 cells biased toward the inner wall.
+    #[value(name = "sqiv")]
     SqIV,
     /// Unstructured triangles on a trapezoidal logical domain.
+    #[value(name = "uti")]
     UtI,
     /// Unstructured triangles, biased toward the inner wall.
+    #[value(name = "utiv")]
     UtIV,
 }
 
@@ -127,15 +132,7 @@ impl FromStr for HorseshoeKind {
 
     /// Case-insensitive: "sqi", "sqii", "sqiv", "uti", "utiv".
     fn from_str(s: &str) -> Result<Self> {
-        let lower = s.trim().to_ascii_lowercase();
-        HorseshoeKind::ALL
-            .into_iter()
-            .find(|k| k.name() == lower)
-            .ok_or_else(|| {
-                Error::InvalidArgument(format!(
-                    "unknown horseshoe mesh type '{s}'; expected sqi, sqii, sqiv, uti or utiv"
-                ))
-            })
+        <Self as clap::ValueEnum>::from_str(s.trim(), true).map_err(Error::InvalidArgument)
     }
 }
 

@@ -105,6 +105,11 @@ impl<'p> CpuBackend<'p> {
         }
     }
 
+    /// The block-Jacobi factors (after `factor_precond`), for tests.
+    pub fn block_jacobi_factors(&self) -> Option<&[[f64; 6]]> {
+        self.precond.as_ref().map(|m| m.factors())
+    }
+
     /// The assembled Hessian (after `assemble`), for tests.
     pub fn hessian(&self) -> Option<&HessianPattern> {
         self.hessian.as_ref()

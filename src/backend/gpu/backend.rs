@@ -248,6 +248,16 @@ impl<'c> GpuBackend<'c> {
         Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
+    /// The block-Jacobi factors (after `factor_precond`), as `BlockJacobi::factors`.
+    pub fn block_jacobi_factors(&mut self) -> Result<Vec<[f64; 6]>> {
+        self.submit()?;
+        let flat = self.ctx.read_real(self.buf(Buf::Factors), 6 * self.n_free)?;
+        Ok(flat
+            .chunks_exact(6)
+            .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
+            .collect())
+    }
+
     /// The assembled Hessian blocks, in the order of `HessianPattern::matrix.blocks`.
     pub fn hessian_blocks(&mut self) -> Result<Vec<crate::metric::mat3::Mat3>> {
         self.submit()?;

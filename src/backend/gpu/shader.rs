@@ -504,4 +504,27 @@ mod tests {
             assert!(!def.source.contains("stride >>= 1u"), "{} has its own tree", def.stem);
         }
     }
+
+    #[test]
+    fn every_kernel_has_a_same_stem_cpu_twin_and_tests() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let tests: String = ["tests/kernels.rs", "tests/gpu_matches_cpu.rs"]
+            .iter()
+            .map(|f| std::fs::read_to_string(root.join(f)).unwrap())
+            .collect();
+        for (_, def) in KERNELS {
+            let twin = root.join(format!("src/backend/cpu/{}.rs", def.stem));
+            assert!(twin.exists(), "{} has no CPU twin at {}", def.stem, twin.display());
+            for p in ["f32", "f64"] {
+                let name = format!("fn {}_matches_cpu_{p}", def.stem);
+                let by_macro = format!("{}_matches_cpu_{p}(", def.stem);
+                assert!(
+                    tests.contains(&name) || tests.contains(&by_macro),
+                    "{} has no test {}_matches_cpu_{p}",
+                    def.stem,
+                    def.stem
+                );
+            }
+        }
+    }
 }
