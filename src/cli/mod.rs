@@ -139,7 +139,8 @@ pub struct GpuArgs {
 /// When a solver stops.
 #[derive(Args, Debug, Clone)]
 pub struct StopArgs {
-    /// Stop when the 2-norm of the objective's gradient falls below this.
+    /// Stop when the 2-norm of the objective's gradient, with lengths measured in mean
+    /// edge lengths (unit-free, like the objective), falls below this.
     #[arg(long, default_value_t = Params::default().tol)]
     pub tol: f64,
     /// Most sweeps (bcd, laplace) or iterations (newton).

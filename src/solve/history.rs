@@ -11,6 +11,8 @@ pub struct Record {
     /// Seconds since the solver started (setup excluded).
     pub seconds: f64,
     pub objective: f64,
+    /// 2-norm of the free gradient of F with lengths in mean edge lengths
+    /// (unit-free; the quantity `Params::tol` bounds).
     pub grad_norm: f64,
 }
 

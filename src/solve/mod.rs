@@ -17,6 +17,7 @@ use crate::backend::Backend;
 use crate::backend::cpu::CpuBackend;
 use crate::backend::gpu::{GpuBackend, GpuContext};
 use crate::error::{Error, Result};
+use crate::mesh::frame::Frame;
 use crate::metric::mat3::Vec3;
 use crate::problem::{Problem, ProblemOptions};
 use line_search::LineSearch;
@@ -85,7 +86,9 @@ impl Default for LaplaceParams {
 /// Termination (shared by every method) and each method's own settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
-    /// Stop when the 2-norm of the free-vertex gradient of F is below this.
+    /// Stop when the 2-norm of the free-vertex gradient of F, with lengths
+    /// measured in mean edge lengths of the start (so unit-free, like F), is
+    /// below this.
     pub tol: f64,
     /// Most sweeps (BCD, Laplace) or iterations (Newton).
     pub max_iter: usize,
@@ -231,12 +234,16 @@ pub fn run<B: Backend + ?Sized>(
     };
     let start = Instant::now();
     let deadline = params.time_limit.map(|t| start + t);
+    // F is unit-free; its gradient scales as 1/length: measured in mean edge
+    // lengths it is unit-free too, and so is the stopping test
     let edge = p.mean_edge_length(x);
+    let unit_free = |(f, g): (f64, f64)| (f, g * edge);
     let first = match &mut solver {
         Solver::Bcd(b) => b.start(be)?,
         Solver::Newton(n) => n.start(be)?,
         Solver::Laplace(l) => l.start(be)?,
     }
+    .map(unit_free)
     .ok_or_else(|| {
         Error::Gpu(format!(
             "the device ({}) finds inverted elements the CPU does not (f32 rounding of a nearly flat element?)",
@@ -256,11 +263,12 @@ pub fn run<B: Backend + ?Sized>(
             if opts.fail_after.is_some_and(|n| steps >= n) {
                 return Err(Error::Gpu("device lost (simulated for testing)".into()));
             }
-            let sweep = match &mut solver {
+            let mut sweep = match &mut solver {
                 Solver::Bcd(b) => b.step(be, deadline)?,
                 Solver::Newton(n) => n.step(be)?,
                 Solver::Laplace(l) => l.step(be, deadline)?,
             };
+            sweep.grad_norm *= edge;
             steps += 1;
             if opts.checkpoint_every.is_some_and(|k| steps % k.max(1) == 0) {
                 checkpoint = Some(be.download()?);
@@ -418,18 +426,42 @@ fn iterate(
 }
 
 /// Smooths `mesh` in place (the library's one-call entry point): builds the
-/// problem with `problem` (metric, template, reference), checks the start is
-/// feasible, runs `opts` and writes the optimised positions back in the
-/// mesh's own vertex numbering (on a failure midway, the last checkpoint).
+/// problem with `problem` (metric, template, reference, ordering), checks the
+/// start is feasible, runs `opts` and writes the optimised positions back in
+/// the mesh's own vertex numbering (on a failure midway, the last checkpoint).
+///
+/// The solve runs in the mesh's `Frame` (centred, scaled by a power of two),
+/// so the answer does not depend on the units or the position of the mesh;
+/// only the coordinates a solver moves are written back (fixed vertices and
+/// the constant coordinate of a planar mesh keep their bits).
 pub fn smooth_mesh(
     mesh: &mut Mesh,
     problem: &ProblemOptions,
     opts: &Options,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    let p = Problem::with_options(mesh, problem)?;
-    let mut x = p.gather(&mesh.points);
+    let frame = Frame::of(&mesh.points);
+    let local = |m: &Mesh| -> Vec<Vec3> { m.points.iter().map(|q| frame.to_local(q)).collect() };
+    let reference = problem.reference.map(|r| Mesh {
+        points: local(r),
+        ..r.clone()
+    });
+    let problem = ProblemOptions {
+        reference: reference.as_ref(),
+        ..*problem
+    };
+    let in_frame = local(mesh);
+    let original = std::mem::replace(&mut mesh.points, in_frame);
+    let built = Problem::with_options(mesh, &problem);
+    let local_points = std::mem::replace(&mut mesh.points, original);
+    let p = built?;
+    let mut x = p.gather(&local_points);
     let result = solve(&p, &mut x, opts, progress);
-    mesh.points = p.scatter(&x);
+    for (new, &old) in p.order.iter().enumerate() {
+        if p.free[new] {
+            let global = frame.to_global(&x[new]);
+            mesh.points[old as usize][..p.dim].copy_from_slice(&global[..p.dim]);
+        }
+    }
     result
 }
