@@ -5,6 +5,7 @@
 
 use crate::Mesh;
 use crate::error::Result;
+use crate::mesh::plane::{Plane, in_plane};
 use crate::mesh::topology;
 use crate::metric::corner_model::{Model, Template};
 use crate::metric::mat3::Vec3;
@@ -44,12 +45,13 @@ pub fn element_values(
         ..Default::default()
     };
     problem::check(mesh, points, &opts)?;
-    let corners = problem::corners(mesh, points, &opts, &Numbering::identity(mesh))?;
+    let points = in_plane(Plane::fit(mesh, points)?.as_ref(), points);
+    let corners = problem::corners(mesh, &points, &opts, &Numbering::identity(mesh))?;
     let model = Model {
         metric,
         template: opts.template,
     };
-    Ok(corners.element_values(&model, points, mesh.num_elements()))
+    Ok(corners.element_values(&model, &points, mesh.num_elements()))
 }
 
 pub fn metric_summary(

@@ -5,6 +5,7 @@ pub mod data;
 pub mod element;
 pub mod frame;
 pub mod order;
+pub mod plane;
 pub mod topology;
 
 pub use data::{DataArray, MeshData, PhysicalName, ValueType, Values};

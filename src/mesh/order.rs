@@ -56,7 +56,10 @@ impl std::str::FromStr for Ordering {
 /// are started in turn from their own farthest vertex. Returns `order[new] = old`.
 pub fn reverse_bfs(points: &[[f64; 3]], neighbours: &Csr, boundary: &[bool]) -> Vec<u32> {
     let n = points.len();
-    let dist2 = |v: usize| points[v].iter().map(|c| c * c).sum::<f64>();
+    // distances from the bounding-box centre, so that the order does not
+    // depend on where the mesh sits
+    let center = crate::mesh::frame::Frame::of(points).center;
+    let dist2 = |v: usize| (0..3).map(|k| (points[v][k] - center[k]).powi(2)).sum::<f64>();
     // candidates for BFS roots: boundary vertices first, farthest first
     let mut roots: Vec<u32> = (0..n as u32).collect();
     roots.sort_by(|&a, &b| {

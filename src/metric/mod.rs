@@ -53,10 +53,18 @@ pub fn is_clockwise(mesh: &Mesh, points: &[Vec3]) -> bool {
     }
 }
 
-/// `points`, mirrored (y -> -y, exact) for clockwise planar meshes so that
-/// their well-shaped elements have positive corner determinants; shape
-/// metrics do not change under the mirror.
+/// `points` as the checks and reports read them: a planar mesh in its
+/// plane's 2D coordinates (`mesh::plane`), mirrored (y -> -y, exact) when it
+/// lies in a plane z = constant wound clockwise, so that well-shaped elements
+/// have positive corner determinants; shape metrics do not change under
+/// either map.
 pub fn oriented<'a>(mesh: &Mesh, points: &'a [Vec3]) -> std::borrow::Cow<'a, [Vec3]> {
+    // a planar mesh outside the planes z = constant, in its plane's
+    // coordinates (counterclockwise by construction); one that is not flat
+    // is read as its xy projection here and refused by every solve
+    if let Ok(Some(plane)) = crate::mesh::plane::Plane::fit(mesh, points) {
+        return std::borrow::Cow::Owned(points.iter().map(|p| plane.to_plane(p)).collect());
+    }
     if is_clockwise(mesh, points) {
         std::borrow::Cow::Owned(points.iter().map(|p| [p[0], -p[1], p[2]]).collect())
     } else {

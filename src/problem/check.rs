@@ -1,9 +1,10 @@
-//! Stage 1, check: the mesh has elements, a planar mesh lies in a plane
-//! z = constant, and the options fit each other and the mesh.
+//! Stage 1, check: the mesh has elements, a planar mesh is flat, and the
+//! options fit each other and the mesh.
 
 use super::ProblemOptions;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
+use crate::mesh::plane::Plane;
 use crate::metric::corner_model::Template;
 use crate::metric::mat3::Vec3;
 use crate::metric::smetric::MetricKind;
@@ -14,23 +15,9 @@ pub fn check(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions) -> Result<()> 
     if mesh.num_elements() == 0 {
         return Err(Error::InvalidMesh("mesh has no elements".into()));
     }
-    if mesh.dim() == 2 {
-        check_planar(points)?;
-    }
+    // a planar mesh must be flat (in any plane)
+    Plane::fit(mesh, points)?;
     opts.check(mesh)
-}
-
-/// A planar mesh must lie in a plane z = constant: only x and y move.
-fn check_planar(points: &[Vec3]) -> Result<()> {
-    let z = points[0][2];
-    match points.iter().position(|p| p[2] != z) {
-        None => Ok(()),
-        Some(v) => Err(Error::Unsupported(format!(
-            "planar mesh not parallel to the xy plane (vertex 0 has z = {z}, vertex {v} has z = {}); \
-             rotate it into a plane z = constant first",
-            points[v][2]
-        ))),
-    }
 }
 
 impl ProblemOptions<'_> {
@@ -90,14 +77,17 @@ mod tests {
     use crate::generate;
 
     #[test]
-    fn check_refuses_a_tilted_planar_mesh_and_a_mismatched_reference() {
+    fn check_refuses_a_bent_planar_mesh_and_a_mismatched_reference() {
         let mut m = generate::quad_grid(2, 2, [1.0, 1.0]);
         let opts = ProblemOptions::default();
         assert!(check(&m, &m.points, &opts).is_ok());
         let mut tilted = m.points.clone();
         tilted[4][2] = 0.5;
         let err = check(&m, &tilted, &opts).unwrap_err().to_string();
-        assert!(err.contains("vertex 4 has z = 0.5"), "{err}");
+        assert!(
+            err.contains("not flat") && err.contains("off the best-fitting plane"),
+            "{err}"
+        );
         let other = generate::quad_grid(3, 2, [1.0, 1.0]);
         let with_ref = ProblemOptions {
             reference: Some(&other),

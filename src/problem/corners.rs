@@ -6,6 +6,7 @@
 use super::ProblemOptions;
 use super::numbering::Numbering;
 use crate::error::{Error, Result};
+use crate::mesh::plane::{Plane, in_plane};
 use crate::mesh::{ElementKind, Mesh};
 use crate::metric::corner::ideal_corner;
 use crate::metric::corner_model::{CornerShape, Model};
@@ -75,6 +76,11 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
         shapes: Vec::new(),
     };
     let mut shape_ids: HashMap<[u64; 12], u32> = HashMap::new();
+    // a planar reference in its own plane's coordinates, as the mesh is in its
+    let reference = match opts.reference {
+        Some(r) => Some((r, in_plane(Plane::fit(r, &r.points)?.as_ref(), &r.points))),
+        None => None,
+    };
     for (new_e, &old_e) in numbering.elem_order.iter().enumerate() {
         let old_e = old_e as usize;
         let kind = mesh.kinds[old_e];
@@ -82,8 +88,8 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
         let rvs = opts.reference.map(|r| element_vertices(r, old_e, flip));
         let used = kind.optimised_corners();
         for c in used {
-            let w = match (opts.reference, &rvs) {
-                (Some(r), Some(rvs)) => corner_matrix(&r.points, rvs, c, dim),
+            let w = match (&reference, &rvs) {
+                (Some((_, rp)), Some(rvs)) => corner_matrix(rp, rvs, c, dim),
                 _ => ideal_corner(kind),
             };
             let shape = CornerShape::from_w(&w, dim).ok_or_else(|| {

@@ -32,6 +32,7 @@ pub use numbering::{MeshGraph, Numbering, order};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 pub use crate::mesh::order::Ordering;
+use crate::mesh::plane::{Plane, in_plane};
 use crate::mesh::topology::Csr;
 use crate::metric::corner_model::{CornerShape, Model, Template};
 use crate::metric::mat3::{Vec3, sub};
@@ -84,6 +85,9 @@ pub struct Problem {
     /// Colour classes of the free vertices: no two vertices of a class share an
     /// element. Each class is in sweep order.
     pub colors: Csr,
+    /// The plane of a planar mesh outside the planes z = constant: positions
+    /// are in its coordinates (`gather` maps into them, `scatter` back).
+    pub plane: Option<Plane>,
     /// Time spent building this problem.
     pub setup_time: Duration,
 }
@@ -98,9 +102,11 @@ impl Problem {
     pub fn with_options(mesh: &Mesh, opts: &ProblemOptions) -> Result<Problem> {
         let start = Instant::now();
         check(mesh, &mesh.points, opts)?;
+        let plane = Plane::fit(mesh, &mesh.points)?;
+        let points = in_plane(plane.as_ref(), &mesh.points);
         let graph = MeshGraph::of(mesh);
         let numbering = order(mesh, &graph, opts.ordering);
-        let corners = corners(mesh, &mesh.points, opts, &numbering)?;
+        let corners = corners(mesh, &points, opts, &numbering)?;
         let adj = adjacency(mesh, &graph, &numbering, &corners);
         let colors = colours(&adj);
         Ok(Problem {
@@ -122,6 +128,7 @@ impl Problem {
             free: adj.free,
             free_vertices: adj.free_vertices,
             colors,
+            plane,
             setup_time: start.elapsed(),
         })
     }
@@ -153,6 +160,7 @@ impl Problem {
 
     /// Mesh positions gathered into the problem's numbering.
     pub fn gather(&self, points: &[Vec3]) -> Vec<Vec3> {
+        let points = in_plane(self.plane.as_ref(), points);
         self.order.iter().map(|&o| points[o as usize]).collect()
     }
 
@@ -160,7 +168,10 @@ impl Problem {
     pub fn scatter(&self, x: &[Vec3]) -> Vec<Vec3> {
         let mut out = vec![[0.0; 3]; x.len()];
         for (new, &old) in self.order.iter().enumerate() {
-            out[old as usize] = x[new];
+            out[old as usize] = match &self.plane {
+                Some(pl) => pl.from_plane(&x[new]),
+                None => x[new],
+            };
         }
         out
     }

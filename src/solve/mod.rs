@@ -431,9 +431,10 @@ fn iterate(
 /// the mesh's own vertex numbering (on a failure midway, the last checkpoint).
 ///
 /// The solve runs in the mesh's `Frame` (centred, scaled by a power of two),
-/// so the answer does not depend on the units or the position of the mesh;
-/// only the coordinates a solver moves are written back (fixed vertices and
-/// the constant coordinate of a planar mesh keep their bits).
+/// so the answer does not depend on the units or the position of the mesh; a
+/// planar mesh in any plane runs in that plane's coordinates. Only what a
+/// solver moves is written back: fixed vertices keep their bits, and so does
+/// the constant coordinate of a mesh in a plane z, y or x = constant.
 pub fn smooth_mesh(
     mesh: &mut Mesh,
     problem: &ProblemOptions,
@@ -456,11 +457,17 @@ pub fn smooth_mesh(
     let local_points = std::mem::replace(&mut mesh.points, original);
     let p = built?;
     let mut x = p.gather(&local_points);
+    let x0 = x.clone();
     let result = solve(&p, &mut x, opts, progress);
+    // back from the plane (a planar mesh outside z = constant moves in all
+    // three coordinates, on its plane) and from the frame; a vertex that did
+    // not move keeps its bits
+    let moved = p.scatter(&x);
+    let coords = if p.plane.is_some() { 3 } else { p.dim };
     for (new, &old) in p.order.iter().enumerate() {
-        if p.free[new] {
-            let global = frame.to_global(&x[new]);
-            mesh.points[old as usize][..p.dim].copy_from_slice(&global[..p.dim]);
+        if p.free[new] && x[new] != x0[new] {
+            let global = frame.to_global(&moved[old as usize]);
+            mesh.points[old as usize][..coords].copy_from_slice(&global[..coords]);
         }
     }
     result
