@@ -36,6 +36,9 @@ fn placed(m: &Mesh, f: impl Fn(&Vec3) -> Vec3) -> Mesh {
     }
 }
 
+/// Where a plane's copy of the xy mesh goes.
+type Placement = Box<dyn Fn(&Vec3) -> Vec3>;
+
 fn smooth(m: &mut Mesh, method: Method) -> Info {
     let params = Params {
         tol: 1e-9,
@@ -55,7 +58,7 @@ fn every_plane_gives_the_xy_answer_on_the_input_plane() {
     let (c, s) = (0.6f64, 0.8f64);
     for quad in [false, true] {
         let xy = xy_start(quad);
-        let cases: [(&str, Box<dyn Fn(&Vec3) -> Vec3>); 3] = [
+        let cases: [(&str, Placement); 3] = [
             ("xz", Box::new(|p: &Vec3| [p[0], 0.1, p[1]])),
             ("xz, other winding", Box::new(|p: &Vec3| [p[1], -3.7, p[0]])),
             (
