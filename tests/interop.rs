@@ -156,8 +156,8 @@ fn all_arrays(m: &Mesh) -> impl Iterator<Item = &DataArray> {
     m.data.point.iter().chain(&m.data.cell).chain(&m.data.field)
 }
 
-/// Read every file of a manifest, write it in every format, read it back and
-/// compare geometry and data; returns how many files were checked.
+/// Read every file of a manifest, smooth it, write it in every format, read it
+/// back and compare geometry and data; returns how many files were checked.
 fn check_folder(dir: &Path) -> usize {
     let rows = manifest(dir);
     assert!(!rows.is_empty(), "{}: empty manifest", dir.display());
@@ -189,6 +189,19 @@ fn check_folder(dir: &Path) -> usize {
             );
         }
         check_known_values(name, &m);
+        // smoothed (the data must not notice), then written in every format
+        let input = m.clone();
+        let mut m = m;
+        let params = meshsmooth::solve::Params {
+            max_iter: 20,
+            ..Default::default()
+        };
+        let opts = meshsmooth::solve::Options::cpu(meshsmooth::solve::Method::Newton, &params);
+        let info = meshsmooth::solve::smooth_mesh(&mut m, &Default::default(), &opts, &mut |_| true)
+            .unwrap_or_else(|e| panic!("{name}: smoothing: {e}"));
+        assert!(info.objective <= info.history.first().unwrap().objective, "{name}");
+        assert!(info.iterations > 0 && m.points != input.points, "{name}: nothing moved");
+        assert!(m.data == input.data, "{name}: smoothing changed the data arrays");
         for f in Format::ALL {
             let p = out.path().join(format!("{name}.{f}.{}", ext(f)));
             io::write(&p, &m, f, &[]).unwrap_or_else(|e| panic!("{name} as {f}: {e}"));

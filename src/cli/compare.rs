@@ -34,7 +34,8 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         device: choice.device(),
         ..Default::default()
     };
-    let (cmp, infos) = meshsmooth::compare::compare(&mesh, &options, methods, &opts)?;
+    let (cmp, infos) =
+        meshsmooth::compare::compare(&mesh, &options, methods, &opts).map_err(|e| io::in_file(&a.input, e))?;
     let where_ = infos.first().map_or_else(String::new, |i| i.device.clone());
     if a.json {
         println!("{}", serde_json::to_string_pretty(&cmp).expect("comparison serialises"));
