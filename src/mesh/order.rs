@@ -168,8 +168,12 @@ mod tests {
         let mut sorted = order.clone();
         sorted.sort();
         assert_eq!(sorted, vec![0, 1, 2, 3, 4, 5]);
-        // root 5 is farthest: the BFS is 5,4, then 3,2,1,0; reversed
-        assert_eq!(order, vec![0, 1, 2, 3, 4, 5]);
+        // distances from the centre x = 2.5: 0 and 5 tie (lower id first), so
+        // the BFS is 0,1,2,3 then 5,4; reversed
+        assert_eq!(order, vec![4, 5, 3, 2, 1, 0]);
+        // the same order wherever the mesh sits and whatever its units
+        let moved: Vec<[f64; 3]> = pts.iter().map(|p| [p[0] * 1e6 - 3e7, 5.0, -1.0]).collect();
+        assert_eq!(reverse_bfs(&moved, &nb, &boundary), order);
         assert_eq!(invert(&[2, 0, 1]), vec![1, 2, 0]);
     }
 
@@ -203,7 +207,7 @@ mod tests {
             assert!(is_permutation(&o.order(&pts, &nb, &boundary), 4), "{o}");
         }
         assert_eq!(Ordering::Input.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
-        assert_eq!(Ordering::ReverseBfs.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
+        assert_eq!(Ordering::ReverseBfs.order(&pts, &nb, &boundary), vec![3, 2, 1, 0]);
         assert_eq!(Ordering::CuthillMcKee.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
     }
 
