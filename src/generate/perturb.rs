@@ -202,7 +202,7 @@ fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbSta
     order.truncate(count);
 
     let h = mean_edge_lengths(mesh);
-    let (lo, hi) = bounding_box(&mesh.points);
+    let (lo, hi) = crate::mesh::frame::bounding_box(&mesh.points);
     let planar = mesh.dim() == 2;
     let ve = vertex_elements(mesh);
     let mut stats = PerturbStats {
@@ -287,16 +287,4 @@ fn mean_edge_lengths(mesh: &Mesh) -> Vec<f64> {
             }
         })
         .collect()
-}
-
-fn bounding_box(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
-    (lo, hi)
 }

@@ -14,19 +14,25 @@ pub struct Frame {
     pub scale: f64,
 }
 
+/// The smallest and largest coordinates of `points`.
+pub fn bounding_box(points: &[Vec3]) -> (Vec3, Vec3) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
 impl Frame {
     /// The frame of `points`: bounding-box centre ((min + max) / 2, exact for
     /// a coordinate that is the same everywhere) and the power of two nearest
     /// the largest extent.
     pub fn of(points: &[Vec3]) -> Frame {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in points {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = bounding_box(points);
         if points.is_empty() {
             return Frame {
                 center: [0.0; 3],

@@ -65,14 +65,7 @@ impl Plane {
                 "planar mesh has no area: its elements do not span a plane".into(),
             ));
         }
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in points {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = crate::mesh::frame::bounding_box(points);
         let origin: Vec3 = std::array::from_fn(|k| lo[k] / 2.0 + hi[k] / 2.0);
         let n = unit(n);
         let axes = match (0..3).find(|&k| n[k].abs() > 1.0 - 1e-12) {
