@@ -420,7 +420,7 @@ def to_meshio(
     field_data: Optional[Dict[str, Any]] = None,
 ) -> Any:
     """A ``meshio.Mesh`` of points and cell blocks (needs meshio)."""
-    import meshio
+    import meshio  # type: ignore[import-untyped, unused-ignore]
 
     p = _check_points(points)
     blocks = _check_cells(cells, p)
@@ -434,7 +434,7 @@ def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
     mesh's lower-dimensional cells, which stay where they are, as do points
     no optimised cell uses. The result of the solve is on ``.meshsmooth_result``
     of the returned mesh."""
-    import meshio
+    import meshio  # type: ignore[import-untyped, unused-ignore]
 
     arrays = from_meshio(mesh)
     n = len(arrays.points)
