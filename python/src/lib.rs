@@ -165,7 +165,8 @@ fn smooth<'py>(
     let params = Params {
         tol,
         max_iter,
-        time_limit: time_limit.map(Duration::from_secs_f64),
+        // a limit beyond what a Duration holds is no limit
+        time_limit: time_limit.and_then(|t| Duration::try_from_secs_f64(t).ok()),
         ..Default::default()
     };
     // the first exception raised by the callback or a signal handler (Ctrl-C)
@@ -194,7 +195,7 @@ fn smooth<'py>(
                 d.set_item("objective", r.objective)?;
                 d.set_item("grad_norm", r.grad_norm)?;
                 // only an explicit False stops: a callback returning None goes on
-                Ok(!cb.bind(py).call1((d,))?.is(&pyo3::types::PyBool::new(py, false)))
+                Ok(!cb.bind(py).call1((d,))?.is(pyo3::types::PyBool::new(py, false)))
             })
             .unwrap_or_else(|e| {
                 raised = Some(e);

@@ -250,3 +250,16 @@ def test_gpu_device_matches_cpu(tet_box):
     assert "cpu" not in gpu.info["device"].split(" ")[0]
     assert abs(gpu.objective - cpu.objective) < 1e-5
     assert abs(gpu.objective - ms.quality(gpu.points, tets)["objective"]) < 1e-6
+
+
+def test_stopping_rules(hex_box):
+    points, hexes, _ = hex_box
+    assert ms.smooth(points, hexes, max_iter=1).stop == "max_iterations"
+    assert ms.smooth(points, hexes, time_limit=0.0).stop == "time_limit"
+    assert ms.smooth(points, hexes, time_limit=1e300).stop == "converged"
+    with pytest.raises(ValueError, match="time_limit"):
+        ms.smooth(points, hexes, time_limit=-1.0)
+    with pytest.raises(ValueError, match="f32"):
+        ms.smooth(points, hexes, precision="f32")
+    with pytest.raises(ValueError, match="device"):
+        ms.smooth(points, hexes, device="tpu")
