@@ -37,6 +37,7 @@ __all__ = [
     "read",
     "smooth",
     "smooth_meshio",
+    "smooth_pyvista",
     "to_meshio",
     "write",
 ]
@@ -248,6 +249,7 @@ def smooth(
     metric: str = "imr",
     template: str = "harmonic",
     fixed: Optional[npt.ArrayLike] = None,
+    boundary: str = "fixed",
     device: str = "cpu",
     precision: str = "auto",
     adapter: Optional[str] = None,
@@ -275,6 +277,7 @@ def smooth(
             the mean quality 1/metric).
         fixed: vertices that must not move besides the boundary skin (which is
             always fixed): a boolean mask of length n or an index array.
+        boundary: "fixed", the only choice: the boundary skin never moves.
         device: "cpu" (f64 on all cores) or "gpu" (wgpu; bcd runs colour by colour).
         precision: GPU arithmetic "f32", "f64" or "auto" (f64 where the adapter has it).
         adapter: use the GPU adapter whose name contains this.
@@ -302,6 +305,8 @@ def smooth(
     p = _check_points(points)
     blocks = _check_cells(cells, p)
     mask = _check_fixed(fixed, p.shape[0])
+    if boundary != "fixed":
+        raise ValueError(f"boundary must be 'fixed' (the boundary skin never moves), got {boundary!r}")
     if callback is not None and not callable(callback):
         raise TypeError(f"callback must be callable, got {type(callback).__name__}")
     for arg, value in (("method", method), ("metric", metric), ("template", template), ("device", device), ("precision", precision)):
@@ -427,16 +432,11 @@ def to_meshio(
     return meshio.Mesh(p, blocks, point_data=point_data or {}, cell_data=cell_data or {}, field_data=field_data or {})
 
 
-def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
-    """Smooths a ``meshio.Mesh`` and returns a new one with the new points and
-    the same cells, point data, cell data, field data and sets. The keyword
-    arguments are :func:`smooth`'s; ``fixed`` adds to the vertices of the
-    mesh's lower-dimensional cells, which stay where they are, as do points
-    no optimised cell uses. The result of the solve is on ``.meshsmooth_result``
-    of the returned mesh."""
-    import meshio  # type: ignore[import-untyped, unused-ignore]
-
-    arrays = from_meshio(mesh)
+def _smooth_parts(points: np.ndarray, parts: List[Tuple[str, Any]], kwargs: Dict[str, Any]) -> Tuple[np.ndarray, Result]:
+    """New positions for all `points` of a mesh given as meshio-named cell
+    blocks: the blocks of the highest dimension are optimised, the vertices of
+    lower ones fixed, points no optimised cell uses left where they are."""
+    arrays = from_meshio(_Parts(points, parts))
     n = len(arrays.points)
     user_fixed = _check_fixed(kwargs.pop("fixed", None), n)
     fixed = arrays.fixed
@@ -447,14 +447,30 @@ def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
     new_id = np.full(n, -1, dtype=np.int64)
     new_id[used] = np.arange(len(used))
     cells = [(t, new_id[a]) for t, a in arrays.cells]
-    result = smooth(
-        arrays.points[used],
-        cells,
-        fixed=None if fixed is None else fixed[used],
-        **kwargs,
-    )
-    points = np.array(mesh.points, dtype=np.float64, copy=True)
-    points[used, : result.points.shape[1]] = result.points
+    result = smooth(arrays.points[used], cells, fixed=None if fixed is None else fixed[used], **kwargs)
+    new_points = np.array(points, dtype=np.float64, copy=True)
+    new_points[used, : result.points.shape[1]] = result.points
+    return new_points, result
+
+
+class _Parts:
+    """The two attributes of a meshio mesh that from_meshio reads."""
+
+    def __init__(self, points: np.ndarray, cells: List[Tuple[str, Any]]) -> None:
+        self.points = points
+        self.cells = cells
+
+
+def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
+    """Smooths a ``meshio.Mesh`` and returns a new one with the new points and
+    the same cells, point data, cell data, field data and sets. The keyword
+    arguments are :func:`smooth`'s; ``fixed`` adds to the vertices of the
+    mesh's lower-dimensional cells, which stay where they are, as do points
+    no optimised cell uses. The result of the solve is on ``.meshsmooth_result``
+    of the returned mesh."""
+    import meshio  # type: ignore[import-untyped, unused-ignore]
+
+    points, result = _smooth_parts(np.asarray(mesh.points), [_block_parts(c) for c in mesh.cells], kwargs)
     out = meshio.Mesh(
         points,
         [(c.type, c.data) for c in mesh.cells],
@@ -465,4 +481,27 @@ def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
         cell_sets=dict(getattr(mesh, "cell_sets", {}) or {}),
     )
     out.meshsmooth_result = result
+    return out
+
+
+#: VTK cell type ids (PyVista's ``celltypes``) as meshio names.
+_VTK_TO_MESHIO = {1: "vertex", 3: "line", 5: "triangle", 9: "quad", 10: "tetra", 12: "hexahedron", 13: "wedge"}
+
+
+def smooth_pyvista(grid: Any, **kwargs: Any) -> Any:
+    """Smooths a PyVista ``UnstructuredGrid`` (needs pyvista) and returns a
+    copy with the new points and all its arrays; keyword arguments as for
+    :func:`smooth`, lower-dimensional cells handled as in :func:`smooth_meshio`.
+    The result of the solve is on ``.meshsmooth_result`` of the returned grid."""
+    parts = []
+    for vtk_type, data in grid.cells_dict.items():
+        name = _VTK_TO_MESHIO.get(int(vtk_type))
+        if name is None:
+            raise ValueError(f"grid: unsupported VTK cell type {int(vtk_type)}")
+        parts.append((name, np.asarray(data)))
+    points, result = _smooth_parts(np.asarray(grid.points), parts, kwargs)
+    out = grid.copy()
+    out.points = points
+    # an attribute PyVista does not know about would warn on assignment
+    object.__setattr__(out, "meshsmooth_result", result)
     return out

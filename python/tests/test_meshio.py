@@ -46,3 +46,19 @@ def test_smooth_meshio_honours_fixed(tet_box):
     chosen = np.flatnonzero(interior)[:2]
     out = ms.smooth_meshio(mesh, fixed=chosen)
     np.testing.assert_array_equal(out.points[chosen], points[chosen])
+
+
+def test_smooth_pyvista_keeps_arrays(tet_box):
+    pv = pytest.importorskip("pyvista")
+    points, tets, interior = tet_box
+    cells = np.c_[np.full(len(tets), 4), tets].ravel()
+    grid = pv.UnstructuredGrid(cells, np.full(len(tets), 10, dtype=np.uint8), points)
+    grid.point_data["t"] = np.arange(len(points), dtype=float)
+    grid.cell_data["m"] = np.arange(len(tets))
+    out = ms.smooth_pyvista(grid)
+    assert out.meshsmooth_result.stop == "converged"
+    np.testing.assert_array_equal(out.point_data["t"], grid.point_data["t"])
+    np.testing.assert_array_equal(out.cell_data["m"], grid.cell_data["m"])
+    np.testing.assert_array_equal(np.asarray(grid.points), points)
+    np.testing.assert_array_equal(np.asarray(out.points)[~interior], points[~interior])
+    assert abs(out.meshsmooth_result.objective - ms.smooth(points, tets).objective) < 1e-12

@@ -263,3 +263,5 @@ def test_stopping_rules(hex_box):
         ms.smooth(points, hexes, precision="f32")
     with pytest.raises(ValueError, match="device"):
         ms.smooth(points, hexes, device="tpu")
+    with pytest.raises(ValueError, match="boundary"):
+        ms.smooth(points, hexes, boundary="free")
