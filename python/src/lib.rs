@@ -1,0 +1,347 @@
+//! `meshsmooth._core`: the compiled half of the Python package. It takes flat,
+//! already checked arrays (the Python half, `meshsmooth/__init__.py`, turns
+//! numpy and meshio input into them and names the bad argument); here they
+//! become a `Mesh`, the library runs with the GIL released, and the results
+//! come back as numpy arrays and dicts.
+
+use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
+use meshsmooth::io::{self, Format};
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::problem::ProblemOptions;
+use meshsmooth::report::quality_report;
+use meshsmooth::solve::{self, Device, Method, Options, Params, Record, StopReason};
+use meshsmooth::{ElementKind, Error, Mesh, metric_report};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::Path;
+use std::time::Duration;
+
+/// The library's error as the Python exception a caller expects: bad input
+/// (mesh, options, file content) is a `ValueError`, a failing device a
+/// `RuntimeError`, the operating system's refusal an `OSError`. The message is
+/// the CLI's.
+fn py_err(e: Error) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        Error::Io { .. } => PyOSError::new_err(msg),
+        Error::Gpu(_) => PyRuntimeError::new_err(msg),
+        _ => PyValueError::new_err(msg),
+    }
+}
+
+fn parse<T: std::str::FromStr<Err = Error>>(s: &str) -> PyResult<T> {
+    s.parse().map_err(py_err)
+}
+
+fn precision(s: &str) -> PyResult<Precision> {
+    match s {
+        "f32" => Ok(Precision::F32),
+        "f64" => Ok(Precision::F64),
+        "auto" => Ok(Precision::Auto),
+        _ => Err(PyValueError::new_err(format!(
+            "precision must be 'f32', 'f64' or 'auto', got {s:?}"
+        ))),
+    }
+}
+
+fn stop_name(s: StopReason) -> &'static str {
+    match s {
+        StopReason::Converged => "converged",
+        StopReason::Stalled => "stalled",
+        StopReason::MaxIterations => "max_iterations",
+        StopReason::TimeLimit => "time_limit",
+        StopReason::Cancelled => "cancelled",
+    }
+}
+
+/// A mesh from the flat arrays: points (n, 3), kind codes (indices into
+/// `ElementKind::ALL`), CSR offsets and connectivity, optional fixed flags;
+/// validated as every reader validates.
+fn build_mesh(
+    points: &PyReadonlyArray2<f64>,
+    kinds: &PyReadonlyArray1<u8>,
+    offsets: &PyReadonlyArray1<i64>,
+    conn: &PyReadonlyArray1<u32>,
+    fixed: Option<&PyReadonlyArray1<bool>>,
+) -> PyResult<Mesh> {
+    let p = points.as_array();
+    if p.ncols() != 3 {
+        return Err(PyValueError::new_err("points must have 3 columns"));
+    }
+    let mut mesh = Mesh::new(p.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect());
+    let kinds = kinds.as_array();
+    let offsets = offsets.as_array();
+    let conn = conn.as_array();
+    if offsets.len() != kinds.len() + 1 {
+        return Err(PyValueError::new_err("offsets must have one entry more than kinds"));
+    }
+    let conn: Vec<u32> = conn.iter().copied().collect();
+    for (e, &k) in kinds.iter().enumerate() {
+        let kind = *ElementKind::ALL
+            .get(k as usize)
+            .ok_or_else(|| PyValueError::new_err(format!("unknown element kind code {k}")))?;
+        let (a, b) = (offsets[e], offsets[e + 1]);
+        if a < 0 || b < a || b as usize > conn.len() || (b - a) as usize != kind.num_vertices() {
+            return Err(PyValueError::new_err(format!("element {e}: bad offsets {a}..{b}")));
+        }
+        mesh.push_element(kind, &conn[a as usize..b as usize]);
+    }
+    if let Some(f) = fixed {
+        mesh.fixed = f.as_array().iter().copied().collect();
+    }
+    mesh.validate().map_err(py_err)?;
+    Ok(mesh)
+}
+
+fn points_array<'py>(py: Python<'py>, points: &[[f64; 3]]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = points.iter().flatten().copied().collect();
+    flat.into_pyarray(py)
+        .reshape([points.len(), 3])
+        .expect("n * 3 values reshape to (n, 3)")
+}
+
+/// The quality report as a Python dict (through its JSON form, so the keys
+/// are the CLI's `quality --json` keys).
+fn report_dict<'py>(py: Python<'py>, mesh: &Mesh) -> PyResult<Bound<'py, PyAny>> {
+    let json = serde_json::to_string(&quality_report(mesh, &mesh.points)).expect("report serialises");
+    py.import("json")?.call_method1("loads", (json,))
+}
+
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, device, precision, adapter, tol, max_iter, time_limit, callback))]
+fn smooth<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    kinds: PyReadonlyArray1<'py, u8>,
+    offsets: PyReadonlyArray1<'py, i64>,
+    conn: PyReadonlyArray1<'py, u32>,
+    fixed: Option<PyReadonlyArray1<'py, bool>>,
+    method: &str,
+    metric: &str,
+    template: &str,
+    device: &str,
+    precision: &str,
+    adapter: Option<String>,
+    tol: f64,
+    max_iter: usize,
+    time_limit: Option<f64>,
+    callback: Option<Py<PyAny>>,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
+    let mut mesh = build_mesh(&points, &kinds, &offsets, &conn, fixed.as_ref())?;
+    let method: Method = parse(method)?;
+    let problem = ProblemOptions {
+        metric: parse(metric)?,
+        template: parse(template)?,
+        ..Default::default()
+    };
+    let gpu_options = GpuOptions {
+        adapter,
+        precision: self::precision(precision)?,
+    };
+    let use_gpu = match device {
+        "cpu" if gpu_options.precision == Precision::F32 => {
+            return Err(PyValueError::new_err(
+                "the CPU backend computes in f64; precision='f32' needs device='gpu'",
+            ));
+        }
+        "cpu" => false,
+        "gpu" => true,
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "device must be 'cpu' or 'gpu', got {device:?}"
+            )));
+        }
+    };
+    if let Some(t) = time_limit
+        && !(t >= 0.0 && t.is_finite())
+    {
+        return Err(PyValueError::new_err(format!(
+            "time_limit must be a non-negative number of seconds, got {t}"
+        )));
+    }
+    let params = Params {
+        tol,
+        max_iter,
+        // a limit beyond what a Duration holds is no limit
+        time_limit: time_limit.and_then(|t| Duration::try_from_secs_f64(t).ok()),
+        ..Default::default()
+    };
+    // the first exception raised by the callback or a signal handler (Ctrl-C)
+    let mut raised: Option<PyErr> = None;
+    let solved = py.detach(|| -> meshsmooth::Result<solve::Info> {
+        problem.check(&mesh)?;
+        let ctx = if use_gpu {
+            Some(GpuContext::new(&gpu_options)?)
+        } else {
+            None
+        };
+        let opts = Options {
+            method,
+            params,
+            device: ctx.as_ref().map_or(Device::Cpu, Device::Gpu),
+            checkpoint_every: None,
+            fail_after: None,
+        };
+        let mut progress = |r: &Record| -> bool {
+            Python::attach(|py| -> PyResult<bool> {
+                py.check_signals()?;
+                let Some(cb) = &callback else { return Ok(true) };
+                let d = PyDict::new(py);
+                d.set_item("iteration", r.iteration)?;
+                d.set_item("seconds", r.seconds)?;
+                d.set_item("objective", r.objective)?;
+                d.set_item("grad_norm", r.grad_norm)?;
+                // only an explicit False stops: a callback returning None goes on
+                Ok(!cb.bind(py).call1((d,))?.is(pyo3::types::PyBool::new(py, false)))
+            })
+            .unwrap_or_else(|e| {
+                raised = Some(e);
+                false
+            })
+        };
+        solve::smooth_mesh(&mut mesh, &problem, &opts, &mut progress)
+    });
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    let info = solved.map_err(py_err)?;
+    let d = PyDict::new(py);
+    d.set_item("method", info.method.name())?;
+    d.set_item("device", &info.device)?;
+    d.set_item("iterations", info.iterations)?;
+    d.set_item("stop", stop_name(info.stop))?;
+    d.set_item("stop_reason", info.stop.to_string())?;
+    d.set_item("objective", info.objective)?;
+    d.set_item("grad_norm", info.grad_norm)?;
+    d.set_item("seconds", info.seconds)?;
+    d.set_item("setup_seconds", info.setup_seconds)?;
+    d.set_item("memory_bytes", info.memory_bytes)?;
+    d.set_item("colors", info.colors)?;
+    d.set_item("cg_iterations", info.cg_iterations)?;
+    let rec = &info.history.records;
+    let history = PyDict::new(py);
+    let column = |f: fn(&Record) -> f64| rec.iter().map(f).collect::<Vec<f64>>().into_pyarray(py);
+    history.set_item(
+        "iteration",
+        rec.iter()
+            .map(|r| r.iteration as i64)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    history.set_item("seconds", column(|r| r.seconds))?;
+    history.set_item("objective", column(|r| r.objective))?;
+    history.set_item("grad_norm", column(|r| r.grad_norm))?;
+    d.set_item("history", history)?;
+    d.set_item("quality", io::eta_field(&mesh).into_pyarray(py))?;
+    d.set_item("report", report_dict(py, &mesh)?)?;
+    Ok((points_array(py, &mesh.points), d))
+}
+
+/// The quality report of a mesh and the per-element values of `metric`
+/// (NaN where an element is inverted).
+#[pyfunction]
+fn quality<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    kinds: PyReadonlyArray1<'py, u8>,
+    offsets: PyReadonlyArray1<'py, i64>,
+    conn: PyReadonlyArray1<'py, u32>,
+    metric: &str,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyArray1<f64>>)> {
+    let mesh = build_mesh(&points, &kinds, &offsets, &conn, None)?;
+    let metric: MetricKind = parse(metric)?;
+    let values = py
+        .detach(|| metric_report::element_values(&mesh, &mesh.points, metric, None))
+        .map_err(py_err)?;
+    let values: Vec<f64> = values.into_iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+    Ok((report_dict(py, &mesh)?, values.into_pyarray(py)))
+}
+
+type FlatMesh<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<u8>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<u32>>,
+    Option<Bound<'py, PyArray1<bool>>>,
+);
+
+/// A mesh file through the library's readers: points, kind codes, offsets,
+/// connectivity, fixed flags (None when the file marks none).
+#[pyfunction]
+fn read<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<FlatMesh<'py>> {
+    let mesh = py.detach(|| io::read(&path)).map_err(py_err)?;
+    let kinds: Vec<u8> = mesh
+        .kinds
+        .iter()
+        .map(|k| ElementKind::ALL.iter().position(|a| a == k).expect("a known kind") as u8)
+        .collect();
+    let offsets: Vec<i64> = mesh.offsets.iter().map(|&o| o as i64).collect();
+    let fixed = (!mesh.fixed.is_empty()).then(|| mesh.fixed.clone().into_pyarray(py));
+    Ok((
+        points_array(py, &mesh.points),
+        kinds.into_pyarray(py),
+        offsets.into_pyarray(py),
+        mesh.conn.clone().into_pyarray(py),
+        fixed,
+    ))
+}
+
+/// Writes a mesh through the library's writers (with its per-element
+/// `inverse_mean_ratio`); the format follows the extension unless named.
+#[pyfunction]
+#[pyo3(signature = (path, points, kinds, offsets, conn, format=None))]
+fn write<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    points: PyReadonlyArray2<'py, f64>,
+    kinds: PyReadonlyArray1<'py, u8>,
+    offsets: PyReadonlyArray1<'py, i64>,
+    conn: PyReadonlyArray1<'py, u32>,
+    format: Option<&str>,
+) -> PyResult<()> {
+    let mesh = build_mesh(&points, &kinds, &offsets, &conn, None)?;
+    let format = match format {
+        Some(name) => Format::from_name(name).ok_or_else(|| {
+            let names: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
+            PyValueError::new_err(format!("unknown format {name:?}; one of {}", names.join(", ")))
+        })?,
+        None => Format::from_path(&path).map_err(py_err)?,
+    };
+    py.detach(|| io::write_mesh(Path::new(&path), &mesh, format))
+        .map_err(py_err)
+}
+
+/// The GPU adapters wgpu finds, best first, as `meshsmooth devices` lists them.
+#[pyfunction]
+fn devices(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let adapters = py.detach(gpu::list_adapters);
+    let out = PyList::empty(py);
+    for a in adapters {
+        let d = PyDict::new(py);
+        d.set_item("name", a.name)?;
+        d.set_item("backend", a.backend)?;
+        d.set_item("device_type", a.device_type)?;
+        d.set_item("driver", a.driver)?;
+        d.set_item("driver_info", a.driver_info)?;
+        d.set_item("f64", a.f64)?;
+        d.set_item("compute", a.compute)?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let names: Vec<&str> = ElementKind::ALL.iter().map(|k| k.name()).collect();
+    m.add("KIND_NAMES", names)?;
+    m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(smooth, m)?)?;
+    m.add_function(wrap_pyfunction!(quality, m)?)?;
+    m.add_function(wrap_pyfunction!(read, m)?)?;
+    m.add_function(wrap_pyfunction!(write, m)?)?;
+    m.add_function(wrap_pyfunction!(devices, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,267 @@
+"""The Python package against the CLI and its documented behaviour."""
+
+import _thread
+import csv
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import meshsmooth as ms
+
+from conftest import box, grid, hex_to_tets
+
+ROOT = Path(__file__).resolve().parents[2]
+VTK_TYPES = {"triangle": 5, "quad": 9, "tetra": 10, "hexahedron": 12, "wedge": 13}
+
+
+def cli():
+    """The release CLI next to this checkout (`cargo test --release` builds it);
+    missing, the comparison skips, except under CI, where it fails."""
+    exe = Path(os.environ.get("MESHSMOOTH_BIN", ROOT / "target" / "release" / "meshsmooth"))
+    if not exe.exists():
+        if os.environ.get("CI"):
+            pytest.fail(f"{exe} is missing: build it with cargo build --release")
+        pytest.skip(f"{exe} is missing: build it with cargo build --release")
+    return exe
+
+
+def write_vtk(path, points, cell_type, cells):
+    """Legacy ASCII VTK written here, not by the package, with repr() floats (exact)."""
+    k = cells.shape[1]
+    lines = ["# vtk DataFile Version 2.0", "box", "ASCII", "DATASET UNSTRUCTURED_GRID"]
+    lines.append(f"POINTS {len(points)} double")
+    lines += [" ".join(repr(float(c)) for c in p) for p in points]
+    lines.append(f"CELLS {len(cells)} {len(cells) * (k + 1)}")
+    lines += [f"{k} " + " ".join(str(int(v)) for v in c) for c in cells]
+    lines.append(f"CELL_TYPES {len(cells)}")
+    lines += [str(VTK_TYPES[cell_type])] * len(cells)
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("method", ["newton", "bcd"])
+def test_box_reaches_the_clis_objective(tmp_path, method):
+    points, hexes, _ = box(n=5)
+    tets = hex_to_tets(hexes)
+    write_vtk(tmp_path / "box.vtk", points, "tetra", tets)
+    out = subprocess.run(
+        [str(cli()), "smooth", str(tmp_path / "box.vtk"), "-o", str(tmp_path / "out.vtk"),
+         "--device", "cpu", "--method", method, "--history", str(tmp_path / "h.csv"), "--quiet"],
+        capture_output=True, text=True,
+    )
+    assert out.returncode == 0, out.stderr
+    rows = list(csv.DictReader((tmp_path / "h.csv").open()))
+    r = ms.smooth(points, tets, method=method)
+    assert r.stop == "converged"
+    assert r.iterations == int(rows[-1]["iteration"])
+    assert abs(r.objective - float(rows[-1]["objective"])) <= 1e-10
+    assert abs(r.history["objective"][0] - float(rows[0]["objective"])) <= 1e-10
+    cli_points, cli_cells, _ = ms.read(tmp_path / "out.vtk")
+    assert np.abs(cli_points - r.points).max() <= 1e-10
+    np.testing.assert_array_equal(cli_cells[0][1], tets)
+
+
+def test_result_fields(hex_box):
+    points, hexes, _ = hex_box
+    r = ms.smooth(points.astype(np.float32), hexes.astype(np.int32), method="bcd", tol=1e-5)
+    assert r.points.dtype == np.float64 and r.points.shape == points.shape
+    assert r.objective < r.history["objective"][0]
+    assert set(r.history) == {"iteration", "seconds", "objective", "grad_norm"}
+    assert len(r.history["objective"]) == r.iterations + 1
+    assert r.history["grad_norm"][-1] == r.grad_norm
+    assert r.quality.shape == (len(hexes),) and np.all(r.quality >= 1 - 1e-12)
+    rep = r.report()
+    assert rep["elements"] == len(hexes) and rep["inverted"] == 0
+    assert abs(rep["objective"] - r.quality.mean()) < 1e-12
+    assert "cpu" in r.info["device"]
+
+
+def test_planar_quads_keep_two_columns(quad_grid):
+    points, quads, interior = quad_grid
+    r = ms.smooth(points, quads)
+    assert r.points.shape == points.shape
+    assert r.objective < 1 + 1e-9  # a perturbed square grid goes back to squares
+    np.testing.assert_array_equal(r.points[~interior], points[~interior])
+
+
+def test_quality_report_and_values(tet_box):
+    points, tets, _ = tet_box
+    q = ms.quality(points, tets)
+    assert q["elements"] == len(tets) and q["inverted"] == 0
+    assert q["values"].shape == (len(tets),)
+    assert abs(q["objective"] - ms.smooth(points, tets, max_iter=0).objective) < 1e-12
+    assert ms.quality(points, tets, metric="cn")["values"].shape == (len(tets),)
+
+
+def test_inputs_are_never_modified(hex_box):
+    points, hexes, _ = hex_box
+    points.flags.writeable = False
+    hexes.flags.writeable = False
+    before = points.copy()
+    r = ms.smooth(points, hexes)
+    np.testing.assert_array_equal(points, before)
+    assert not np.shares_memory(r.points, points)
+
+
+@pytest.mark.parametrize("as_indices", [False, True])
+def test_fixed_vertices_do_not_move(hex_box, as_indices):
+    points, hexes, interior = hex_box
+    chosen = np.flatnonzero(interior)[::3]
+    mask = np.zeros(len(points), dtype=bool)
+    mask[chosen] = True
+    r = ms.smooth(points, hexes, fixed=chosen if as_indices else mask)
+    np.testing.assert_array_equal(r.points[mask], points[mask])
+    np.testing.assert_array_equal(r.points[~interior], points[~interior])
+    assert np.any(r.points[interior & ~mask] != points[interior & ~mask])
+
+
+def test_callback_sees_every_iteration_and_can_stop(hex_box):
+    points, hexes, _ = hex_box
+    seen = []
+
+    def cb(record):
+        seen.append(record)
+        return record["iteration"] < 2
+
+    r = ms.smooth(points, hexes, method="bcd", callback=cb)
+    assert r.stop == "cancelled" and r.iterations == 2
+    assert [s["iteration"] for s in seen] == [0, 1, 2]
+    assert seen[-1]["objective"] == r.objective
+    assert ms.smooth(points, hexes, callback=lambda rec: None).stop == "converged"
+
+
+def test_exception_in_callback_propagates_with_input_unchanged(hex_box):
+    points, hexes, _ = hex_box
+    before = points.copy()
+
+    def cb(record):
+        if record["iteration"] == 1:
+            raise KeyboardInterrupt
+        return True
+
+    with pytest.raises(KeyboardInterrupt):
+        ms.smooth(points, hexes, method="bcd", callback=cb)
+    np.testing.assert_array_equal(points, before)
+
+    with pytest.raises(ZeroDivisionError):
+        ms.smooth(points, hexes, callback=lambda rec: 1 / 0)
+
+
+def test_ctrl_c_interrupts_between_iterations(hex_box):
+    """A SIGINT arriving during the solve (simulated with interrupt_main, as a
+    signal from another thread would) stops it at the next iteration."""
+    points, hexes, _ = hex_box
+    before = points.copy()
+    seen = []
+
+    def cb(record):
+        seen.append(record["iteration"])
+        if record["iteration"] == 1:
+            _thread.interrupt_main()
+        return True
+
+    with pytest.raises(KeyboardInterrupt):
+        ms.smooth(points, hexes, method="bcd", tol=0.0, max_iter=10_000, callback=cb)
+    assert seen == [0, 1]
+    np.testing.assert_array_equal(points, before)
+
+
+def test_bad_inputs_raise_documented_errors(tet_box):
+    points, tets, _ = tet_box
+    with pytest.raises(ValueError, match="non-finite"):
+        bad = points.copy()
+        bad[3, 1] = np.nan
+        ms.smooth(bad, tets)
+    with pytest.raises(ValueError, match="out of range"):
+        bad = tets.copy()
+        bad[0, 0] = len(points)
+        ms.smooth(points, bad)
+    with pytest.raises(ValueError, match="out of range"):
+        bad = tets.copy()
+        bad[0, 0] = -1
+        ms.smooth(points, bad)
+    with pytest.raises(ValueError, match="points must have shape"):
+        ms.smooth(np.c_[points, points[:, :1]], tets)
+    with pytest.raises(ValueError, match="cells must have"):
+        ms.smooth(points, tets[:, :2])
+    with pytest.raises(ValueError, match="cells must have shape"):
+        ms.smooth(points, tets.ravel())
+    with pytest.raises(TypeError, match="cells must be an integer array"):
+        ms.smooth(points, tets.astype(float))
+    with pytest.raises(TypeError, match="points must be a float"):
+        ms.smooth(points.astype(np.int64), tets)
+    with pytest.raises(ValueError, match="inverted"):
+        flipped = tets.copy()
+        flipped[:5, [0, 1]] = flipped[:5, [1, 0]]
+        ms.smooth(points, flipped)
+    with pytest.raises(ValueError, match="fixed"):
+        ms.smooth(points, tets, fixed=np.zeros(3, dtype=bool))
+    with pytest.raises(ValueError, match="newtn"):
+        ms.smooth(points, tets, method="newtn")
+    with pytest.raises(ValueError, match="used by no element"):
+        ms.smooth(np.r_[points, [[5.0, 5.0, 5.0]]], tets)
+    with pytest.raises(ValueError, match="unsupported cell type"):
+        ms.smooth(points, [("pyramid", tets)])
+    with pytest.raises(TypeError, match="callback"):
+        ms.smooth(points, tets, callback=3)
+
+
+def test_cell_blocks_and_ambiguous_four_columns(tet_box, quad_grid):
+    points, tets, _ = tet_box
+    a = ms.smooth(points, tets)
+    b = ms.smooth(points, [("tetra", tets[:10]), ("tetra", tets[10:].astype(np.int32))])
+    assert a.objective == b.objective
+    p2, quads, _ = quad_grid
+    flat3 = np.c_[p2, np.full(len(p2), 2.5)]
+    r = ms.smooth(flat3, quads)  # z constant: 4 columns are quads
+    assert r.points.shape == flat3.shape and np.all(r.points[:, 2] == 2.5)
+    assert abs(r.objective - ms.smooth(p2, quads).objective) < 1e-12
+
+
+def test_read_write_round_trip(tmp_path, tet_box):
+    points, tets, _ = tet_box
+    for name in ["m.vtu", "m.msh", "m.vtk"]:
+        ms.write(tmp_path / name, points, tets)
+        p, cells, fixed = ms.read(tmp_path / name)
+        np.testing.assert_array_equal(p, points)
+        assert [t for t, _ in cells] == ["tetra"]
+        np.testing.assert_array_equal(cells[0][1], tets)
+    with pytest.raises(OSError):
+        ms.read(tmp_path / "missing.vtu")
+
+
+def test_gpu_device_matches_cpu(tet_box):
+    usable = [d for d in ms.devices() if d["compute"]]
+    if not usable:
+        if os.environ.get("CI"):
+            pytest.fail("no GPU adapter (lavapipe should be installed by .ci/install-test-deps)")
+        pytest.skip("no GPU adapter with compute shaders")
+    points, tets, _ = tet_box
+    cpu = ms.smooth(points, tets)
+    try:
+        gpu = ms.smooth(points, tets, device="gpu", tol=1e-5)
+    except RuntimeError as e:
+        if os.environ.get("CI"):
+            raise
+        pytest.skip(f"GPU unusable here: {e}")
+    assert gpu.stop in ("converged", "stalled")
+    assert "cpu" not in gpu.info["device"].split(" ")[0]
+    assert abs(gpu.objective - cpu.objective) < 1e-5
+    assert abs(gpu.objective - ms.quality(gpu.points, tets)["objective"]) < 1e-6
+
+
+def test_stopping_rules(hex_box):
+    points, hexes, _ = hex_box
+    assert ms.smooth(points, hexes, max_iter=1).stop == "max_iterations"
+    assert ms.smooth(points, hexes, time_limit=0.0).stop == "time_limit"
+    assert ms.smooth(points, hexes, time_limit=1e300).stop == "converged"
+    with pytest.raises(ValueError, match="time_limit"):
+        ms.smooth(points, hexes, time_limit=-1.0)
+    with pytest.raises(ValueError, match="f32"):
+        ms.smooth(points, hexes, precision="f32")
+    with pytest.raises(ValueError, match="device"):
+        ms.smooth(points, hexes, device="tpu")
+    with pytest.raises(ValueError, match="boundary"):
+        ms.smooth(points, hexes, boundary="free")
