@@ -271,3 +271,37 @@ fn clockwise_planar_meshes_are_smoothed_like_counter_clockwise_ones() {
     generate::perturb(&mut cw2, &opts).unwrap();
     assert!(metric::inverted_elements(&cw2, &cw2.points).is_empty());
 }
+
+#[test]
+fn a_target_objective_stops_at_the_first_iterate_that_reaches_it() {
+    for method in [Method::Newton, Method::Bcd] {
+        let mesh = perturbed_box(6, 0.3, 5);
+        let mut full = mesh.clone();
+        let done = smooth(&mut full, method, &Params::default());
+        let f0 = done.history.first().unwrap().objective;
+        // halfway between the start and the optimum
+        let target = 0.5 * (f0 + done.objective);
+        let mut m = mesh.clone();
+        let params = Params {
+            target_objective: Some(target),
+            ..Params::default()
+        };
+        let info = smooth(&mut m, method, &params);
+        assert_eq!(info.stop, StopReason::TargetReached, "{method}");
+        assert!(
+            info.objective <= target,
+            "{method}: F {} above {target}",
+            info.objective
+        );
+        let h = &info.history.records;
+        assert!(
+            h[..h.len() - 1].iter().all(|r| r.objective > target),
+            "{method}: went past the first crossing"
+        );
+        assert!(info.iterations < done.iterations, "{method}");
+        // the same iterates as the unstopped run, up to the stop
+        for (a, b) in h.iter().zip(&done.history.records) {
+            assert_eq!(a.objective, b.objective, "{method}: iteration {}", a.iteration);
+        }
+    }
+}

@@ -84,7 +84,8 @@ class Result:
             mean edge lengths of the start (unit-free; the quantity ``tol`` bounds).
         iterations: Newton iterations or sweeps (bcd, laplace) run.
         stop: why it stopped: "converged", "stalled", "max_iterations",
-            "time_limit" or "cancelled" (the callback returned False).
+            "time_limit", "target_reached" or "cancelled" (the callback
+            returned False).
         history: numpy arrays per column: "iteration", "seconds", "objective",
             "grad_norm"; row 0 is the start.
         quality: per-cell inverse mean ratio at the new positions (1 is ideal).

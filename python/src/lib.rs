@@ -53,6 +53,7 @@ fn stop_name(s: StopReason) -> &'static str {
         StopReason::MaxIterations => "max_iterations",
         StopReason::TimeLimit => "time_limit",
         StopReason::Cancelled => "cancelled",
+        StopReason::TargetReached => "target_reached",
     }
 }
 

@@ -40,10 +40,18 @@ impl StopArgs {
                 )));
             }
         };
+        if let Some(t) = self.target_objective
+            && !t.is_finite()
+        {
+            return Err(Error::InvalidArgument(format!(
+                "--target-objective must be a finite number, got {t}"
+            )));
+        }
         Ok(Params {
             tol,
             max_iter,
             time_limit,
+            target_objective: self.target_objective,
             ..Params::default()
         })
     }

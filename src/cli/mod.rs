@@ -146,6 +146,9 @@ pub struct StopArgs {
     /// Most sweeps (bcd, laplace) or iterations (newton).
     #[arg(long, default_value_t = Params::default().max_iter)]
     pub max_iter: usize,
+    /// Stop as soon as the objective F is at or below this value.
+    #[arg(long, value_name = "F")]
+    pub target_objective: Option<f64>,
     /// Stop after this many seconds, per method (the mesh so far is kept; it is always valid).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,

@@ -71,6 +71,8 @@ pub enum StopReason {
     TimeLimit,
     /// The progress callback asked to stop.
     Cancelled,
+    /// F reached `Params::target_objective`.
+    TargetReached,
 }
 
 impl fmt::Display for StopReason {
@@ -81,6 +83,7 @@ impl fmt::Display for StopReason {
             StopReason::MaxIterations => "iteration limit reached",
             StopReason::TimeLimit => "time limit reached",
             StopReason::Cancelled => "cancelled",
+            StopReason::TargetReached => "target objective reached",
         })
     }
 }

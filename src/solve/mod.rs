@@ -93,6 +93,9 @@ pub struct Params {
     /// Most sweeps (BCD, Laplace) or iterations (Newton).
     pub max_iter: usize,
     pub time_limit: Option<Duration>,
+    /// Stop as soon as F is at or below this (a baseline-derived stop, as in
+    /// the reordering paper's comparisons).
+    pub target_objective: Option<f64>,
     pub bcd: BcdParams,
     pub newton: NewtonParams,
     pub laplace: LaplaceParams,
@@ -104,6 +107,7 @@ impl Default for Params {
             tol: 1e-6,
             max_iter: 1000,
             time_limit: None,
+            target_objective: None,
             bcd: BcdParams::default(),
             newton: NewtonParams::default(),
             laplace: LaplaceParams::default(),
@@ -377,6 +381,10 @@ fn iterate(
     let mut iterations = 0;
     let mut cg_iterations = 0;
     while stop.is_none() {
+        if params.target_objective.is_some_and(|t| f <= t) {
+            stop = Some(StopReason::TargetReached);
+            break;
+        }
         if gnorm < params.tol {
             stop = Some(StopReason::Converged);
             break;
