@@ -5,7 +5,7 @@
 
 use crate::Mesh;
 use crate::error::Result;
-use crate::mesh::plane::{Plane, in_plane};
+use crate::mesh::plane::in_plane;
 use crate::mesh::topology;
 use crate::metric::corner_model::{Model, Template};
 use crate::metric::mat3::Vec3;
@@ -44,8 +44,8 @@ pub fn element_values(
         reference,
         ..Default::default()
     };
-    problem::check(mesh, points, &opts)?;
-    let points = in_plane(Plane::fit(mesh, points)?.as_ref(), points);
+    let plane = problem::check(mesh, points, &opts)?;
+    let points = in_plane(plane.as_ref(), points);
     let corners = problem::corners(mesh, &points, &opts, &Numbering::identity(mesh))?;
     let model = Model {
         metric,

@@ -27,6 +27,12 @@ pub fn bounding_box(points: &[Vec3]) -> (Vec3, Vec3) {
     (lo, hi)
 }
 
+/// (lo + hi) / 2, halves first so that it cannot overflow; exact for a
+/// coordinate that is the same everywhere.
+pub fn box_center(lo: &Vec3, hi: &Vec3) -> Vec3 {
+    std::array::from_fn(|k| lo[k] / 2.0 + hi[k] / 2.0)
+}
+
 impl Frame {
     /// The frame of `points`: bounding-box centre ((min + max) / 2, exact for
     /// a coordinate that is the same everywhere) and the power of two nearest
@@ -39,8 +45,7 @@ impl Frame {
                 scale: 1.0,
             };
         }
-        // halves first: (lo + hi) / 2 could overflow
-        let center = std::array::from_fn(|k| lo[k] / 2.0 + hi[k] / 2.0);
+        let center = box_center(&lo, &hi);
         let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
         let scale = if extent > 0.0 && extent.is_finite() {
             2f64.powi(extent.log2().round() as i32)

@@ -8,6 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
+use crate::mesh::frame::{bounding_box, box_center};
 use crate::metric::mat3::{Vec3, dot, sub};
 use std::borrow::Cow;
 
@@ -65,8 +66,8 @@ impl Plane {
                 "planar mesh has no area: its elements do not span a plane".into(),
             ));
         }
-        let (lo, hi) = crate::mesh::frame::bounding_box(points);
-        let origin: Vec3 = std::array::from_fn(|k| lo[k] / 2.0 + hi[k] / 2.0);
+        let (lo, hi) = bounding_box(points);
+        let origin = box_center(&lo, &hi);
         let n = unit(n);
         let axes = match (0..3).find(|&k| n[k].abs() > 1.0 - 1e-12) {
             // a plane through two axes: exact axes, so its constant coordinate survives

@@ -10,14 +10,17 @@ use crate::metric::mat3::Vec3;
 use crate::metric::smetric::MetricKind;
 
 /// Refuses what no later stage can build from; `points` are the positions
-/// the problem is built at (the mesh's own, or a report's).
-pub fn check(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions) -> Result<()> {
+/// the problem is built at (the mesh's own, or a report's). Returns the plane
+/// of a planar mesh outside the planes z = constant, which the later stages
+/// work in.
+pub fn check(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions) -> Result<Option<Plane>> {
     if mesh.num_elements() == 0 {
         return Err(Error::InvalidMesh("mesh has no elements".into()));
     }
     // a planar mesh must be flat (in any plane)
-    Plane::fit(mesh, points)?;
-    opts.check(mesh)
+    let plane = Plane::fit(mesh, points)?;
+    opts.check(mesh)?;
+    Ok(plane)
 }
 
 impl ProblemOptions<'_> {

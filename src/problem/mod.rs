@@ -101,8 +101,7 @@ impl Problem {
     /// check → order → corners → adjacency → colours.
     pub fn with_options(mesh: &Mesh, opts: &ProblemOptions) -> Result<Problem> {
         let start = Instant::now();
-        check(mesh, &mesh.points, opts)?;
-        let plane = Plane::fit(mesh, &mesh.points)?;
+        let plane = check(mesh, &mesh.points, opts)?;
         let points = in_plane(plane.as_ref(), &mesh.points);
         let graph = MeshGraph::of(mesh);
         let numbering = order(mesh, &graph, opts.ordering);

@@ -12,7 +12,8 @@ use std::time::Instant;
 const F: Slot = Slot(0);
 const INFEASIBLE: Slot = Slot(1);
 const GG: Slot = Slot(2);
-const MOVED: Slot = Slot(3);
+/// The slot a sweep writes its largest squared move to.
+pub(crate) const MOVED: Slot = Slot(3);
 
 pub(crate) const EVAL: EvalSlots = EvalSlots {
     value: F,
@@ -80,6 +81,3 @@ pub(crate) fn finish<B: Backend + ?Sized>(be: &mut B, g: Vector) -> Result<Sweep
         cg_iterations: 0,
     })
 }
-
-/// The slot a sweep writes its largest squared move to.
-pub(crate) const MOVED_SLOT: Slot = MOVED;

@@ -3,7 +3,7 @@
 //! that of every other method.
 
 use super::Sweep;
-use super::bcd::{MOVED_SLOT, evaluate_at, finish};
+use super::bcd::{MOVED, evaluate_at, finish};
 use crate::backend::{Backend, Vector};
 use crate::error::{Error, Result};
 use std::time::Instant;
@@ -23,7 +23,7 @@ impl Laplace {
     }
 
     pub fn step<B: Backend + ?Sized>(&mut self, be: &mut B, deadline: Option<Instant>) -> Result<Sweep> {
-        if !be.laplace(MOVED_SLOT, deadline)? {
+        if !be.laplace(MOVED, deadline)? {
             return Err(Error::InvalidArgument(format!(
                 "method 'laplace' has no version on {}",
                 be.describe()

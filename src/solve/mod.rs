@@ -193,10 +193,9 @@ pub(crate) fn check_start(p: &Problem, x: &[Vec3], params: &Params) -> Result<()
 /// return `false` to stop.
 pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnMut(&Record) -> bool) -> Result<Info> {
     check_start(p, x, &opts.params)?;
-    let ls = match opts.method {
-        Method::Newton => opts.params.newton.line_search,
-        _ => opts.params.bcd.line_search,
-    };
+    // the backends' own line search is the per-vertex one of BCD; Newton
+    // carries its global one in `NewtonParams`
+    let ls = opts.params.bcd.line_search;
     match opts.device {
         Device::Cpu => run(&mut CpuBackend::new(p, x, &ls)?, p, x, opts, progress),
         Device::Gpu(ctx) => {

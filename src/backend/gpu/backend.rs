@@ -185,12 +185,10 @@ impl<'c> GpuBackend<'c> {
             let group = self.ctx.bind(v, &buffers);
             self.groups.insert(key.clone(), group);
         }
+        let group = self.groups[&key].clone();
         let ctx = self.ctx;
-        let enc = self
-            .encoder
-            .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()));
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        ctx.dispatch(&mut pass, v, &self.groups[&key], Some(offset as u32), threads)
+        let mut pass = self.encoder().begin_compute_pass(&Default::default());
+        ctx.dispatch(&mut pass, v, &group, Some(offset as u32), threads)
     }
 
     /// The encoder operations are recorded into, started on first use.
