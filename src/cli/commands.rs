@@ -120,7 +120,7 @@ fn summary(info: &Info, f0: f64) -> String {
         info.stop,
         info.iterations,
         match info.method {
-            Method::Newton => "iterations".to_string(),
+            Method::Newton | Method::Nlcg => "iterations".to_string(),
             Method::BcdColored => format!("sweeps of {} colours", info.colors),
             _ => "sweeps".to_string(),
         },
