@@ -4,6 +4,8 @@
 //! backend from a `Device` and runs the one loop (`iterate`) over it.
 
 pub mod bcd;
+#[cfg(test)]
+mod function_backend;
 pub mod history;
 pub mod laplace;
 pub mod line_search;

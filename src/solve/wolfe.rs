@@ -8,13 +8,20 @@
 //! tests a plain function. Every step it returns was evaluated and found
 //! feasible, with sufficient decrease.
 //!
-//! Two departures from the printed algorithms, both for feasible sets that
-//! are not intervals (a corner determinant is a polynomial in alpha, so a mesh
-//! can be valid at two steps and inverted between them):
-//! - a zoom trial found infeasible becomes the new upper end (as a trial with
-//!   phi = +inf would), and the next trial bisects towards the lower end;
+//! Departures from the printed algorithms:
+//! - for feasible sets that are not intervals (a corner determinant is a
+//!   polynomial in alpha, so a mesh can be valid at two steps and inverted
+//!   between them), a zoom trial found infeasible becomes the new upper end
+//!   (as a trial with phi = +inf would), and the next trial bisects towards
+//!   the lower end;
 //! - the cubic step (algorithm 5) falls back to bisection where it is not a
-//!   number or not inside the interval (rounding on a nearly flat phi).
+//!   number or not inside the interval (rounding on a nearly flat phi);
+//! - the bracketing increment doubles after each trial that neither brackets
+//!   nor satisfies the conditions (`Wolfe::growth`; 1 is the paper's fixed
+//!   increment): with the previous step as the first increment, the fixed
+//!   one spent the whole evaluation budget on Rosenbrock's function when the
+//!   step had to grow fiftyfold;
+//! - at most `Wolfe::max_evaluations` trials per search.
 //!
 //! Algorithm 5 as printed divides by phi(hi) - phi(lo) + 2 d2; the cubic's
 //! minimiser (Nocedal and Wright, eq. 3.59) has phi'(hi) - phi'(lo) + 2 d2,
@@ -29,6 +36,12 @@ pub struct Wolfe {
     pub c2: f64,
     /// Step-increment reduction after an infeasible trial (the paper's rho).
     pub rho: f64,
+    /// Step-increment growth after a trial that neither brackets nor meets
+    /// the conditions. The paper keeps the increment (1): the trials go
+    /// delta, 2 delta, 3 delta, ... and a first increment far too short costs
+    /// one evaluation per increment; 2 doubles it (trials delta, 3 delta,
+    /// 7 delta, ...), as Nocedal and Wright's extrapolation does.
+    pub growth: f64,
     /// A cubic step closer to the lower end than this fraction of the
     /// interval is moved to it (the paper's tol_alpha_lo).
     pub interpolation_tol: f64,
@@ -43,6 +56,7 @@ impl Default for Wolfe {
             c1: 1e-4,
             c2: 0.1,
             rho: 0.5,
+            growth: 2.0,
             interpolation_tol: 0.1,
             max_evaluations: 50,
         }
@@ -57,6 +71,7 @@ impl Wolfe {
             && self.c2 < 1.0
             && 0.0 < self.rho
             && self.rho < 1.0
+            && self.growth >= 1.0
             && 0.0 < self.interpolation_tol
             && self.interpolation_tol < 0.5
             && self.max_evaluations > 0
@@ -85,8 +100,8 @@ pub struct Search {
 }
 
 /// Searches along a descent direction: `start` is phi(0) and phi'(0) < 0,
-/// `delta` the first step increment (the trials go delta, 2 delta, ... until
-/// a bracket is found), `tol_alpha` the step resolution. `phi` returns
+/// `delta` the first step increment (grown by `Wolfe::growth` after each
+/// trial until a bracket is found), `tol_alpha` the step resolution. `phi` returns
 /// `(phi, phi')` or `None` where the step is infeasible; a value or slope
 /// that is not finite counts as infeasible.
 pub fn line_search<E>(
@@ -130,6 +145,7 @@ pub fn line_search<E>(
             return s.zoom(trial, prev);
         }
         prev = trial;
+        delta *= params.growth;
     }
 }
 
@@ -414,14 +430,18 @@ mod tests {
     #[test]
     fn evaluation_budget_returns_the_best_step_so_far() {
         // phi keeps decreasing: linear bracketing never brackets
-        let params = Wolfe {
-            max_evaluations: 7,
-            ..Wolfe::default()
-        };
-        let (s, trials) = run(|a| Some((-a, -1.0)), 0.5, &params);
-        assert_eq!(trials.len(), 7);
-        assert_eq!(s.step.unwrap().alpha, 3.5);
-        assert!(!s.strong_wolfe);
+        // (with the paper's fixed increment, and doubling it)
+        for (growth, last) in [(1.0, 3.5), (2.0, 63.5)] {
+            let params = Wolfe {
+                max_evaluations: 7,
+                growth,
+                ..Wolfe::default()
+            };
+            let (s, trials) = run(|a| Some((-a, -1.0)), 0.5, &params);
+            assert_eq!(trials.len(), 7);
+            assert_eq!(s.step.unwrap().alpha, last);
+            assert!(!s.strong_wolfe);
+        }
     }
 
     #[test]
