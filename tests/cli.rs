@@ -106,11 +106,11 @@ fn generate_smooth_and_quality_work_together() {
 }
 
 #[test]
-fn laplace_and_colored_methods_run() {
+fn laplace_colored_and_nlcg_methods_run() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.msh");
     generate_box(&input, [4, 4, 4], "random:0.3", 1);
-    for method in ["laplace", "bcd-colored"] {
+    for method in ["laplace", "bcd-colored", "nlcg"] {
         let out = dir.path().join(format!("{method}.mesh"));
         let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--method", method, "--quiet"]);
         assert!(o.status.success(), "{method}: {}", text(&o));

@@ -84,7 +84,8 @@ pub struct SmoothArgs {
 pub struct SolverArgs {
     /// newton: inexact Newton with block-Jacobi PCG (reaches the optimum first on every
     /// mesh measured); bcd: block coordinate descent (per-vertex Newton); bcd-colored: the
-    /// same, colour by colour in parallel; laplace: smart Laplacian smoothing (CPU only).
+    /// same, colour by colour in parallel; nlcg: nonlinear conjugate gradients (gradients
+    /// only); laplace: smart Laplacian smoothing (CPU only).
     #[arg(long, value_enum, default_value_t = Method::default())]
     pub method: Method,
     /// cpu: f64 on all cores; gpu: wgpu (bcd runs colour by colour); auto: a hardware GPU if

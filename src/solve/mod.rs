@@ -212,7 +212,7 @@ pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnM
         Device::Gpu(ctx) => {
             if opts.method == Method::Laplace {
                 return Err(Error::InvalidArgument(
-                    "method 'laplace' has no GPU version (use bcd, bcd-colored or newton)".into(),
+                    "method 'laplace' has no GPU version (use bcd, bcd-colored, newton or nlcg)".into(),
                 ));
             }
             run(&mut GpuBackend::new(ctx, p, x, &ls)?, p, x, opts, progress)
