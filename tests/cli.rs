@@ -120,6 +120,37 @@ fn laplace_colored_and_nlcg_methods_run() {
 }
 
 #[test]
+fn nlcg_stops_on_tol_x_and_refuses_a_negative_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.vtk");
+    generate_box(&input, [4, 4, 4], "random:0.3", 2);
+    let out = dir.path().join("out.vtk");
+    let run = |tol_x: &str| {
+        let tol_x = format!("--tol-x={tol_x}");
+        meshsmooth(&[
+            "smooth",
+            s(&input),
+            "-o",
+            s(&out),
+            "--method",
+            "nlcg",
+            "--tol",
+            "1e-12",
+            &tol_x,
+            "--quiet",
+        ])
+    };
+    let o = run("1e-3");
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("step below tolerance"), "{}", text(&o));
+    std::fs::remove_file(&out).unwrap();
+    let o = run("-1");
+    assert!(!o.status.success());
+    assert!(text(&o).contains("--tol-x"), "{}", text(&o));
+    assert!(!out.exists());
+}
+
+#[test]
 fn refuses_to_overwrite_its_input() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.vtk");

@@ -144,6 +144,10 @@ pub struct StopArgs {
     /// edge lengths (unit-free, like the objective), falls below this.
     #[arg(long, default_value_t = Params::default().tol)]
     pub tol: f64,
+    /// nlcg: also stop after a step that moved no vertex farther than this many mean edge
+    /// lengths.
+    #[arg(long, default_value_t = Params::default().nlcg.tol_x)]
+    pub tol_x: f64,
     /// Most sweeps (bcd, laplace) or iterations (newton).
     #[arg(long, default_value_t = Params::default().max_iter)]
     pub max_iter: usize,
