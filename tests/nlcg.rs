@@ -166,3 +166,61 @@ fn a_step_below_tol_x_stops_nlcg() {
     }
     assert_eq!(prev, x);
 }
+
+/// The line search's evaluations per iteration, with the paper's fixed
+/// bracketing increment and with the doubling one, for the README:
+/// `cargo test --release --test nlcg -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn nlcg_line_search_costs() {
+    use meshsmooth::backend::cpu::CpuBackend;
+    use meshsmooth::solve::nlcg::Nlcg;
+    use meshsmooth::solve::wolfe::Wolfe;
+    use std::time::Instant;
+    let mut hexes = meshsmooth::generate::hex_box(16, 16, 16, [16.0; 3]);
+    let perturb = meshsmooth::generate::PerturbOptions {
+        perturbation: meshsmooth::generate::Perturbation::Random { alpha: 0.3 },
+        fraction: 1.0,
+        seed: 1,
+    };
+    meshsmooth::generate::perturb(&mut hexes, &perturb).unwrap();
+    for (name, mesh) in [("tet box 20^3", perturbed_box(20, 0.3, 1)), ("hex box 16^3", hexes)] {
+        let p = Problem::new(&mesh).unwrap();
+        let x0 = p.gather(&mesh.points);
+        let edge = p.mean_edge_length(&x0);
+        for growth in [1.0, 2.0] {
+            for first_move in [0.01, 0.1, 1.0] {
+                let params = NlcgParams {
+                    first_move,
+                    line_search: Wolfe {
+                        growth,
+                        ..Wolfe::default()
+                    },
+                    ..NlcgParams::default()
+                };
+                let mut be = CpuBackend::new(&p, &x0, &Default::default()).unwrap();
+                let mut nlcg = Nlcg::new(&mut be, params, edge).unwrap();
+                let t = Instant::now();
+                let (_, mut g) = nlcg.start(&mut be).unwrap().unwrap();
+                let mut f = 0.0;
+                let mut iterations = 0;
+                while g * edge >= 1e-6 && iterations < 1000 {
+                    let s = nlcg.step(&mut be).unwrap();
+                    if s.max_move_sq == 0.0 {
+                        break;
+                    }
+                    (f, g) = (s.objective, s.grad_norm);
+                    iterations += 1;
+                }
+                eprintln!(
+                    "{name}: growth {growth}, first move {first_move}: {iterations} iterations, {} evaluations ({:.2}/iteration), {}/{} strong Wolfe, F {f:.10}, {:.2} s",
+                    nlcg.evaluations,
+                    nlcg.evaluations as f64 / iterations as f64,
+                    nlcg.wolfe_steps,
+                    nlcg.searches,
+                    t.elapsed().as_secs_f64()
+                );
+            }
+        }
+    }
+}
