@@ -106,3 +106,48 @@ fn nlcg_converges_to_cpu_objective_f64() {
 fn nlcg_converges_to_cpu_objective_f32() {
     converged_matches(Precision::F32, 1e-5, 1e-5);
 }
+
+#[test]
+fn nlcg_matches_cpu_for_every_metric_and_element_kind_f64() {
+    use common::{KINDS, meshes, models, problem};
+    let Some(ctx) = context(Precision::F64) else {
+        return;
+    };
+    for kind in KINDS {
+        let (mesh, reference) = meshes(kind, 5);
+        for (metric, template) in models() {
+            let p = problem(&mesh, &reference, metric, template);
+            let x0 = p.gather(&mesh.points);
+            let params = Params {
+                max_iter: 8,
+                ..Params::default()
+            };
+            let mut cx = x0.clone();
+            let cpu = solve_on(&p, &mut cx, Method::Nlcg, &params, Device::Cpu);
+            let mut gx = x0.clone();
+            let gpu = solve_on(&p, &mut gx, Method::Nlcg, &params, Device::Gpu(&ctx));
+            let case = format!("{kind:?} {metric} {template:?}");
+            eprintln!(
+                "{case}: {} iterations, F CPU {:.15} GPU {:.15}",
+                gpu.iterations, cpu.objective, gpu.objective
+            );
+            assert_eq!(gpu.iterations, cpu.iterations, "{case}");
+            assert!(
+                (gpu.objective - cpu.objective).abs() <= 1e-12 * cpu.objective.abs().max(1.0),
+                "{case}"
+            );
+            let edge = p.mean_edge_length(&x0);
+            let worst = cx
+                .iter()
+                .flatten()
+                .zip(gx.iter().flatten())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst <= 1e-10 * edge,
+                "{case}: vertices differ by {:.1e} edges",
+                worst / edge
+            );
+        }
+    }
+}
