@@ -1,7 +1,8 @@
 //! Solvers: they own the iteration loop, line searches, termination and
 //! history, and reach the numerics only through `backend::Backend`. Each
-//! method is written once (`bcd`, `newton` with `pcg`); `solve` picks the
-//! backend from a `Device` and runs the one loop (`iterate`) over it.
+//! method is written once (`bcd`, `newton` with `pcg`, `nlcg` with `wolfe`);
+//! `solve` picks the backend from a `Device` and runs the one loop
+//! (`iterate`) over it.
 
 pub mod bcd;
 #[cfg(test)]
