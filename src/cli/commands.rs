@@ -69,6 +69,7 @@ impl ObjectiveArgs {
             template: self.template,
             reference,
             ordering: self.order,
+            ..Default::default()
         })
     }
 }
