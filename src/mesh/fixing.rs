@@ -6,9 +6,10 @@
 //! A file's lower cells (Gmsh boundary faces, lines, points) fix their
 //! vertices by default. `free_groups` releases the vertices of the lower
 //! cells of those groups, and with a sliding boundary the lower cells that
-//! are facets (faces of a volume mesh, lines of a planar one) describe the
-//! boundary rather than fix it, so they release theirs too; a vertex also on
-//! another lower cell, or flagged by a `fixed` point array, stays fixed.
+//! are facets on the skin (faces of a volume mesh, lines of a planar one)
+//! describe the boundary rather than fix it, so they release theirs too
+//! (internal interfaces stay fixed); a vertex also on another lower cell, or
+//! flagged by a `fixed` point array, stays fixed.
 
 use super::data::{DataArray, GMSH_PHYSICAL, Values};
 use super::{LowerKind, Mesh};
@@ -71,15 +72,21 @@ impl FixRules {
             .map(|g| Ok((g.clone(), group_tags(mesh, g)?)))
             .collect::<Result<_>>()?;
         if !freed_tags.is_empty() || self.release_facets {
+            let skin = if self.release_facets {
+                super::topology::skin_vertices(mesh)
+            } else {
+                vec![false; n]
+            };
             let lower_tag = mesh.data.lower_array(GMSH_PHYSICAL);
             let tag = |i: usize| lower_tag.map(|a| a.get_i64(i));
-            let released_by = |i: usize, kind: LowerKind| -> Option<usize> {
+            let released_by = |i: usize, kind: LowerKind, vs: &[u32]| -> Option<usize> {
                 if let Some(t) = tag(i)
                     && let Some(k) = freed_tags.iter().position(|(_, tags)| tags.contains(&t))
                 {
                     return Some(k);
                 }
-                (self.release_facets && facet_kinds.contains(&kind)).then_some(freed_tags.len())
+                let on_skin = vs.iter().all(|&v| skin[v as usize]);
+                (self.release_facets && facet_kinds.contains(&kind) && on_skin).then_some(freed_tags.len())
             };
             let mut keep = vec![false; n];
             if let Some(a) = mesh.data.point.iter().find(|a| a.name == "fixed") {
@@ -89,7 +96,7 @@ impl FixRules {
             }
             let mut released: Vec<Option<usize>> = vec![None; n];
             for (i, (kind, vs)) in mesh.lower.iter().enumerate() {
-                match released_by(i, *kind) {
+                match released_by(i, *kind, vs) {
                     Some(k) => vs.iter().for_each(|&v| {
                         released[v as usize].get_or_insert(k);
                     }),
