@@ -92,9 +92,15 @@ impl<'c> GpuBackend<'c> {
             )));
         }
         let r = ctx.real_size();
+        let (slide_real, slide_idx) = slide_tables(p);
         check_bindings(
             &BindingLimits::of(&ctx.limits),
             &[
+                (
+                    "sliding-boundary projectors and primitives",
+                    slide_real.len() as u64 * r,
+                ),
+                ("sliding-boundary candidates", 4 * slide_idx.len() as u64),
                 ("positions", 3 * nv as u64 * r),
                 ("corners", 20 * nc as u64),
                 ("incidence", 4 * p.incidence.items.len() as u64),
@@ -137,7 +143,6 @@ impl<'c> GpuBackend<'c> {
         bufs.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
         bufs.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
         bufs.insert(Buf::Dummy, ctx.zeros_real("unused", 4));
-        let (slide_real, slide_idx) = slide_tables(p);
         bufs.insert(
             Buf::SlideReal,
             ctx.storage_real("sliding projectors and primitives", &slide_real),
