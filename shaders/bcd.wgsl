@@ -20,6 +20,12 @@
 @group(0) @binding(8) var<storage, read> colors: array<u32>;
 // each vertex's move in this sweep (0 when it stayed), 3 reals per vertex
 @group(0) @binding(9) var<storage, read_write> moves: array<real>;
+// sliding-boundary constraints (`boundary.wgsl`); no vertex slides when the
+// candidate offsets are all zero
+@group(0) @binding(10) var<storage, read> slide_real: array<real>;
+@group(0) @binding(11) var<storage, read> slide_idx: array<u32>;
+
+#import boundary
 
 // The vertex's S-without-its-term per corner, as the CPU's `Patch` keeps
 // them; vertices with more corners than this recompute them per trial.
@@ -92,6 +98,13 @@ fn main(
             }
         }
     }
+    // a sliding vertex: the step in its tangent space, each trial put back on the boundary
+    let slide = slides(v);
+    if slide {
+        let p = projector(v);
+        g = mul_vec(p, g);
+        h = constrain_hessian(p, h);
+    }
     let neg_g = vec3<real>(-g[0], -g[1], -g[2]);
     // the block is positive definite for the mean ratio; fall back to a scaled
     // steepest descent step should rounding say otherwise
@@ -113,7 +126,10 @@ fn main(
     let sigma = ls.y;
     var alpha = real(1.0);
     for (var n = 0u; n <= op.aux; n++) {
-        let trial = vec3<real>(xv[0] + alpha * d[0], xv[1] + alpha * d[1], xv[2] + alpha * d[2]);
+        var trial = vec3<real>(xv[0] + alpha * d[0], xv[1] + alpha * d[1], xv[2] + alpha * d[2]);
+        if slide {
+            trial = project_vertex(v, trial);
+        }
         let f = patch_value(v, trial);
         if f.ok && f.eta <= f0 + sigma * alpha * slope {
             x[3u * v] = trial[0];

@@ -10,12 +10,13 @@ mod common;
 use common::{KINDS, context, meshes, problem, rel_diff};
 
 use meshsmooth::backend::cpu::CpuBackend;
+use meshsmooth::backend::cpu::project_boundary::project_vertex;
 use meshsmooth::backend::gpu::{GpuBackend, GpuContext, Precision};
 use meshsmooth::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::mat3::Vec3;
 use meshsmooth::metric::smetric::MetricKind;
-use meshsmooth::problem::Problem;
+use meshsmooth::problem::{Boundary, BoundaryMode, Problem, ProblemOptions};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -49,6 +50,31 @@ fn cases() -> Vec<Case> {
                 x,
             });
         }
+    }
+    out
+}
+
+/// The same meshes with a sliding boundary (the constraint kernels and BCD's
+/// constrained step; the planar kinds slide along their boundary lines).
+fn slide_cases() -> Vec<Case> {
+    let mut out = Vec::new();
+    for kind in KINDS {
+        let (mesh, _) = meshes(kind, 5);
+        let opts = ProblemOptions {
+            boundary: Boundary {
+                mode: BoundaryMode::Slide,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let p = Problem::with_options(&mesh, &opts).unwrap();
+        assert!(p.sliding.as_ref().is_some_and(|s| s.counts[0] + s.counts[1] > 0));
+        let x: Vec<Vec3> = p.gather(&mesh.points).iter().map(|c| c.map(quantise)).collect();
+        out.push(Case {
+            name: format!("{kind} sliding"),
+            p,
+            x,
+        });
     }
     out
 }
@@ -355,7 +381,84 @@ fn check_line_search(pair: &mut Pair, c: &Case, tol: f64) {
     assert_ne!(cx, c.x);
 }
 
+fn check_project_boundary(pair: &mut Pair, c: &Case, tol: f64) {
+    let n = c.p.free_vertices.len();
+    let d = pair.vectors(&[random_vec(n, 11).iter().map(|v| v.map(|t| t / 8.0)).collect()])[0];
+    pair.both(|be| {
+        be.trial(Coef::value(1.0), d).unwrap();
+        be.accept_trial().unwrap();
+    });
+    let (gx, cx) = pair.both(|be| be.download().unwrap());
+    let e = rel_diff(&gx, &cx);
+    assert!(e <= tol, "{}: projected positions differ by {e:.1e}", c.name);
+    // the CPU's points are on the boundary: projecting again keeps them
+    let s = c.p.sliding.as_ref().unwrap();
+    let mut sliding = 0;
+    for &v in &c.p.free_vertices {
+        let v = v as usize;
+        if s.slides(v) {
+            sliding += 1;
+            let again = project_vertex(s, v, &cx[v]);
+            assert!(
+                rel_diff(&[again], &[cx[v]]) <= 1e-15,
+                "{}: vertex {v} is off the boundary",
+                c.name
+            );
+        }
+    }
+    assert!(sliding > 0, "{}: nothing slides", c.name);
+}
+
+fn check_constrain(pair: &mut Pair, c: &Case, tol: f64) {
+    check_gradient_gather(pair, c, tol);
+    // the constrained gradient has no component across the boundary
+    let g = pair.vectors(&[vec![[0.0; 3]; c.p.free_vertices.len()]])[0];
+    pair.cpu.evaluate(Points::Current, EVAL, Some(g)).unwrap();
+    let cg = pair.cpu.read_vector(g).unwrap();
+    let s = c.p.sliding.as_ref().unwrap();
+    for (i, &v) in c.p.free_vertices.iter().enumerate() {
+        let p = &s.projector[v as usize];
+        let pg = [0, 1, 2].map(|r| p[r][0] * cg[i][0] + p[r][1] * cg[i][1] + p[r][2] * cg[i][2]);
+        assert!(
+            rel_diff(&[pg], &[cg[i]]) <= 1e-14 || cg[i] == [0.0; 3],
+            "{}: vertex {v}",
+            c.name
+        );
+    }
+}
+
 type Check = fn(&mut Pair, &Case, f64);
+
+fn run_sliding(precision: Precision, tol: f64, check: Check) {
+    let Some(ctx) = context(precision) else {
+        return;
+    };
+    for c in slide_cases() {
+        let mut pair = Pair::new(&ctx, &c);
+        check(&mut pair, &c, tol);
+    }
+}
+
+/// Tests of the sliding-boundary kernels on the sliding cases.
+macro_rules! sliding_tests {
+    ($($check:ident: $f32:ident ($tol32:expr), $f64:ident ($tol64:expr);)*) => {$(
+        #[test]
+        fn $f32() {
+            run_sliding(Precision::F32, $tol32, $check);
+        }
+        #[test]
+        fn $f64() {
+            run_sliding(Precision::F64, $tol64, $check);
+        }
+    )*};
+}
+
+sliding_tests! {
+    check_project_boundary: project_boundary_matches_cpu_f32(1e-5), project_boundary_matches_cpu_f64(1e-13);
+    check_constrain: constrain_matches_cpu_f32(1e-4), constrain_matches_cpu_f64(1e-12);
+    check_hessian_gather: constrain_blocks_matches_cpu_f32(1e-4), constrain_blocks_matches_cpu_f64(1e-12);
+    check_bcd: bcd_sliding_matches_cpu_f32(1e-3), bcd_sliding_matches_cpu_f64(1e-11);
+}
 
 fn run(precision: Precision, tol: f64, check: Check) {
     let Some(ctx) = context(precision) else {

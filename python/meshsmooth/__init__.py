@@ -251,6 +251,7 @@ def smooth(
     template: str = "harmonic",
     fixed: Optional[npt.ArrayLike] = None,
     boundary: str = "fixed",
+    feature_angle: float = 30.0,
     device: str = "cpu",
     precision: str = "auto",
     adapter: Optional[str] = None,
@@ -277,9 +278,14 @@ def smooth(
             (target matrix; needs a reference, not available here).
         template: "harmonic" (minimise the mean metric) or "average" (maximise
             the mean quality 1/metric).
-        fixed: vertices that must not move besides the boundary skin (which is
-            always fixed): a boolean mask of length n or an index array.
-        boundary: "fixed", the only choice: the boundary skin never moves.
+        fixed: vertices that must not move besides the boundary skin (fixed
+            unless ``boundary="slide"``): a boolean mask of length n or an index array.
+        boundary: "fixed" (the boundary skin never moves) or "slide" (boundary
+            vertices move within their boundary face or along their feature
+            edge and stay on the original boundary; corners stay).
+        feature_angle: with ``boundary="slide"``, faces meeting at more than
+            this many degrees form a feature edge, and an edge turning by more
+            than it makes a corner.
         device: "cpu" (f64 on all cores) or "gpu" (wgpu; bcd runs colour by colour).
         precision: GPU arithmetic "f32", "f64" or "auto" (f64 where the adapter has it).
         adapter: use the GPU adapter whose name contains this.
@@ -307,8 +313,8 @@ def smooth(
     p = _check_points(points)
     blocks = _check_cells(cells, p)
     mask = _check_fixed(fixed, p.shape[0])
-    if boundary != "fixed":
-        raise ValueError(f"boundary must be 'fixed' (the boundary skin never moves), got {boundary!r}")
+    if boundary not in ("fixed", "slide"):
+        raise ValueError(f"boundary must be 'fixed' or 'slide', got {boundary!r}")
     if callback is not None and not callable(callback):
         raise TypeError(f"callback must be callable, got {type(callback).__name__}")
     for arg, value in (("method", method), ("metric", metric), ("template", template), ("device", device), ("precision", precision)):
@@ -326,6 +332,8 @@ def smooth(
         method,
         metric,
         template,
+        boundary,
+        float(feature_angle),
         device,
         precision,
         adapter,

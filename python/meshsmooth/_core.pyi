@@ -17,6 +17,8 @@ def smooth(
     method: str,
     metric: str,
     template: str,
+    boundary: str,
+    feature_angle: float,
     device: str,
     precision: str,
     adapter: Optional[str],

@@ -7,7 +7,7 @@
 use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
 use meshsmooth::io::{self, Format};
 use meshsmooth::metric::smetric::MetricKind;
-use meshsmooth::problem::ProblemOptions;
+use meshsmooth::problem::{Boundary, ProblemOptions};
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::{self, Device, Method, Options, Params, Record, StopReason};
 use meshsmooth::{ElementKind, Error, Mesh, metric_report};
@@ -113,7 +113,7 @@ fn report_dict<'py>(py: Python<'py>, mesh: &Mesh) -> PyResult<Bound<'py, PyAny>>
 
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, device, precision, adapter, tol, max_iter, time_limit, callback))]
+#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback))]
 fn smooth<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -124,6 +124,8 @@ fn smooth<'py>(
     method: &str,
     metric: &str,
     template: &str,
+    boundary: &str,
+    feature_angle: f64,
     device: &str,
     precision: &str,
     adapter: Option<String>,
@@ -134,9 +136,18 @@ fn smooth<'py>(
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
     let mut mesh = build_mesh(&points, &kinds, &offsets, &conn, fixed.as_ref())?;
     let method: Method = parse(method)?;
+    if !(feature_angle > 0.0 && feature_angle < 180.0) {
+        return Err(PyValueError::new_err(format!(
+            "feature_angle must be between 0 and 180 degrees, got {feature_angle}"
+        )));
+    }
     let problem = ProblemOptions {
         metric: parse(metric)?,
         template: parse(template)?,
+        boundary: Boundary {
+            mode: parse(boundary)?,
+            feature_angle,
+        },
         ..Default::default()
     };
     let gpu_options = GpuOptions {

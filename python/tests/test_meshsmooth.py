@@ -265,3 +265,23 @@ def test_stopping_rules(hex_box):
         ms.smooth(points, hexes, device="tpu")
     with pytest.raises(ValueError, match="boundary"):
         ms.smooth(points, hexes, boundary="free")
+    with pytest.raises(ValueError, match="feature_angle"):
+        ms.smooth(points, hexes, boundary="slide", feature_angle=200.0)
+
+
+def test_sliding_boundary_keeps_sides_and_corners(quad_grid):
+    points, quads, interior = quad_grid
+    p = points.copy()
+    rng = np.random.default_rng(3)
+    for k in range(2):
+        # boundary vertices strictly inside a side running along axis k move along it
+        along = ~interior & (points[:, k] > 0) & (points[:, k] < 1)
+        p[along, k] += rng.uniform(-0.05, 0.05, along.sum())
+    fixed = ms.smooth(p, quads)
+    slid = ms.smooth(p, quads, boundary="slide")
+    assert slid.objective < fixed.objective - 1e-4
+    on = (points == 0.0) | (points == 1.0)
+    assert np.abs(slid.points[on] - p[on]).max() <= 1e-12
+    corners = on.all(axis=1)
+    assert np.array_equal(slid.points[corners], p[corners])
+    assert not np.array_equal(slid.points[~interior], p[~interior])

@@ -6,9 +6,11 @@ use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs, StopAr
 use meshsmooth::backend::gpu::list_adapters;
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, Format};
+use meshsmooth::mesh::fixing::RuleCount;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report;
-use meshsmooth::problem::ProblemOptions;
+use meshsmooth::problem::boundary::{VertexClass, classify};
+use meshsmooth::problem::{BoundaryMode, ProblemOptions};
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::{self, Info, Method, Params};
 use meshsmooth::{Error, Mesh, Result, metric};
@@ -77,6 +79,7 @@ impl ObjectiveArgs {
             template: self.template,
             reference,
             ordering: self.order,
+            ..Default::default()
         })
     }
 }
@@ -143,10 +146,27 @@ fn summary(info: &Info, f0: f64) -> String {
 
 /// Smooths `mesh` in place, printing reports and iterations unless `quiet`.
 fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: bool) -> Result<Info> {
+    let reference = solver.objective.reference()?;
+    let mut options = solver.objective.options(reference.as_ref())?;
+    options.boundary = solver.boundary.boundary()?;
+    // the rules fix vertices for this run only: the output keeps the file's own flags
+    let file_fixed = mesh.fixed.clone();
+    let rule_counts = solver.boundary.rules()?.apply(mesh)?;
+    let result = run_with_rules(mesh, solver, &options, &rule_counts, quiet, save_partial);
+    mesh.fixed = file_fixed;
+    result
+}
+
+fn run_with_rules(
+    mesh: &mut Mesh,
+    solver: &SolverArgs,
+    options: &ProblemOptions,
+    rule_counts: &[RuleCount],
+    quiet: bool,
+    save_partial: bool,
+) -> Result<Info> {
     let method = solver.method;
     let params = solver.params()?;
-    let reference = solver.objective.reference()?;
-    let options = solver.objective.options(reference.as_ref())?;
     // refuse what cannot be smoothed before printing anything
     options.check(mesh)?;
     let bad = metric::inverted_elements(mesh, &mesh.points);
@@ -160,6 +180,24 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
     let before = quality_report(mesh, &mesh.points);
     if !quiet {
         println!("== initial mesh ==\n{before}");
+        for c in rule_counts {
+            println!("{}: {} vertices", c.rule, c.vertices);
+        }
+        if options.boundary.mode == BoundaryMode::Slide {
+            let skin = classify(mesh, &mesh.points, options.boundary.feature_angle);
+            let count = |k: VertexClass| {
+                (0..mesh.num_points())
+                    .filter(|&v| skin.class[v] == k && (k == VertexClass::Corner || !mesh.is_fixed(v)))
+                    .count()
+            };
+            println!(
+                "--boundary slide (feature angle {}°): {} vertices slide on boundary faces, {} along feature edges; {} corners fixed\n",
+                options.boundary.feature_angle,
+                count(VertexClass::Surface),
+                count(VertexClass::Edge),
+                count(VertexClass::Corner)
+            );
+        }
     }
     let start = mesh.points.clone();
     // other metrics get the paper-style table of their own values as well
@@ -174,7 +212,7 @@ fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: b
         checkpoint_every: save_partial.then_some(10),
         fail_after: None,
     };
-    let result = solve::smooth_mesh(mesh, &options, &opts, &mut |r| progress.update(r));
+    let result = solve::smooth_mesh(mesh, options, &opts, &mut |r| progress.update(r));
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
     let info = result?;
     if !quiet {

@@ -1,6 +1,7 @@
 //! Argument parsing and the subcommands. No numerics live here: every
 //! command calls the library and prints what it returns.
 
+mod boundary;
 mod commands;
 mod compare;
 mod device;
@@ -98,6 +99,8 @@ pub struct SolverArgs {
     pub stop: StopArgs,
     #[command(flatten)]
     pub objective: ObjectiveArgs,
+    #[command(flatten)]
+    pub boundary: boundary::BoundaryArgs,
     /// Newton: what CG returns on negative curvature: the CG iterate so far (truncated
     /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
     #[arg(long, value_enum, default_value_t = NewtonParams::default().negative_curvature)]

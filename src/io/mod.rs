@@ -500,3 +500,28 @@ pub(crate) fn fmt_f64(x: f64) -> String {
 pub(crate) fn is_planar_z0(mesh: &Mesh) -> bool {
     mesh.dim() == 2 && mesh.points.iter().all(|p| p[2].to_bits() == 0)
 }
+
+/// Vertex ids (0-based, whitespace- or comma-separated, `#` starts a
+/// comment) from a text file, for `--fixed-file`; an entry that is not a
+/// non-negative integer is refused with its line.
+pub fn read_vertex_ids(path: &Path) -> Result<Vec<usize>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut ids = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let content = line.split('#').next().unwrap_or("");
+        for token in content
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|t| !t.is_empty())
+        {
+            let id = token.parse::<usize>().map_err(|_| {
+                Error::parse(
+                    path,
+                    Some(crate::error::Location::Line(i + 1)),
+                    format!("'{}' is not a vertex id (a non-negative integer)", lex::clip(token)),
+                )
+            })?;
+            ids.push(id);
+        }
+    }
+    Ok(ids)
+}

@@ -3,6 +3,7 @@
 pub mod color;
 pub mod data;
 pub mod element;
+pub mod fixing;
 pub mod frame;
 pub mod order;
 pub mod plane;

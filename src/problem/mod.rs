@@ -20,11 +20,13 @@
 //! [`ElementKind::optimised_corners`]: crate::mesh::ElementKind::optimised_corners
 
 mod adjacency;
+pub mod boundary;
 mod check;
 mod corners;
 mod numbering;
 
 pub use adjacency::{Adjacency, adjacency, colours};
+pub use boundary::{Boundary, BoundaryMode, Sliding};
 pub use check::check;
 pub use corners::{Corners, corners, element_vertices};
 pub use numbering::{MeshGraph, Numbering, order};
@@ -50,6 +52,8 @@ pub struct ProblemOptions<'a> {
     pub reference: Option<&'a Mesh>,
     /// The vertex order the problem is built (and swept) in.
     pub ordering: Ordering,
+    /// Fixed boundary (the default) or sliding on it.
+    pub boundary: Boundary,
 }
 
 #[derive(Clone, Debug)]
@@ -88,6 +92,8 @@ pub struct Problem {
     /// The plane of a planar mesh outside the planes z = constant: positions
     /// are in its coordinates (`gather` maps into them, `scatter` back).
     pub plane: Option<Plane>,
+    /// The constraints of the boundary vertices that slide (`--boundary slide`).
+    pub sliding: Option<Sliding>,
     /// Time spent building this problem.
     pub setup_time: Duration,
 }
@@ -103,11 +109,22 @@ impl Problem {
         let start = Instant::now();
         let plane = check(mesh, &mesh.points, opts)?;
         let points = in_plane(plane.as_ref(), &mesh.points);
-        let graph = MeshGraph::of(mesh);
+        let mut graph = MeshGraph::of(mesh);
+        let skin = (opts.boundary.mode == BoundaryMode::Slide)
+            .then(|| boundary::classify(mesh, &points, opts.boundary.feature_angle));
+        // a sliding vertex is free unless the user fixed it
+        let slides = |v: usize| {
+            skin.as_ref()
+                .is_some_and(|s| !s.candidates.of(v).is_empty() && !mesh.is_fixed(v))
+        };
+        for (v, f) in graph.fixed.iter_mut().enumerate() {
+            *f &= !slides(v);
+        }
         let numbering = order(mesh, &graph, opts.ordering);
         let corners = corners(mesh, &points, opts, &numbering)?;
         let adj = adjacency(mesh, &graph, &numbering, &corners);
         let colors = colours(&adj);
+        let sliding = skin.as_ref().map(|s| s.renumber(&numbering, slides));
         Ok(Problem {
             dim: corners.dim,
             order: numbering.order,
@@ -128,6 +145,7 @@ impl Problem {
             free_vertices: adj.free_vertices,
             colors,
             plane,
+            sliding,
             setup_time: start.elapsed(),
         })
     }
@@ -143,6 +161,7 @@ impl Problem {
             + csr(&self.incidence)
             + csr(&self.neighbours)
             + csr(&self.colors)
+            + self.sliding.as_ref().map_or(0, |s| s.bytes())
     }
 
     pub fn num_vertices(&self) -> usize {

@@ -4,6 +4,7 @@
 //! parallel, as the kernel does; `sweep` visits the vertices one at a time in
 //! locality order, which only the CPU can (the sequential BCD is CPU-only).
 
+use super::project_boundary::{constrain_block, project_vertex};
 use crate::metric::TetShape;
 use crate::metric::mat3::{Mat3, Vec3, cholesky_solve, dot};
 use crate::problem::Problem;
@@ -95,6 +96,12 @@ fn s_with(rest: &Mat3, b: &Vec3, y: &Vec3) -> Mat3 {
 pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &mut Patch) -> Option<Vec3> {
     patch.load(p, x, v);
     let (f0, g, h) = patch.gradient_hessian(p, &x[v])?;
+    // a sliding vertex: the step in its tangent space, each trial put back on the boundary
+    let slide = p.sliding.as_ref().filter(|s| s.slides(v));
+    let (g, h) = match slide {
+        Some(s) => constrain_block(&s.projector[v], &g, &h),
+        None => (g, h),
+    };
     let neg_g = [-g[0], -g[1], -g[2]];
     // the block is positive definite for the mean ratio; fall back to a scaled
     // steepest descent step should rounding say otherwise
@@ -109,7 +116,10 @@ pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &m
     }
     let mut alpha = 1.0;
     for _ in 0..=ls.max_backtracks {
-        let trial = [x[v][0] + alpha * d[0], x[v][1] + alpha * d[1], x[v][2] + alpha * d[2]];
+        let mut trial = [x[v][0] + alpha * d[0], x[v][1] + alpha * d[1], x[v][2] + alpha * d[2]];
+        if let Some(s) = slide {
+            trial = project_vertex(s, v, &trial);
+        }
         if let Some(f) = patch.value(p, &trial)
             && f <= f0 + ls.sigma * alpha * slope
         {

@@ -3,7 +3,8 @@
 //! element or worsen the worst element around the vertex is not taken. CPU
 //! only: it is sequential by nature and a baseline, not an optimiser.
 
-use crate::metric::mat3::Vec3;
+use super::project_boundary::project_vertex;
+use crate::metric::mat3::{Vec3, dot, mul_vec, sub};
 use crate::problem::Problem;
 use std::time::Instant;
 
@@ -44,13 +45,23 @@ pub fn sweep(p: &Problem, x: &mut [Vec3], deadline: Option<Instant>) -> f64 {
         let Some(before) = patch_worst(p, x, v, &x[v]) else {
             continue;
         };
-        let d = [c[0] - x[v][0], c[1] - x[v][1], c[2] - x[v][2]];
+        let mut d = [c[0] - x[v][0], c[1] - x[v][1], c[2] - x[v][2]];
+        // a sliding vertex moves toward the centroid within its tangent
+        // space, then back onto the boundary
+        let slide = p.sliding.as_ref().filter(|s| s.slides(v));
+        if let Some(s) = slide {
+            d = mul_vec(&s.projector[v], &d);
+        }
         // full move first, then shorter ones toward the centroid
         for t in [1.0, 0.5, 0.25] {
-            let trial = [x[v][0] + t * d[0], x[v][1] + t * d[1], x[v][2] + t * d[2]];
+            let mut trial = [x[v][0] + t * d[0], x[v][1] + t * d[1], x[v][2] + t * d[2]];
+            if let Some(s) = slide {
+                trial = project_vertex(s, v, &trial);
+            }
             if patch_worst(p, x, v, &trial).is_some_and(|w| w <= before) {
+                let m = sub(&trial, &x[v]);
+                max_sq = max_sq.max(dot(&m, &m));
                 x[v] = trial;
-                max_sq = max_sq.max(t * t * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
                 break;
             }
         }

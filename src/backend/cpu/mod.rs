@@ -8,6 +8,8 @@ pub mod block_jacobi;
 pub mod block_jacobi_factor;
 pub mod bsr_spmv;
 pub mod cbrt_eval;
+pub mod constrain;
+pub mod constrain_blocks;
 pub mod dot;
 pub mod gradient_gather;
 pub mod hessian_assemble;
@@ -16,6 +18,7 @@ pub mod laplace;
 pub mod line_search;
 pub mod mean_ratio_eval;
 pub mod objective;
+pub mod project_boundary;
 pub mod reduce;
 pub mod set_slot;
 
@@ -186,8 +189,11 @@ impl Backend for CpuBackend<'_> {
         };
         let min_det = out.min_det.map(|_| objective::min_det(p, x));
         let (f, bad) = match value {
-            Some((f, g)) => {
+            Some((f, mut g)) => {
                 if let Some(v) = gradient {
+                    if let Some(s) = &p.sliding {
+                        constrain::constrain(&s.projector, &p.free_vertices, &mut g);
+                    }
                     self.vectors[v.0 as usize] = g;
                 }
                 (f, 0.0)
@@ -211,6 +217,9 @@ impl Backend for CpuBackend<'_> {
             &self.vectors[d.0 as usize],
             &mut self.trial,
         );
+        if let Some(s) = &self.problem()?.sliding {
+            project_boundary::project(s, &self.problem()?.free_vertices, &mut self.trial);
+        }
         Ok(())
     }
 
@@ -256,8 +265,13 @@ impl Backend for CpuBackend<'_> {
             .hessian
             .as_mut()
             .ok_or_else(|| Error::InvalidArgument("assemble before prepare_hessian".into()))?;
-        if !h.assemble(p, &self.x, &mut self.vectors[g.0 as usize]) {
+        let grad = &mut self.vectors[g.0 as usize];
+        if !h.assemble(p, &self.x, grad) {
             return Err(crate::solve::accepted_step_inverted());
+        }
+        if let Some(s) = &p.sliding {
+            constrain::constrain(&s.projector, &p.free_vertices, grad);
+            constrain_blocks::constrain_blocks(&s.projector, &p.free_vertices, &mut h.matrix);
         }
         Ok(())
     }

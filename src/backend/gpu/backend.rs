@@ -46,6 +46,10 @@ enum Buf {
     Elem,
     Blocks,
     Factors,
+    /// Sliding-boundary projectors and primitives (`boundary.wgsl`).
+    SlideReal,
+    /// Sliding-boundary candidate lists.
+    SlideIdx,
 }
 
 /// Operations recorded between two submissions (the `Op` buffer's capacity).
@@ -88,9 +92,15 @@ impl<'c> GpuBackend<'c> {
             )));
         }
         let r = ctx.real_size();
+        let (slide_real, slide_idx) = slide_tables(p);
         check_bindings(
             &BindingLimits::of(&ctx.limits),
             &[
+                (
+                    "sliding-boundary projectors and primitives",
+                    slide_real.len() as u64 * r,
+                ),
+                ("sliding-boundary candidates", 4 * slide_idx.len() as u64),
                 ("positions", 3 * nv as u64 * r),
                 ("corners", 20 * nc as u64),
                 ("incidence", 4 * p.incidence.items.len() as u64),
@@ -133,6 +143,11 @@ impl<'c> GpuBackend<'c> {
         bufs.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
         bufs.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
         bufs.insert(Buf::Dummy, ctx.zeros_real("unused", 4));
+        bufs.insert(
+            Buf::SlideReal,
+            ctx.storage_real("sliding projectors and primitives", &slide_real),
+        );
+        bufs.insert(Buf::SlideIdx, ctx.storage_u32("sliding candidates", &slide_idx));
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scalar slots read back"),
             size: N_SLOTS as u64 * r,
@@ -246,6 +261,19 @@ impl<'c> GpuBackend<'c> {
         Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
+    /// g <- P g at every free vertex, where the boundary slides.
+    fn constrain(&mut self, g: Vector) -> Result<()> {
+        if self.problem.sliding.is_none() {
+            return Ok(());
+        }
+        self.record(
+            Kernel::Constrain.for_model(true),
+            &[Buf::Ops, Buf::SlideReal, Buf::SlideIdx, Buf::Free, Buf::Vector(g.0)],
+            Op::n(self.n_free),
+            self.n_free,
+        )
+    }
+
     /// The block-Jacobi factors (after `factor_precond`), as `BlockJacobi::factors`.
     pub fn block_jacobi_factors(&mut self) -> Result<Vec<[f64; 6]>> {
         self.submit()?;
@@ -264,6 +292,35 @@ impl<'c> GpuBackend<'c> {
             .chunks_exact(9)
             .map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]])
             .collect())
+    }
+}
+
+/// `boundary.wgsl`'s tables: projectors then primitives (reals), and the
+/// vertex count, candidate offsets and candidates (u32s). Without sliding,
+/// all offsets are zero: no vertex slides.
+fn slide_tables(p: &Problem) -> (Vec<f64>, Vec<u32>) {
+    let nv = p.num_vertices();
+    match &p.sliding {
+        None => (
+            vec![0.0; 4],
+            [nv as u32].into_iter().chain(std::iter::repeat_n(0, nv + 1)).collect(),
+        ),
+        Some(s) => {
+            let real = s
+                .projector
+                .iter()
+                .flatten()
+                .flatten()
+                .chain(s.primitives.iter().flatten().flatten())
+                .copied()
+                .collect();
+            let idx = [nv as u32]
+                .into_iter()
+                .chain(s.candidates.offsets.iter().copied())
+                .chain(s.candidates.items.iter().copied())
+                .collect();
+            (real, idx)
+        }
     }
 }
 
@@ -381,6 +438,7 @@ impl Backend for GpuBackend<'_> {
                 op,
                 self.n_free,
             )?;
+            self.constrain(g)?;
         }
         Ok(())
     }
@@ -395,7 +453,16 @@ impl Backend for GpuBackend<'_> {
             &[Buf::Ops, Buf::Scalars, Buf::Free, Buf::X, Buf::Vector(d.0), Buf::Trial],
             op,
             self.n_free,
-        )
+        )?;
+        if self.problem.sliding.is_some() {
+            self.record(
+                Kernel::ProjectBoundary.for_model(true),
+                &[Buf::Ops, Buf::SlideReal, Buf::SlideIdx, Buf::Free, Buf::Trial],
+                Op::n(self.n_free),
+                self.n_free,
+            )?;
+        }
+        Ok(())
     }
 
     fn accept_trial(&mut self) -> Result<()> {
@@ -426,6 +493,8 @@ impl Backend for GpuBackend<'_> {
                 Buf::Inc,
                 Buf::Colors,
                 Buf::Moves,
+                Buf::SlideReal,
+                Buf::SlideIdx,
             ],
             op,
             count as usize,
@@ -516,7 +585,26 @@ impl Backend for GpuBackend<'_> {
             ],
             op,
             nf,
-        )
+        )?;
+        if self.problem.sliding.is_some() {
+            self.constrain(g)?;
+            self.record(
+                Kernel::ConstrainBlocks.for_model(true),
+                &[
+                    Buf::Ops,
+                    Buf::SlideReal,
+                    Buf::SlideIdx,
+                    Buf::Free,
+                    Buf::RowOffsets,
+                    Buf::Cols,
+                    Buf::Diag,
+                    Buf::Blocks,
+                ],
+                Op::n(nf),
+                nf,
+            )?;
+        }
+        Ok(())
     }
 
     fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()> {

@@ -44,6 +44,7 @@ const SHARED: &[(&str, &str)] = &[
     ("corners", include_str!("../../../shaders/common/corners.wgsl")),
     ("tree", include_str!("../../../shaders/common/tree.wgsl")),
     ("slots", include_str!("../../../shaders/common/slots.wgsl")),
+    ("boundary", include_str!("../../../shaders/common/boundary.wgsl")),
     ("mean_ratio", include_str!("../../../shaders/metric/mean_ratio.wgsl")),
     ("condition", include_str!("../../../shaders/metric/condition.wgsl")),
     ("target", include_str!("../../../shaders/metric/target.wgsl")),
@@ -95,6 +96,8 @@ const OP: Binding = b("op", OpU, St("Op"));
 const MODEL: Binding = b("model", U, St("Model"));
 const SCALARS_R: Binding = b("scalars", R, Re);
 const SCALARS_RW: Binding = b("scalars", RW, Re);
+const SLIDE_REAL: Binding = b("slide_real", R, Re);
+const SLIDE_IDX: Binding = b("slide_idx", R, Ui);
 
 /// One kernel: its WGSL stem (file, CPU twin and tests share it), source,
 /// bindings in order (group 0, binding i) and whether it has a closed-form
@@ -143,6 +146,7 @@ kernels! {
     Bcd = "bcd", variants: true, [
         MODEL, b("ls", U, V4), OP, b("x", RW, Re), b("corners", R, Ui), b("shapes", R, V4),
         b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
+        SLIDE_REAL, SLIDE_IDX,
     ];
     HessianAssemble = "hessian_assemble", variants: true, [
         MODEL, OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4), b("elem", RW, Re),
@@ -162,6 +166,14 @@ kernels! {
     Dot = "dot", variants: false, [OP, b("a", R, Re), b("b", R, Re), b("partials", RW, V4)];
     LineSearch = "line_search", variants: false, [
         OP, SCALARS_R, b("free_vertices", R, Ui), b("x", R, Re), b("d", R, Re), b("trial", RW, Re),
+    ];
+    ProjectBoundary = "project_boundary", variants: false, [
+        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("x", RW, Re),
+    ];
+    Constrain = "constrain", variants: false, [OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("y", RW, Re)];
+    ConstrainBlocks = "constrain_blocks", variants: false, [
+        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("row_offsets", R, Ui), b("cols", R, Ui),
+        b("diag", R, Ui), b("blocks", RW, Re),
     ];
 }
 

@@ -1,0 +1,358 @@
+//! Which vertices stay fixed, from what the file holds: Gmsh physical groups
+//! (by name or number), point-data arrays, lists of vertex ids. Applied to
+//! `Mesh::fixed` before a problem is built; each rule reports how many
+//! vertices it fixed (or released).
+//!
+//! A file's lower cells (Gmsh boundary faces, lines, points) fix their
+//! vertices by default. `free_groups` releases the vertices of the lower
+//! cells of those groups, and with a sliding boundary the lower cells that
+//! are facets on the skin (faces of a volume mesh, lines of a planar one)
+//! describe the boundary rather than fix it, so they release theirs too
+//! (internal interfaces stay fixed); a vertex also on another lower cell, or
+//! flagged by a `fixed` point array, stays fixed.
+
+use super::data::{DataArray, GMSH_PHYSICAL, Values};
+use super::{LowerKind, Mesh};
+use crate::error::{Error, Result};
+use std::collections::BTreeSet;
+
+/// The rules, applied in this order: releases, then fixes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FixRules {
+    /// Gmsh physical groups (names or numbers) whose vertices are fixed.
+    pub fix_groups: Vec<String>,
+    /// Gmsh physical groups whose lower cells do not fix their vertices.
+    pub free_groups: Vec<String>,
+    /// Point-data arrays: a vertex with any non-zero component is fixed.
+    pub fixed_arrays: Vec<String>,
+    /// Lists of vertex ids (0-based), each with where it came from (a file name).
+    pub fixed_ids: Vec<(String, Vec<usize>)>,
+    /// The boundary slides: facet lower cells do not fix their vertices.
+    pub release_facets: bool,
+}
+
+/// What one rule did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RuleCount {
+    /// The rule as the command line spells it (`--fix-group inlet`).
+    pub rule: String,
+    /// Vertices it fixed (or, for releases, released).
+    pub vertices: usize,
+}
+
+impl FixRules {
+    pub fn is_empty(&self) -> bool {
+        self.fix_groups.is_empty()
+            && self.free_groups.is_empty()
+            && self.fixed_arrays.is_empty()
+            && self.fixed_ids.is_empty()
+            && !self.release_facets
+    }
+
+    /// Applies the rules to `mesh.fixed`.
+    pub fn apply(&self, mesh: &mut Mesh) -> Result<Vec<RuleCount>> {
+        let mut report = Vec::new();
+        if self.is_empty() {
+            return Ok(report);
+        }
+        let n = mesh.num_points();
+        let mut fixed = if mesh.fixed.is_empty() {
+            vec![false; n]
+        } else {
+            mesh.fixed.clone()
+        };
+        let facet_kinds: &[LowerKind] = if mesh.dim() == 3 {
+            &[LowerKind::Triangle, LowerKind::Quadrilateral]
+        } else {
+            &[LowerKind::Line]
+        };
+        let freed_tags: Vec<(String, BTreeSet<i64>)> = self
+            .free_groups
+            .iter()
+            .map(|g| Ok((g.clone(), group_tags(mesh, g)?)))
+            .collect::<Result<_>>()?;
+        if !freed_tags.is_empty() || self.release_facets {
+            let skin = if self.release_facets {
+                super::topology::skin_vertices(mesh)
+            } else {
+                vec![false; n]
+            };
+            let lower_tag = mesh.data.lower_array(GMSH_PHYSICAL);
+            let tag = |i: usize| lower_tag.map(|a| a.get_i64(i));
+            let released_by = |i: usize, kind: LowerKind, vs: &[u32]| -> Option<usize> {
+                if let Some(t) = tag(i)
+                    && let Some(k) = freed_tags.iter().position(|(_, tags)| tags.contains(&t))
+                {
+                    return Some(k);
+                }
+                let on_skin = vs.iter().all(|&v| skin[v as usize]);
+                (self.release_facets && facet_kinds.contains(&kind) && on_skin).then_some(freed_tags.len())
+            };
+            let mut keep = vec![false; n];
+            if let Some(a) = mesh.data.point.iter().find(|a| a.name == "fixed") {
+                for (v, k) in keep.iter_mut().enumerate() {
+                    *k = nonzero(a, v);
+                }
+            }
+            let mut released: Vec<Option<usize>> = vec![None; n];
+            for (i, (kind, vs)) in mesh.lower.iter().enumerate() {
+                match released_by(i, *kind, vs) {
+                    Some(k) => vs.iter().for_each(|&v| {
+                        released[v as usize].get_or_insert(k);
+                    }),
+                    None => vs.iter().for_each(|&v| keep[v as usize] = true),
+                }
+            }
+            let mut counts = vec![0usize; freed_tags.len() + 1];
+            for v in 0..n {
+                if let Some(k) = released[v]
+                    && !keep[v]
+                    && fixed[v]
+                {
+                    fixed[v] = false;
+                    counts[k] += 1;
+                }
+            }
+            for (k, (g, _)) in freed_tags.iter().enumerate() {
+                report.push(RuleCount {
+                    rule: format!("--free-group {g} (released)"),
+                    vertices: counts[k],
+                });
+            }
+            if self.release_facets && counts[freed_tags.len()] > 0 {
+                report.push(RuleCount {
+                    rule: "--boundary slide (boundary faces of the file released)".into(),
+                    vertices: counts[freed_tags.len()],
+                });
+            }
+        }
+        for g in &self.fix_groups {
+            let tags = group_tags(mesh, g)?;
+            let mut hit = vec![false; n];
+            if let Some(a) = mesh.data.cell_array(GMSH_PHYSICAL) {
+                for e in 0..mesh.num_elements() {
+                    if tags.contains(&a.get_i64(e)) {
+                        mesh.element(e).iter().for_each(|&v| hit[v as usize] = true);
+                    }
+                }
+            }
+            if let Some(a) = mesh.data.lower_array(GMSH_PHYSICAL) {
+                for (i, (_, vs)) in mesh.lower.iter().enumerate() {
+                    if tags.contains(&a.get_i64(i)) {
+                        vs.iter().for_each(|&v| hit[v as usize] = true);
+                    }
+                }
+            }
+            report.push(mark(&mut fixed, &hit, format!("--fix-group {g}")));
+        }
+        for name in &self.fixed_arrays {
+            let a = mesh.data.point.iter().find(|a| &a.name == name).ok_or_else(|| {
+                let names: Vec<&str> = mesh.data.point.iter().map(|a| a.name.as_str()).collect();
+                Error::InvalidArgument(format!(
+                    "--fixed-array {name}: the mesh has no point array of that name (its point arrays: {})",
+                    if names.is_empty() {
+                        "none".into()
+                    } else {
+                        names.join(", ")
+                    }
+                ))
+            })?;
+            if matches!(a.values, Values::Str(_)) {
+                return Err(Error::InvalidArgument(format!(
+                    "--fixed-array {name}: the array holds strings, not numbers"
+                )));
+            }
+            let hit: Vec<bool> = (0..n).map(|v| nonzero(a, v)).collect();
+            report.push(mark(&mut fixed, &hit, format!("--fixed-array {name}")));
+        }
+        for (source, ids) in &self.fixed_ids {
+            let mut hit = vec![false; n];
+            for &v in ids {
+                if v >= n {
+                    return Err(Error::InvalidArgument(format!(
+                        "--fixed-file {source}: vertex {v} does not exist (the mesh has {n} vertices, numbered from 0)"
+                    )));
+                }
+                hit[v] = true;
+            }
+            report.push(mark(&mut fixed, &hit, format!("--fixed-file {source}")));
+        }
+        mesh.fixed = if fixed.iter().any(|&f| f) { fixed } else { Vec::new() };
+        Ok(report)
+    }
+}
+
+fn nonzero(a: &DataArray, v: usize) -> bool {
+    let k = a.components;
+    (v * k..(v + 1) * k).any(|i| a.get_f64(i) != 0.0)
+}
+
+fn mark(fixed: &mut [bool], hit: &[bool], rule: String) -> RuleCount {
+    let mut vertices = 0;
+    for (f, &h) in fixed.iter_mut().zip(hit) {
+        if h {
+            *f = true;
+            vertices += 1;
+        }
+    }
+    RuleCount { rule, vertices }
+}
+
+/// The physical tags a group name or number stands for.
+fn group_tags(mesh: &Mesh, group: &str) -> Result<BTreeSet<i64>> {
+    let mut present: BTreeSet<i64> = BTreeSet::new();
+    for a in [
+        mesh.data.cell_array(GMSH_PHYSICAL),
+        mesh.data.lower_array(GMSH_PHYSICAL),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        present.extend((0..a.tuples()).map(|i| a.get_i64(i)));
+    }
+    let names = &mesh.data.physical_names;
+    let known = || {
+        let mut list: Vec<String> = names.iter().map(|p| format!("{} ({})", p.name, p.tag)).collect();
+        list.extend(
+            present
+                .iter()
+                .filter(|t| !names.iter().any(|p| p.tag as i64 == **t))
+                .map(|t| t.to_string()),
+        );
+        if list.is_empty() {
+            "none".to_string()
+        } else {
+            list.join(", ")
+        }
+    };
+    let tags: BTreeSet<i64> = match group.trim().parse::<i64>() {
+        Ok(t) => [t].into_iter().filter(|t| present.contains(t)).collect(),
+        Err(_) => names.iter().filter(|p| p.name == group).map(|p| p.tag as i64).collect(),
+    };
+    if tags.is_empty() {
+        return Err(Error::InvalidArgument(format!(
+            "no physical group '{group}' in the mesh (its groups: {})",
+            known()
+        )));
+    }
+    Ok(tags)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::data::{PhysicalName, ValueType};
+    use crate::{ElementKind, generate};
+
+    /// A 2x2 quad grid with its four boundary sides as tagged lines 1..4.
+    fn tagged_grid() -> Mesh {
+        let mut m = generate::quad_grid(2, 2, [2.0, 2.0]);
+        let sides: [[u32; 3]; 4] = [[0, 1, 2], [2, 5, 8], [8, 7, 6], [6, 3, 0]];
+        let mut tags = Vec::new();
+        for (k, s) in sides.iter().enumerate() {
+            for w in s.windows(2) {
+                m.lower.push((LowerKind::Line, w.to_vec()));
+                tags.push(k as i64 + 1);
+            }
+        }
+        let cell = DataArray::new(GMSH_PHYSICAL, ValueType::I32, 1, Values::Int(vec![9; m.num_elements()]));
+        m.data.lower = vec![DataArray::new(GMSH_PHYSICAL, ValueType::I32, 1, Values::Int(tags))];
+        m.data.cell = vec![cell];
+        m.data.physical_names = vec![
+            PhysicalName {
+                dim: 1,
+                tag: 1,
+                name: "bottom".into(),
+            },
+            PhysicalName {
+                dim: 2,
+                tag: 9,
+                name: "plate".into(),
+            },
+        ];
+        m.fixed = vec![true; 9];
+        m.fixed[4] = false;
+        assert_eq!(m.kinds[0], ElementKind::Quadrilateral);
+        m
+    }
+
+    #[test]
+    fn groups_by_name_and_number_fix_and_release() {
+        let mut m = tagged_grid();
+        let rules = FixRules {
+            free_groups: vec!["bottom".into(), "2".into()],
+            ..Default::default()
+        };
+        let report = rules.apply(&mut m).unwrap();
+        // bottom releases 1 (vertex 1; 0 and 2 are also on sides 4 and 2... 2 is on freed side 2)
+        let free: Vec<usize> = (0..9).filter(|&v| !m.is_fixed(v)).collect();
+        assert_eq!(free, vec![1, 2, 4, 5]);
+        assert_eq!(report[0].vertices + report[1].vertices, 3);
+        let rules = FixRules {
+            fix_groups: vec!["plate".into()],
+            ..Default::default()
+        };
+        let report = rules.apply(&mut m).unwrap();
+        assert_eq!(report[0].vertices, 9);
+        assert!((0..9).all(|v| m.is_fixed(v)));
+        let err = FixRules {
+            fix_groups: vec!["inlet".into()],
+            ..Default::default()
+        }
+        .apply(&mut m)
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("inlet") && err.contains("bottom (1)") && err.contains("plate (9)"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn sliding_releases_facets_but_not_flagged_vertices() {
+        let mut m = tagged_grid();
+        m.data.point.push(DataArray::new(
+            "fixed",
+            ValueType::U8,
+            1,
+            Values::Int((0..9).map(|v| i64::from(v == 1)).collect()),
+        ));
+        let rules = FixRules {
+            release_facets: true,
+            ..Default::default()
+        };
+        rules.apply(&mut m).unwrap();
+        let fixed: Vec<usize> = (0..9).filter(|&v| m.is_fixed(v)).collect();
+        assert_eq!(fixed, vec![1]);
+    }
+
+    #[test]
+    fn arrays_and_id_lists_fix_and_bad_names_are_refused() {
+        let mut m = generate::quad_grid(2, 2, [2.0, 2.0]);
+        m.data.point.push(DataArray::new(
+            "pin",
+            ValueType::F64,
+            2,
+            Values::Float((0..18).map(|i| if i == 9 { 0.5 } else { 0.0 }).collect()),
+        ));
+        let rules = FixRules {
+            fixed_arrays: vec!["pin".into()],
+            fixed_ids: vec![("ids.txt".into(), vec![4, 8])],
+            ..Default::default()
+        };
+        let report = rules.apply(&mut m).unwrap();
+        assert_eq!(report.iter().map(|r| r.vertices).collect::<Vec<_>>(), vec![1, 2]);
+        let fixed: Vec<usize> = (0..9).filter(|&v| m.is_fixed(v)).collect();
+        assert_eq!(fixed, vec![4, 8]);
+        let bad = FixRules {
+            fixed_arrays: vec!["nope".into()],
+            ..Default::default()
+        };
+        assert!(bad.apply(&mut m).unwrap_err().to_string().contains("pin"));
+        let bad = FixRules {
+            fixed_ids: vec![("ids.txt".into(), vec![9])],
+            ..Default::default()
+        };
+        assert!(bad.apply(&mut m).unwrap_err().to_string().contains("ids.txt"));
+    }
+}
