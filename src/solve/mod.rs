@@ -9,8 +9,10 @@ pub mod laplace;
 pub mod line_search;
 pub mod newton;
 pub mod pcg;
+pub mod untangle;
 
 pub use history::{History, Record, StopReason};
+pub use untangle::{UntangleInfo, UntangleParams, untangle, untangle_mesh};
 
 use crate::Mesh;
 use crate::backend::Backend;
