@@ -75,6 +75,8 @@ pub struct UntangleInfo {
     /// Elements with an inverted or degenerate corner before and after.
     pub inverted_before: usize,
     pub inverted_after: usize,
+    /// Corners with det S <= 0 before.
+    pub inverted_corners_before: usize,
     /// Corners below the margin before and after.
     pub corners_before: usize,
     pub corners_after: usize,
@@ -194,8 +196,10 @@ pub fn untangle(
     }
     let inverted_before = p.infeasible_elements(x).len();
     let (bad, mut min_det) = corners_below_margin(p, x, params.margin);
+    let (inverted_corners, _) = corners_below_margin(p, x, 0.0);
     let mut info = UntangleInfo {
         inverted_before,
+        inverted_corners_before: inverted_corners.len(),
         inverted_after: inverted_before,
         corners_before: bad.len(),
         corners_after: bad.len(),
