@@ -212,10 +212,11 @@ fn run_solver_untangling(
             first: bad.into_iter().take(5).collect(),
         });
     }
-    if !bad.is_empty() {
-        if let Some(msg) = solve::untangle::convention_problem(mesh) {
-            return Err(Error::InvalidMesh(msg));
-        }
+    if let Some(msg) = (!bad.is_empty())
+        .then(|| solve::untangle::convention_problem(mesh))
+        .flatten()
+    {
+        return Err(Error::InvalidMesh(msg));
     }
     let untangle_method = if method == Method::Laplace {
         Method::Newton
