@@ -282,3 +282,34 @@ fn mesquite_tangled_meshes_untangle() {
         );
     }
 }
+
+/// Rounds of a few inner iterations each: eps follows Garanzha et al.'s
+/// schedule down (never up) and the mesh still ends untangled.
+#[test]
+fn eps_decreases_over_short_rounds_and_the_mesh_untangles() {
+    for (name, r) in [
+        ("tet", generate::tet_box(5, 5, 5, [5.0; 3])),
+        ("quad", generate::quad_grid(10, 10, [10.0, 10.0])),
+    ] {
+        let (mut m, _) = tangled(&r, 1.0, 2);
+        let params = UntangleParams {
+            inner_max_iter: 1,
+            ..Default::default()
+        };
+        let info = untangle_mesh(
+            &mut m,
+            &ProblemOptions::default(),
+            &Options::cpu(Method::Newton, &Params::default()),
+            &params,
+            &mut |_| true,
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(info.rounds > 1, "{name}: {info:?}");
+        assert!(
+            info.schedule.windows(2).all(|w| w[1].0 <= w[0].0),
+            "{name}: {:?}",
+            info.schedule
+        );
+        assert!(inverted_elements(&m, &m.points).is_empty(), "{name}");
+    }
+}

@@ -178,6 +178,22 @@ fn failure(p: &Problem, x: &[Vec3], rounds: usize) -> Error {
     }
 }
 
+/// Garanzha et al.'s update of eps after a round that took F from `f0` to
+/// `f1` and left `min_det` as the smallest det S: with sigma = max(1 - f1/f0,
+/// 0.1) and mu = (1 - sigma) chi(min_det, eps), eps = 2 sqrt(mu (mu -
+/// min_det)) when min_det < mu, else `floor` (never below it). It solves
+/// chi(min_det, eps_new) = mu: the worst corner's regularised determinant is
+/// asked to shrink by the factor F shrank by.
+pub fn next_eps(eps: f64, min_det: f64, f0: f64, f1: f64, floor: f64) -> f64 {
+    let sigma = (1.0 - f1 / f0).max(0.1);
+    let mu = (1.0 - sigma) * smetric::chi(min_det, eps).0;
+    if min_det < mu {
+        (2.0 * (mu * (mu - min_det)).sqrt()).max(floor)
+    } else {
+        floor
+    }
+}
+
 /// Untangles positions `x` (problem numbering) in place on `opts.device`
 /// with `opts.method`. Returns `Err(Error::Untangle)`, with `x` at the last
 /// round's positions, when elements stay inverted.
@@ -195,7 +211,7 @@ pub fn untangle(
         ));
     }
     let inverted_before = p.infeasible_elements(x).len();
-    let (bad, mut min_det) = corners_below_margin(p, x, params.margin);
+    let (bad, _) = corners_below_margin(p, x, params.margin);
     let (inverted_corners, _) = corners_below_margin(p, x, 0.0);
     let mut info = UntangleInfo {
         inverted_before,
@@ -235,27 +251,18 @@ pub fn untangle(
         info.rounds += 1;
         info.iterations += solved.iterations;
         info.device = solved.device;
-        let (bad, d) = corners_below_margin(p, x, params.margin);
-        min_det = d;
+        let (bad, min_det) = corners_below_margin(p, x, params.margin);
         info.schedule.push((eps, min_det));
         info.corners_after = bad.len();
         info.inverted_after = p.infeasible_elements(x).len();
         if bad.is_empty() || solved.stop == StopReason::Cancelled {
             break;
         }
-        // Garanzha et al.'s update from the relative decrease and the worst corner
         let records = &solved.history.records;
         let (f0, f1) = (records[0].objective, records[records.len() - 1].objective);
-        let sigma = (1.0 - f1 / f0).max(0.1);
-        let mu = (1.0 - sigma) * smetric::chi(min_det, eps).0;
-        eps = if min_det < mu {
-            (2.0 * (mu * (mu - min_det)).sqrt()).max(floor)
-        } else {
-            floor
-        };
+        eps = next_eps(eps, min_det, f0, f1, floor);
     }
     info.seconds = start.elapsed().as_secs_f64();
-    let _ = min_det;
     if info.inverted_after > 0 {
         return Err(failure(p, x, info.rounds));
     }
@@ -380,4 +387,25 @@ fn every_corner_negative(kind: crate::ElementKind, x: &[Vec3]) -> bool {
         };
         d < 0.0
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn next_eps_solves_for_the_target_regularised_determinant() {
+        // chi(min_det, eps_new) = mu = (1 - sigma) chi(min_det, eps)
+        for (eps, min_det, f0, f1) in [(1.0, -0.5, 10.0, 4.0), (0.3, -2.0, 5.0, 4.9), (0.1, 0.01, 2.0, 1.0)] {
+            let sigma = f64::max(1.0 - f1 / f0, 0.1);
+            let mu = (1.0 - sigma) * smetric::chi(min_det, eps).0;
+            let new = next_eps(eps, min_det, f0, f1, 1e-12);
+            assert!(new < eps, "eps must decrease: {eps} -> {new}");
+            assert!((smetric::chi(min_det, new).0 - mu).abs() <= 1e-12 * mu.abs().max(1.0));
+        }
+        // a worst corner already above mu: the floor
+        assert_eq!(next_eps(0.1, 1.0, 2.0, 1.0, 1e-9), 1e-9);
+        // never below the floor
+        assert_eq!(next_eps(1e-9, -1e-30, 1.0, 0.0, 1e-9), 1e-9);
+    }
 }
