@@ -115,3 +115,34 @@ fn an_unrepairable_tangle_is_refused_with_the_element_and_reason() {
         assert!(!out.exists(), "{cmd} wrote an output");
     }
 }
+
+#[test]
+fn generate_tangle_writes_a_tangled_mesh_that_smooth_repairs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("g.vtk"), dir.path().join("o.vtk"));
+    let o = meshsmooth(&[
+        "generate",
+        "box",
+        "--cells",
+        "4",
+        "4",
+        "4",
+        "--perturb",
+        "random:0.6",
+        "--tangle",
+        "-o",
+        s(&input),
+    ]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    let m = io::read(&input).unwrap();
+    let bad = inverted_elements(&m, &m.points).len();
+    assert!(
+        bad > 0 && t.contains(&format!("{bad} of {} elements inverted", m.num_elements())),
+        "{t}"
+    );
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--device", "cpu", "-q"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let m = io::read(&out).unwrap();
+    assert!(inverted_elements(&m, &m.points).is_empty());
+}

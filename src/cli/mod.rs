@@ -268,6 +268,10 @@ pub struct PerturbArgs {
     /// Seed of the random numbers.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Skip the inversion guard: every move is made in full, so elements may invert
+    /// (tangled inputs for `untangle`).
+    #[arg(long, requires = "perturb")]
+    pub tangle: bool,
 }
 
 /// Where a generated mesh goes.
