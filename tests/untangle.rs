@@ -313,3 +313,69 @@ fn eps_decreases_over_short_rounds_and_the_mesh_untangles() {
         assert!(inverted_elements(&m, &m.points).is_empty(), "{name}");
     }
 }
+
+/// A fan of triangles around one free vertex whose fixed boundary is a "C":
+/// no point sees the whole boundary, so no position of the free vertex makes
+/// every triangle valid. The error says so; the partial variant keeps the
+/// last positions.
+fn c_fan() -> Mesh {
+    let boundary = [
+        [0.0, 0.0],
+        [4.0, 0.0],
+        [4.0, 1.0],
+        [1.0, 1.0],
+        [1.0, 2.0],
+        [4.0, 2.0],
+        [4.0, 3.0],
+        [0.0, 3.0],
+    ];
+    let mut points: Vec<[f64; 3]> = boundary.iter().map(|p| [p[0], p[1], 0.0]).collect();
+    points.push([0.5, 1.5, 0.0]);
+    let mut m = Mesh::new(points);
+    for i in 0..8u32 {
+        m.push_element(meshsmooth::ElementKind::Triangle, &[8, i, (i + 1) % 8]);
+    }
+    m
+}
+
+#[test]
+fn a_tangle_without_a_valid_position_fails_after_its_rounds() {
+    let m = c_fan();
+    let bad = inverted_elements(&m, &m.points);
+    assert!(!bad.is_empty() && bad.len() < 8);
+    let run = |partial: bool| {
+        let mut mesh = m.clone();
+        let params = UntangleParams {
+            max_rounds: 8,
+            ..Default::default()
+        };
+        let opts = Options::cpu(Method::Newton, &Params::default());
+        let err = if partial {
+            meshsmooth::solve::untangle::untangle_mesh_partial(
+                &mut mesh,
+                &ProblemOptions::default(),
+                &opts,
+                &params,
+                &mut |_| true,
+            )
+        } else {
+            untangle_mesh(&mut mesh, &ProblemOptions::default(), &opts, &params, &mut |_| true)
+        }
+        .unwrap_err();
+        (err, mesh)
+    };
+    let (err, mesh) = run(false);
+    let text = err.to_string();
+    assert!(matches!(err, Error::Untangle { .. }), "{text}");
+    assert!(
+        text.contains("no positions of their free vertices") && text.contains("8 rounds"),
+        "{text}"
+    );
+    assert_eq!(mesh.points, m.points, "nothing moves without the partial variant");
+    let (_, partial) = run(true);
+    assert_ne!(
+        partial.points[8], m.points[8],
+        "the partial variant keeps the last positions"
+    );
+    assert_eq!(partial.points[..8], m.points[..8]);
+}

@@ -53,8 +53,10 @@ fn smooth_untangles_a_tangled_input_and_says_so() {
         "{t}"
     );
     assert!(t.contains("untangled") && t.contains("inverted corner(s)"), "{t}");
-    // the report before and after: inverted count, then none
-    assert!(t.contains(&format!("inverted: {bad}")) || t.contains("inverted"), "{t}");
+    // the report before and after: the inverted count, then none
+    let (before, after) = t.split_once("== optimised mesh ==").expect("both reports");
+    assert!(before.contains(&format!("inverted elements: {bad} ")), "{before}");
+    assert!(after.contains("(inverted elements: 0)"), "{after}");
     let m = io::read(&out).unwrap();
     assert!(inverted_elements(&m, &m.points).is_empty());
 }
@@ -111,7 +113,7 @@ fn an_unrepairable_tangle_is_refused_with_the_element_and_reason() {
             t.contains("untangling failed: 1 element(s) remain inverted (first ids: 1)"),
             "{t}"
         );
-        assert!(t.contains("every vertex fixed"), "{t}");
+        assert!(t.contains("every vertex fixed") && t.contains("two_tets.vtk"), "{t}");
         assert!(!out.exists(), "{cmd} wrote an output");
     }
 }
@@ -145,4 +147,42 @@ fn generate_tangle_writes_a_tangled_mesh_that_smooth_repairs() {
     assert!(o.status.success(), "{}", text(&o));
     let m = io::read(&out).unwrap();
     assert!(inverted_elements(&m, &m.points).is_empty());
+}
+
+/// A triangle fan around one free vertex inside a fixed "C": no valid
+/// position exists. `--save-partial` writes the last (still tangled)
+/// positions as NAME.partial.EXT and nothing under the output's name.
+#[test]
+fn save_partial_writes_the_still_tangled_result_beside_the_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("c.vtk"), dir.path().join("o.vtk"));
+    let boundary = [
+        [0.0, 0.0],
+        [4.0, 0.0],
+        [4.0, 1.0],
+        [1.0, 1.0],
+        [1.0, 2.0],
+        [4.0, 2.0],
+        [4.0, 3.0],
+        [0.0, 3.0],
+    ];
+    let mut points: Vec<[f64; 3]> = boundary.iter().map(|p| [p[0], p[1], 0.0]).collect();
+    points.push([0.5, 1.5, 0.0]);
+    let mut m = meshsmooth::Mesh::new(points);
+    for i in 0..8u32 {
+        m.push_element(meshsmooth::ElementKind::Triangle, &[8, i, (i + 1) % 8]);
+    }
+    io::write(&input, &m, Format::VtkAscii, &[]).unwrap();
+    let o = meshsmooth(&["untangle", s(&input), "-o", s(&out), "--device", "cpu"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("untangling failed") && t.contains("c.vtk"), "{t}");
+    assert!(!out.exists() && !dir.path().join("o.partial.vtk").exists());
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--device", "cpu", "--save-partial"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(!out.exists());
+    let partial = io::read(&dir.path().join("o.partial.vtk")).unwrap();
+    assert!(!inverted_elements(&partial, &partial.points).is_empty());
+    assert_ne!(partial.points[8], m.points[8]);
 }
