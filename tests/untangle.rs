@@ -379,3 +379,24 @@ fn a_tangle_without_a_valid_position_fails_after_its_rounds() {
     );
     assert_eq!(partial.points[..8], m.points[..8]);
 }
+
+#[test]
+fn the_time_limit_covers_every_round_and_is_named_when_it_ends_the_run() {
+    let mut m = c_fan();
+    let params = Params {
+        time_limit: Some(std::time::Duration::from_nanos(1)),
+        ..Default::default()
+    };
+    let err = untangle_mesh(
+        &mut m,
+        &ProblemOptions::default(),
+        &Options::cpu(Method::Newton, &params),
+        &UntangleParams::default(),
+        &mut |_| true,
+    )
+    .unwrap_err();
+    assert!(
+        err.to_string().contains("the time limit ran out after 0 rounds"),
+        "{err}"
+    );
+}

@@ -154,7 +154,7 @@ pub fn pinned_inverted(p: &Problem, x: &[Vec3]) -> Vec<usize> {
 }
 
 /// The error for a mesh that stays tangled: which elements, and why.
-fn failure(p: &Problem, x: &[Vec3], rounds: usize) -> Error {
+fn failure(p: &Problem, x: &[Vec3], rounds: usize, timed_out: bool) -> Error {
     let remaining = p.infeasible_elements(x);
     let pinned = pinned_inverted(p, x);
     let ids = |v: &[usize]| v.iter().take(10).map(|e| e.to_string()).collect::<Vec<_>>().join(", ");
@@ -165,6 +165,8 @@ fn failure(p: &Problem, x: &[Vec3], rounds: usize) -> Error {
             pinned.len(),
             ids(&pinned)
         )
+    } else if timed_out {
+        format!("the time limit ran out after {rounds} rounds")
     } else {
         format!(
             "no positions of their free vertices making them valid were found in {rounds} rounds (the fixed \
@@ -229,7 +231,7 @@ pub fn untangle(
         return Ok(info);
     }
     if !pinned_inverted(p, x).is_empty() {
-        return Err(failure(p, x, 0));
+        return Err(failure(p, x, 0, false));
     }
     // unit-free: the determinant of a corner with the mean edge length
     let scale = p.mean_edge_length(x).powi(p.dim as i32);
@@ -242,7 +244,18 @@ pub fn untangle(
     inner.params.target_objective = None;
     inner.checkpoint_every = None;
     let ls = opts.params.bcd.line_search;
+    // the time limit covers all rounds together
+    let deadline = opts.params.time_limit.map(|t| start + t);
+    let mut timed_out = false;
     while info.rounds < params.max_rounds {
+        if let Some(d) = deadline {
+            let left = d.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                timed_out = true;
+                break;
+            }
+            inner.params.time_limit = Some(left);
+        }
         q.model = untangling_model(p.model, eps);
         let solved = match opts.device {
             Device::Cpu => run(&mut CpuBackend::new(&q, x, &ls)?, &q, x, &inner, progress)?,
@@ -264,7 +277,7 @@ pub fn untangle(
     }
     info.seconds = start.elapsed().as_secs_f64();
     if info.inverted_after > 0 {
-        return Err(failure(p, x, info.rounds));
+        return Err(failure(p, x, info.rounds, timed_out));
     }
     Ok(info)
 }
