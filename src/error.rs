@@ -25,10 +25,22 @@ pub enum Error {
 
     /// The mesh has inverted or degenerate elements; optimisation needs a feasible start.
     #[error(
-        "mesh has {count} inverted or degenerate element(s) (first ids: {}); untangling is not supported yet",
+        "mesh has {count} inverted or degenerate element(s) (first ids: {}); untangle it first (meshsmooth untangle, \
+         or smooth without --no-untangle)",
         fmt_ids(first)
     )]
     Inverted { count: usize, first: Vec<usize> },
+
+    /// Untangling left elements inverted; `reason` says why.
+    #[error(
+        "untangling failed: {count} element(s) remain inverted (first ids: {}); {reason}",
+        fmt_ids(first)
+    )]
+    Untangle {
+        count: usize,
+        first: Vec<usize>,
+        reason: String,
+    },
 
     /// Something meshsmooth does not handle (yet), such as pyramids.
     #[error("unsupported: {0}")]

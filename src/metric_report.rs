@@ -50,6 +50,7 @@ pub fn element_values(
     let model = Model {
         metric,
         template: opts.template,
+        eps: 0.0,
     };
     Ok(corners.element_values(&model, &points, mesh.num_elements()))
 }

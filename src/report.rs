@@ -376,7 +376,8 @@ impl fmt::Display for QualityReport {
             )?;
         }
         match self.objective {
-            Some(obj) => writeln!(f, "objective F (mean eta): {}", num(obj))?,
+            // the count is shown when zero too, so reports before and after untangling compare
+            Some(obj) => writeln!(f, "objective F (mean eta): {} (inverted elements: 0)", num(obj))?,
             None => writeln!(
                 f,
                 "inverted elements: {} (first ids: {:?}); objective undefined",

@@ -188,7 +188,15 @@ fn every_metric_and_element_kind_matches_finite_differences() {
                     continue;
                 }
                 let reference = perturbed(kind, &mut rng, 0.1);
-                let el = Element::new(kind, Model { metric, template }, Some(&reference));
+                let el = Element::new(
+                    kind,
+                    Model {
+                        metric,
+                        template,
+                        eps: 0.0,
+                    },
+                    Some(&reference),
+                );
                 // an infeasible draw is redrawn, so every case checks four elements
                 let mut checked = 0;
                 for draw in 0..100 {
@@ -219,6 +227,7 @@ fn ideal_elements_have_the_ideal_values() {
                 Model {
                     metric,
                     template: Template::Harmonic,
+                    eps: 0.0,
                 },
                 None,
             );
@@ -231,6 +240,7 @@ fn ideal_elements_have_the_ideal_values() {
                 Model {
                     metric,
                     template: Template::Average,
+                    eps: 0.0,
                 },
                 None,
             );
@@ -244,6 +254,7 @@ fn ideal_elements_have_the_ideal_values() {
             Model {
                 metric: MetricKind::TargetShapeSize,
                 template: Template::Harmonic,
+                eps: 0.0,
             },
             Some(&r),
         );

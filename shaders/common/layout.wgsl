@@ -57,6 +57,8 @@ struct Model {
     metric: u32,
     tmpl: u32,
     fast: u32,
+    // untangling's regularisation (`Model::eps`); 0 = the barrier metric
+    eps: real,
 }
 
 // `shapes`-indexed B tables: rows b_k in .xyz (k = 0..3), the corner's weight

@@ -4,8 +4,9 @@
 
 #import smetric
 
-fn cn3(s: mat3x3<real>, d: real, hess: bool) -> MetricEval {
+fn cn3(s: mat3x3<real>, x: Chi, hess: bool) -> MetricEval {
     var out: MetricEval;
+    let d = x.c;
     let c = cofactor3(s);
     let a = frob_n(s, 3u);
     let cc = frob_n(c, 3u);
@@ -24,7 +25,7 @@ fn cn3(s: mat3x3<real>, d: real, hess: bool) -> MetricEval {
     }
     var gl: array<real, 9>;
     for (var k = 0u; k < 9u; k++) {
-        gl[k] = sf[k] / a + real(0.5) * gc[k] / cc - cf[k] / d;
+        gl[k] = sf[k] / a + real(0.5) * gc[k] / cc - x.c1 * cf[k] / d;
     }
     for (var i = 0u; i < 3u; i++) {
         for (var j = 0u; j < 3u; j++) {
@@ -54,7 +55,7 @@ fn cn3(s: mat3x3<real>, d: real, hess: bool) -> MetricEval {
                     ha = real(2.0);
                 }
                 let hl = real(0.5) * (ha / a - real(4.0) * sf[p] * sf[q] / (a * a))
-                    + real(0.5) * (hc / cc - gc[p] * gc[q] / (cc * cc)) - (d2[p][q] / d - cf[p] * cf[q] / (d * d));
+                    + real(0.5) * (hc / cc - gc[p] * gc[q] / (cc * cc)) - ((x.c1 * d2[p][q] + x.c2 * cf[p] * cf[q]) / d - x.c1 * x.c1 * cf[p] * cf[q] / (d * d));
                 out.h[p][q] = kappa * (hl + gl[p] * gl[q]);
             }
         }

@@ -32,7 +32,7 @@ fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
 }
 
 fn model_eval(model: Model, s: mat3x3<real>, hess: bool) -> MetricEval {
-    let m = eval_metric(model.metric, model.dim, s, hess);
+    let m = eval_metric(model.metric, model.dim, s, hess, model.eps);
     if !m.ok {
         return m;
     }

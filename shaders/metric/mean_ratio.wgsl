@@ -186,8 +186,9 @@ fn hess_s(p: SParts) -> array<array<real, 9>, 9> {
 }
 
 // eta = f h / n with f = |S|^2, h = d^(-2/n), through the dense 9x9 Hessian.
-fn imr(n: u32, s: mat3x3<real>, d: real, hess: bool) -> MetricEval {
+fn imr(n: u32, s: mat3x3<real>, x: Chi, hess: bool) -> MetricEval {
     var out: MetricEval;
+    let d = x.c;
     let nf = real(n);
     var h = real(1.0) / d;
     if n == 3u {
@@ -200,7 +201,7 @@ fn imr(n: u32, s: mat3x3<real>, d: real, hess: bool) -> MetricEval {
     let p = real(2.0) / nf;
     for (var i = 0u; i < n; i++) {
         for (var j = 0u; j < n; j++) {
-            out.g[i][j] = (real(2.0) * h * s[i][j] - f * p * h / d * c[i][j]) / nf;
+            out.g[i][j] = (real(2.0) * h * s[i][j] - f * p * h / d * (x.c1 * c[i][j])) / nf;
         }
     }
     if hess {
@@ -218,7 +219,11 @@ fn imr(n: u32, s: mat3x3<real>, d: real, hess: bool) -> MetricEval {
                 if b % 3u >= n || b / 3u >= n {
                     continue;
                 }
-                out.h[a][b] = cross * (sf[a] * cf[b] + cf[a] * sf[b]) + cc * cf[a] * cf[b] + dd * d2[a][b];
+                // grad chi = chi' C; Hess chi = chi' D2 + chi'' C C^T
+                let ca = x.c1 * cf[a];
+                let cb = x.c1 * cf[b];
+                out.h[a][b] = cross * (sf[a] * cb + ca * sf[b]) + cc * ca * cb
+                    + dd * (x.c1 * d2[a][b] + x.c2 * cf[a] * cf[b]);
             }
             out.h[a][a] += real(2.0) * h / nf;
         }

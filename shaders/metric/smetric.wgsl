@@ -97,21 +97,43 @@ fn finite(v: real) -> bool {
     return v >= -REAL_MAX && v <= REAL_MAX;
 }
 
-// `smetric::eval`: ok = false when the corner is inverted or degenerate.
-fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, hess: bool) -> MetricEval {
+// chi(d, eps) of untangling with its first and second derivatives in d.
+struct Chi {
+    c: real,
+    c1: real,
+    c2: real,
+}
+
+// `smetric::chi`: (d + sqrt(eps^2 + d^2)) / 2, the conjugate form for d <= 0.
+fn chi(d: real, eps: real) -> Chi {
+    if eps == real(0.0) {
+        return Chi(d, real(1.0), real(0.0));
+    }
+    let r = sqrt(eps * eps + d * d);
+    var c = real(0.5) * eps * eps / (r - d);
+    if d > real(0.0) {
+        c = real(0.5) * (d + r);
+    }
+    return Chi(c, c / r, real(0.5) * eps * eps / (r * r * r));
+}
+
+// `smetric::eval_regularised`: ok = false when the corner is inverted or
+// degenerate and eps = 0; with eps > 0 det S is chi(det S, eps).
+fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, hess: bool, eps: real) -> MetricEval {
     let d = det_n(s, n);
-    if !is_finite_pos(d) {
+    if !finite(d) || (eps == real(0.0) && !is_finite_pos(d)) {
         var bad: MetricEval;
         bad.ok = false;
         return bad;
     }
+    let x = chi(d, eps);
     var out: MetricEval;
     if metric == METRIC_TMP {
         out = tmp(n, s);
     } else if metric == METRIC_CN && n == 3u {
-        out = cn3(s, d, hess);
+        out = cn3(s, x, hess);
     } else {
-        out = imr(n, s, d, hess);
+        out = imr(n, s, x, hess);
     }
     out.ok = finite(out.v);
     return out;

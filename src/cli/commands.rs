@@ -2,7 +2,7 @@
 
 use super::device;
 use super::progress::Progress;
-use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs, StopArgs};
+use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs, StopArgs, UntangleArgs};
 use meshsmooth::backend::gpu::list_adapters;
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, Format};
@@ -108,6 +108,17 @@ fn partial_path(output: &Path) -> std::path::PathBuf {
     output.with_file_name(name)
 }
 
+/// A partial result asked for by `--save-partial`: still tangled after a
+/// failed untangling, it is written without the quality field (which
+/// inverted elements lack).
+fn write_partial(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
+    if metric::inverted_elements(mesh, &mesh.points).is_empty() {
+        io::write_mesh(path, mesh, format)
+    } else {
+        io::write(path, mesh, format, &[])
+    }
+}
+
 pub(super) fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
     if io::same_file(input, output) {
         return Err(Error::InvalidArgument(format!(
@@ -144,15 +155,68 @@ fn summary(info: &Info, f0: f64) -> String {
     )
 }
 
-/// Smooths `mesh` in place, printing reports and iterations unless `quiet`.
+/// Untangles a tangled `mesh` in place (a no-op for an untangled one) and
+/// prints the line saying so; with `save_partial` a failure leaves the last
+/// positions in `mesh`.
+fn untangle_phase(
+    mesh: &mut Mesh,
+    options: &ProblemOptions,
+    opts: &solve::Options,
+    save_partial: bool,
+    quiet: bool,
+) -> Result<Option<solve::UntangleInfo>> {
+    let bad = metric::inverted_elements(mesh, &mesh.points);
+    if bad.is_empty() {
+        return Ok(None);
+    }
+    if !quiet {
+        println!(
+            "the input is tangled ({} inverted element(s)): untangling first (--no-untangle refuses instead)",
+            bad.len()
+        );
+    }
+    let params = solve::UntangleParams::default();
+    // the inner solves' iterations are untangling's own; the bar is smoothing's
+    let mut progress = |_: &solve::Record| true;
+    let opts = solve::Options {
+        method: match opts.method {
+            Method::Laplace => Method::Newton,
+            m => m,
+        },
+        ..opts.clone()
+    };
+    let info = if save_partial {
+        solve::untangle::untangle_mesh_partial(mesh, options, &opts, &params, &mut progress)?
+    } else {
+        solve::untangle_mesh(mesh, options, &opts, &params, &mut progress)?
+    };
+    println!(
+        "untangled {} inverted corner(s) in {} element(s) on {}: {} round(s) of eps, {} iteration(s), {:.3} s",
+        info.inverted_corners_before, info.inverted_before, info.device, info.rounds, info.iterations, info.seconds
+    );
+    Ok(Some(info))
+}
+
+/// Smooths `mesh` in place, printing reports and iterations unless `quiet`;
+/// a tangled mesh is untangled first when `untangle` allows.
 fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: bool) -> Result<Info> {
+    run_solver_untangling(mesh, solver, quiet, save_partial, false)
+}
+
+fn run_solver_untangling(
+    mesh: &mut Mesh,
+    solver: &SolverArgs,
+    quiet: bool,
+    save_partial: bool,
+    untangle: bool,
+) -> Result<Info> {
     let reference = solver.objective.reference()?;
     let mut options = solver.objective.options(reference.as_ref())?;
     options.boundary = solver.boundary.boundary()?;
     // the rules fix vertices for this run only: the output keeps the file's own flags
     let file_fixed = mesh.fixed.clone();
     let rule_counts = solver.boundary.rules()?.apply(mesh)?;
-    let result = run_with_rules(mesh, solver, &options, &rule_counts, quiet, save_partial);
+    let result = run_with_rules(mesh, solver, &options, &rule_counts, quiet, save_partial, untangle);
     mesh.fixed = file_fixed;
     result
 }
@@ -164,19 +228,31 @@ fn run_with_rules(
     rule_counts: &[RuleCount],
     quiet: bool,
     save_partial: bool,
+    untangle: bool,
 ) -> Result<Info> {
     let method = solver.method;
     let params = solver.params()?;
     // refuse what cannot be smoothed before printing anything
     options.check(mesh)?;
     let bad = metric::inverted_elements(mesh, &mesh.points);
-    if !bad.is_empty() {
+    if !bad.is_empty() && !untangle {
         return Err(Error::Inverted {
             count: bad.len(),
             first: bad.into_iter().take(5).collect(),
         });
     }
-    let choice = device::choose(solver.device, &solver.gpu, &[method])?;
+    if let Some(msg) = (!bad.is_empty())
+        .then(|| solve::untangle::convention_problem(mesh))
+        .flatten()
+    {
+        return Err(Error::InvalidMesh(msg));
+    }
+    let untangle_method = if method == Method::Laplace {
+        Method::Newton
+    } else {
+        method
+    };
+    let choice = device::choose(solver.device, &solver.gpu, &[method, untangle_method])?;
     let before = quality_report(mesh, &mesh.points);
     if !quiet {
         println!("== initial mesh ==\n{before}");
@@ -199,6 +275,14 @@ fn run_with_rules(
             );
         }
     }
+    let phase_opts = solve::Options {
+        method,
+        params: params.clone(),
+        device: choice.device(),
+        checkpoint_every: None,
+        fail_after: None,
+    };
+    untangle_phase(mesh, options, &phase_opts, save_partial, quiet)?;
     let start = mesh.points.clone();
     // other metrics get the paper-style table of their own values as well
     let metric_before = (options.metric != MetricKind::InverseMeanRatio)
@@ -239,6 +323,69 @@ fn run_with_rules(
     Ok(info)
 }
 
+/// `meshsmooth untangle`: the untangling phase alone.
+pub fn untangle(a: &UntangleArgs) -> Result<()> {
+    let format = output_format(&a.output, a.format.as_deref())?;
+    refuse_overwrite(&a.input, &a.output)?;
+    let mut mesh = io::read(&a.input)?;
+    if a.drop_data {
+        mesh.data = Default::default();
+    }
+    let start = mesh.points.clone();
+    let run = |mesh: &mut Mesh| -> Result<Option<solve::UntangleInfo>> {
+        let params = a.solver.params()?;
+        let reference = a.solver.objective.reference()?;
+        let mut options = a.solver.objective.options(reference.as_ref())?;
+        options.boundary = a.solver.boundary.boundary()?;
+        options.check(mesh)?;
+        let choice = device::choose(a.solver.device, &a.solver.gpu, &[a.solver.method])?;
+        if !a.quiet {
+            println!("== initial mesh ==\n{}", quality_report(mesh, &mesh.points));
+        }
+        // the rules fix vertices for this run only: the output keeps the file's own flags
+        let file_fixed = mesh.fixed.clone();
+        let rule_counts = a.solver.boundary.rules()?.apply(mesh)?;
+        if !a.quiet {
+            for c in &rule_counts {
+                println!("{}: {} vertices", c.rule, c.vertices);
+            }
+        }
+        let opts = solve::Options {
+            method: a.solver.method,
+            params,
+            device: choice.device(),
+            checkpoint_every: None,
+            fail_after: None,
+        };
+        let info = untangle_phase(mesh, &options, &opts, a.save_partial, a.quiet);
+        mesh.fixed = file_fixed;
+        let info = info?;
+        if !a.quiet {
+            println!("\n== untangled mesh ==\n{}", quality_report(mesh, &mesh.points));
+        }
+        Ok(info)
+    };
+    match run(&mut mesh).map_err(|e| io::in_file(&a.input, e)) {
+        Ok(None) => println!("{}: no inverted elements; written unchanged", a.input.display()),
+        Ok(Some(_)) => {}
+        Err(e) => {
+            if a.save_partial && mesh.points != start {
+                let partial = partial_path(&a.output);
+                match write_partial(&partial, &mesh, format) {
+                    Ok(()) => eprintln!("saved the last positions (still tangled) to {}", partial.display()),
+                    Err(w) => eprintln!("could not save partial positions: {w}"),
+                }
+            }
+            return Err(e);
+        }
+    }
+    io::write_mesh(&a.output, &mesh, format)?;
+    if !a.quiet {
+        println!("wrote {}", a.output.display());
+    }
+    Ok(())
+}
+
 pub fn smooth(a: &SmoothArgs) -> Result<()> {
     let format = output_format(&a.output, a.format.as_deref())?;
     refuse_overwrite(&a.input, &a.output)?;
@@ -258,14 +405,15 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         mesh.data = Default::default();
     }
     let start = mesh.points.clone();
-    let solved = run_solver(&mut mesh, &a.solver, a.quiet, a.save_partial).map_err(|e| io::in_file(&a.input, e));
+    let solved = run_solver_untangling(&mut mesh, &a.solver, a.quiet, a.save_partial, !a.no_untangle)
+        .map_err(|e| io::in_file(&a.input, e));
     let info = match solved {
         Ok(info) => info,
         Err(e) => {
             if a.save_partial && mesh.points != start {
                 let partial = partial_path(&a.output);
-                match io::write_mesh(&partial, &mesh, format) {
-                    Ok(()) => eprintln!("saved the last feasible positions to {}", partial.display()),
+                match write_partial(&partial, &mesh, format) {
+                    Ok(()) => eprintln!("saved the last positions to {}", partial.display()),
                     Err(w) => eprintln!("could not save partial positions: {w}"),
                 }
             }

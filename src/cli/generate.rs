@@ -15,14 +15,22 @@ pub(super) fn perturb(mesh: &mut Mesh, a: &PerturbArgs) -> Result<()> {
             a.fraction
         )));
     }
-    let stats = generate::perturb(
-        mesh,
-        &PerturbOptions {
-            perturbation,
-            fraction: a.fraction,
-            seed: a.seed,
-        },
-    )?;
+    let opts = PerturbOptions {
+        perturbation,
+        fraction: a.fraction,
+        seed: a.seed,
+    };
+    if a.tangle {
+        let stats = generate::perturb_unguarded(mesh, &opts)?;
+        let bad = meshsmooth::metric::inverted_elements(mesh, &mesh.points).len();
+        println!(
+            "perturbed {} vertices without the inversion guard: {bad} of {} elements inverted",
+            stats.moved,
+            mesh.num_elements()
+        );
+        return Ok(());
+    }
+    let stats = generate::perturb(mesh, &opts)?;
     println!(
         "perturbed {} vertices ({} shortened to keep elements valid)",
         stats.moved, stats.backtracked
@@ -41,7 +49,12 @@ fn positive(counts: &[usize], what: &str) -> Result<()> {
 
 fn save(out: &OutputArgs, mesh: &Mesh) -> Result<()> {
     let format = output_format(&out.output, out.format.as_deref())?;
-    write_mesh(&out.output, mesh, format)?;
+    if meshsmooth::metric::inverted_elements(mesh, &mesh.points).is_empty() {
+        write_mesh(&out.output, mesh, format)?;
+    } else {
+        // asked for with --tangle: written without the quality field inverted elements lack
+        meshsmooth::io::write(&out.output, mesh, format, &[])?;
+    }
     let kinds: Vec<String> = ElementKind::ALL
         .iter()
         .filter_map(|&k| match mesh.count_kind(k) {

@@ -39,6 +39,8 @@ pub struct Cli {
 pub enum Command {
     /// Optimise vertex positions and write the improved mesh.
     Smooth(SmoothArgs),
+    /// Untangle a mesh with inverted elements (only that: `smooth` untangles and then smooths).
+    Untangle(UntangleArgs),
     /// Print the quality report of a mesh.
     Quality(QualityArgs),
     /// Run several methods from the same start and compare their histories
@@ -77,6 +79,32 @@ pub struct SmoothArgs {
     pub quiet: bool,
     /// If the run fails midway (e.g. the GPU is lost), save the last feasible positions
     /// next to the output as NAME.partial.EXT.
+    #[arg(long)]
+    pub save_partial: bool,
+    /// Refuse a tangled input (inverted elements) instead of untangling it first.
+    #[arg(long)]
+    pub no_untangle: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct UntangleArgs {
+    /// Input mesh (.vtk, .vtu, .msh, .mesh).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension unless --format is given.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub solver: SolverArgs,
+    /// Output format (as for smooth).
+    #[arg(long)]
+    pub format: Option<String>,
+    /// Write the bare mesh (as for smooth).
+    #[arg(long)]
+    pub drop_data: bool,
+    /// Print only the untangling line.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// If elements stay inverted, write the last positions anyway as NAME.partial.EXT.
     #[arg(long)]
     pub save_partial: bool,
 }
@@ -248,6 +276,10 @@ pub struct PerturbArgs {
     /// Seed of the random numbers.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Skip the inversion guard: every move is made in full, so elements may invert
+    /// (tangled inputs for `untangle`).
+    #[arg(long, requires = "perturb")]
+    pub tangle: bool,
 }
 
 /// Where a generated mesh goes.
@@ -378,6 +410,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         },
         Some(Command::Demo(a)) => commands::demo(&a),
         Some(Command::Smooth(a)) => commands::smooth(&a),
+        Some(Command::Untangle(a)) => commands::untangle(&a),
         Some(Command::Quality(a)) => commands::quality(&a),
         Some(Command::Compare(a)) => compare::compare(&a),
         Some(Command::Devices) => commands::devices(),

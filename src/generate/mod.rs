@@ -15,5 +15,5 @@ pub use graded::graded_tet_box;
 pub use grid::{hex_box, quad_grid, tri_grid};
 pub use horseshoe::{HorseshoeKind, horseshoe};
 pub use mixed::mixed_block;
-pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb};
+pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb, perturb_unguarded};
 pub use prism::{distorted_hex_box, prism_mesh};

@@ -151,6 +151,17 @@ const MAX_HALVINGS: u32 = 30;
 /// without inverted elements stays without them. Planar meshes move in x and
 /// y only. The result depends only on the mesh, the options and the seed.
 pub fn perturb(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
+    perturb_with(mesh, opts, true)
+}
+
+/// [`perturb`] without the inversion guard: every selected vertex moves by
+/// its full displacement, inverting elements where it lands them inverted
+/// (tangled inputs for untangling). The start must still be valid.
+pub fn perturb_unguarded(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
+    perturb_with(mesh, opts, false)
+}
+
+fn perturb_with(mesh: &mut Mesh, opts: &PerturbOptions, guard: bool) -> Result<PerturbStats> {
     let f = opts.fraction;
     if !(f > 0.0 && f <= 1.0) {
         return Err(Error::InvalidArgument(format!(
@@ -173,14 +184,14 @@ pub fn perturb(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
     if mirror {
         flip(mesh);
     }
-    let result = perturb_oriented(mesh, opts);
+    let result = perturb_oriented(mesh, opts, guard);
     if mirror {
         flip(mesh);
     }
     result
 }
 
-fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
+fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions, guard: bool) -> Result<PerturbStats> {
     let (f, p) = (opts.fraction, opts.perturbation);
     let inverted = inverted_elements(mesh, &mesh.points);
     if !inverted.is_empty() {
@@ -218,10 +229,11 @@ fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbSta
         let mut placed = false;
         for halvings in 0..=MAX_HALVINGS {
             mesh.points[v] = std::array::from_fn(|i| x0[i] + d[i]);
-            if ve
-                .of(v)
-                .iter()
-                .all(|&e| element_min_det(mesh, &mesh.points, e as usize) > 0.0)
+            if !guard
+                || ve
+                    .of(v)
+                    .iter()
+                    .all(|&e| element_min_det(mesh, &mesh.points, e as usize) > 0.0)
             {
                 stats.moved += 1;
                 stats.backtracked += (halvings > 0) as usize;

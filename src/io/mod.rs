@@ -200,7 +200,9 @@ pub fn read(path: &Path) -> Result<Mesh> {
 pub fn in_file(path: &Path, e: Error) -> Error {
     match e {
         Error::InvalidMesh(msg) => Error::parse(path, None, msg),
-        e @ (Error::Inverted { .. } | Error::Unsupported(_)) => Error::parse(path, None, e.to_string()),
+        e @ (Error::Inverted { .. } | Error::Untangle { .. } | Error::Unsupported(_)) => {
+            Error::parse(path, None, e.to_string())
+        }
         other => other,
     }
 }

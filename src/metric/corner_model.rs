@@ -66,17 +66,21 @@ impl CornerShape {
 
 /// Metric, template and dimension: everything that turns corner positions
 /// into objective terms.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Model {
     pub metric: MetricKind,
     pub template: Template,
+    /// Untangling's regularisation: det S becomes `smetric::chi(det S, eps)`
+    /// (`smetric::eval_regularised`), so inverted corners have finite terms.
+    /// 0 (the default) is the barrier metric itself.
+    pub eps: f64,
 }
 
 impl Model {
     /// The closed forms apply: the inverse mean ratio in 3D under the harmonic template.
     #[inline]
     pub fn fast(&self, n: usize) -> bool {
-        n == 3 && self.metric == MetricKind::InverseMeanRatio && self.template == Template::Harmonic
+        n == 3 && self.metric == MetricKind::InverseMeanRatio && self.template == Template::Harmonic && self.eps == 0.0
     }
 
     /// The template applied to a metric value, gradient and Hessian in S.
@@ -105,7 +109,7 @@ impl Model {
         if self.fast(n) {
             return TetShape::value_of_s(s);
         }
-        let m = smetric::eval(self.metric, n, s, false)?.0;
+        let m = smetric::eval_regularised(self.metric, n, s, false, self.eps)?.0;
         Some(match self.template {
             Template::Harmonic => m,
             Template::Average => 1.0 - 1.0 / m,
@@ -125,7 +129,7 @@ impl Model {
         if self.fast(n) {
             return TetShape::vertex_gradient_hessian_at(s, b);
         }
-        let (v, g, h) = self.templated(smetric::eval(self.metric, n, &s, true)?, true);
+        let (v, g, h) = self.templated(smetric::eval_regularised(self.metric, n, &s, true, self.eps)?, true);
         let mut gv = [0.0; 3];
         let mut hv = [[0.0; 3]; 3];
         for i in 0..n {
@@ -153,7 +157,7 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
-        let (v, g, _) = self.templated(smetric::eval(self.metric, n, &s, false)?, false);
+        let (v, g, _) = self.templated(smetric::eval_regularised(self.metric, n, &s, false, self.eps)?, false);
         let mut out = [[0.0; 3]; 4];
         for (k, o) in out.iter_mut().enumerate().take(n + 1) {
             let b = shape.tet.b(k);
@@ -171,7 +175,7 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
-        let (v, g, h) = self.templated(smetric::eval(self.metric, n, &s, true)?, true);
+        let (v, g, h) = self.templated(smetric::eval_regularised(self.metric, n, &s, true, self.eps)?, true);
         let nv = n + 1;
         let mut grad = [[0.0; 3]; 4];
         // t[l][(i,j)][q] = sum_m H[(i,j),(q,m)] b_l[m]

@@ -41,15 +41,23 @@ pub fn element_min_det(mesh: &Mesh, points: &[Vec3], e: usize) -> f64 {
     min_corner_det(mesh.kinds[e], &x[..vs.len()])
 }
 
-/// Whether a planar mesh is wound clockwise (most of its elements have
-/// negative corner determinants in the xy plane). Such meshes are fine: their
-/// orientation is simply mirrored, and every check reads them mirrored.
+/// Whether a planar mesh is wound clockwise: the signed areas of its
+/// elements in the xy plane sum to a negative number. Such meshes are fine:
+/// their orientation is simply mirrored, and every check reads them mirrored.
+/// The sum is the signed area the boundary encloses, which moving interior
+/// vertices does not change, so a tangled mesh (even one with most elements
+/// inverted) keeps the orientation of its boundary.
 pub fn is_clockwise(mesh: &Mesh, points: &[Vec3]) -> bool {
     mesh.dim() == 2 && {
-        let negative = (0..mesh.num_elements())
-            .filter(|&e| element_min_det(mesh, points, e) < 0.0)
-            .count();
-        2 * negative > mesh.num_elements()
+        let mut area = 0.0;
+        for e in 0..mesh.num_elements() {
+            let vs = mesh.element(e);
+            for (i, &v) in vs.iter().enumerate() {
+                let (p, q) = (points[v as usize], points[vs[(i + 1) % vs.len()] as usize]);
+                area += p[0] * q[1] - q[0] * p[1];
+            }
+        }
+        area < 0.0
     }
 }
 

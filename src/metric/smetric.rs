@@ -125,31 +125,60 @@ fn flat(m: &Mat3) -> [f64; 9] {
 /// corner is inverted or degenerate (det <= 0), which every metric treats as
 /// infeasible.
 pub fn eval(metric: MetricKind, n: usize, s: &Mat3, hess: bool) -> Option<(f64, Mat3, Hess9)> {
+    eval_regularised(metric, n, s, hess, 0.0)
+}
+
+/// The regularised determinant of Garanzha et al. ("Foldover-free maps in 50
+/// lines of code", ACM TOG 2021): chi(d, eps) = (d + sqrt(eps^2 + d^2)) / 2,
+/// positive for every d when eps > 0 and equal to d when eps = 0 and d > 0.
+/// Returns (chi, d chi / d d, d^2 chi / d d^2).
+pub fn chi(d: f64, eps: f64) -> (f64, f64, f64) {
+    if eps == 0.0 {
+        return (d, 1.0, 0.0);
+    }
+    let r = (eps * eps + d * d).sqrt();
+    // for d < 0 the sum d + r cancels: the conjugate form keeps its digits
+    let c = if d > 0.0 {
+        0.5 * (d + r)
+    } else {
+        0.5 * eps * eps / (r - d)
+    };
+    (c, c / r, 0.5 * eps * eps / (r * r * r))
+}
+
+/// `eval` with det S replaced by `chi(det S, eps)` wherever a metric divides
+/// by it (the inverse mean ratio and the condition number), so that with
+/// eps > 0 an inverted corner has a finite value and a gradient that points
+/// towards untangling it. The target metric has no determinant and is the
+/// same for every eps. eps = 0 is `eval`.
+pub fn eval_regularised(metric: MetricKind, n: usize, s: &Mat3, hess: bool, eps: f64) -> Option<(f64, Mat3, Hess9)> {
     let d = det_n(s, n);
-    if !(d > 0.0) || !d.is_finite() {
+    if !d.is_finite() || (eps == 0.0 && !(d > 0.0)) {
         return None;
     }
+    let x = chi(d, eps);
     let out = match metric {
-        MetricKind::InverseMeanRatio => imr(n, s, d, hess),
-        MetricKind::ConditionNumber if n == 2 => imr(n, s, d, hess),
-        MetricKind::ConditionNumber => cn3(s, d, hess),
+        MetricKind::InverseMeanRatio => imr(n, s, x, hess),
+        MetricKind::ConditionNumber if n == 2 => imr(n, s, x, hess),
+        MetricKind::ConditionNumber => cn3(s, x, hess),
         MetricKind::TargetShapeSize => tmp(n, s),
     };
     out.0.is_finite().then_some(out)
 }
 
-/// eta = f h / n with f = |S|^2, h = d^(-2/n).
-fn imr(n: usize, s: &Mat3, d: f64, hess: bool) -> (f64, Mat3, Hess9) {
+/// eta = f h / n with f = |S|^2, h = chi^(-2/n) for `(chi, chi', chi'')`
+/// (`chi` = det S when not regularised).
+fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, Hess9) {
     let nf = n as f64;
     let h = if n == 2 { 1.0 / d } else { 1.0 / (d.cbrt() * d.cbrt()) };
     let f = frob_n(s, n);
     let eta = f * h / nf;
     let c = cof_n(s, n);
-    let p = 2.0 / nf; // d h / d det = -p h / d
+    let p = 2.0 / nf; // d h / d chi = -p h / chi
     let mut g = [[0.0; 3]; 3];
     for i in 0..n {
         for j in 0..n {
-            g[i][j] = (2.0 * h * s[i][j] - f * p * h / d * c[i][j]) / nf;
+            g[i][j] = (2.0 * h * s[i][j] - f * p * h / d * (d1 * c[i][j])) / nf;
         }
     }
     let mut hm = [[0.0; 9]; 9];
@@ -167,7 +196,10 @@ fn imr(n: usize, s: &Mat3, d: f64, hess: bool) -> (f64, Mat3, Hess9) {
                 if b % 3 >= n || b / 3 >= n {
                     continue;
                 }
-                hm[a][b] = cross * (sf[a] * cf[b] + cf[a] * sf[b]) + cc * cf[a] * cf[b] + dd * d2[a][b];
+                // grad chi = chi' C; Hess chi = chi' D2 + chi'' C C^T
+                let (ca, cb) = (d1 * cf[a], d1 * cf[b]);
+                hm[a][b] =
+                    cross * (sf[a] * cb + ca * sf[b]) + cc * ca * cb + dd * (d1 * d2[a][b] + d2c * cf[a] * cf[b]);
             }
             hm[a][a] += 2.0 * h / nf;
         }
@@ -195,7 +227,9 @@ fn tmp(n: usize, s: &Mat3) -> (f64, Mat3, Hess9) {
 /// grad kappa = kappa grad L, Hess kappa = kappa (Hess L + grad L grad L^T), with
 /// |S^-1| = |C| / d, grad |C|^2 = 2 D2 vec(C), Hess |C|^2 = 2 (D2^T D2 + E),
 /// E[(p,q),(r,s)] = sum_ij C_ij eps_ipr eps_jqs.
-fn cn3(s: &Mat3, d: f64, hess: bool) -> (f64, Mat3, Hess9) {
+/// Regularised: d becomes chi, so ln kappa has -ln chi with gradient
+/// chi' C / chi and Hessian (chi' D2 + chi'' C C^T) / chi - chi'^2 C C^T / chi^2.
+fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, Hess9) {
     let c = cofactor(s);
     let a = frob_n(s, 3);
     let cc = frob_n(&c, 3);
@@ -209,7 +243,7 @@ fn cn3(s: &Mat3, d: f64, hess: bool) -> (f64, Mat3, Hess9) {
     }
     let mut gl = [0.0; 9];
     for k in 0..9 {
-        gl[k] = sf[k] / a + 0.5 * gc[k] / cc - cf[k] / d;
+        gl[k] = sf[k] / a + 0.5 * gc[k] / cc - d1 * cf[k] / d;
     }
     let mut g = [[0.0; 3]; 3];
     for i in 0..3 {
@@ -233,7 +267,7 @@ fn cn3(s: &Mat3, d: f64, hess: bool) -> (f64, Mat3, Hess9) {
                 let hc = 2.0 * (dtd + e);
                 let ha = if p == q { 2.0 } else { 0.0 };
                 let hl = 0.5 * (ha / a - 4.0 * sf[p] * sf[q] / (a * a)) + 0.5 * (hc / cc - gc[p] * gc[q] / (cc * cc))
-                    - (d2[p][q] / d - cf[p] * cf[q] / (d * d));
+                    - ((d1 * d2[p][q] + d2c * cf[p] * cf[q]) / d - d1 * d1 * cf[p] * cf[q] / (d * d));
                 hm[p][q] = kappa * (hl + gl[p] * gl[q]);
             }
         }
@@ -246,6 +280,11 @@ mod tests {
     use super::*;
 
     fn fd_check(metric: MetricKind, n: usize, s: Mat3) {
+        fd_check_eps(metric, n, s, 0.0)
+    }
+
+    fn fd_check_eps(metric: MetricKind, n: usize, s: Mat3, eps: f64) {
+        let eval = |metric, n, s: &Mat3, hess| eval_regularised(metric, n, s, hess, eps);
         let (v, g, h) = eval(metric, n, &s, true).unwrap();
         let step = 1e-5;
         let gs = g.iter().flatten().map(|x| x.abs()).fold(1e-12, f64::max);
@@ -263,7 +302,7 @@ mod tests {
                 let fd = f4(&|m| eval(metric, n, m, false).unwrap().0);
                 assert!(
                     (fd - g[i][j]).abs() < 1e-7 * gs,
-                    "{metric} n={n} grad[{i}][{j}] {} vs {fd}",
+                    "{metric} n={n} eps={eps} grad[{i}][{j}] {} vs {fd}",
                     g[i][j]
                 );
                 for k in 0..n {
@@ -272,7 +311,7 @@ mod tests {
                         let an = h[3 * i + j][3 * k + l];
                         assert!(
                             (fdh - an).abs() < 1e-6 * hs,
-                            "{metric} n={n} H[{i}{j}][{k}{l}] {an} vs {fdh}"
+                            "{metric} n={n} eps={eps} H[{i}{j}][{k}{l}] {an} vs {fdh}"
                         );
                     }
                 }
@@ -307,6 +346,70 @@ mod tests {
             flip[0][0] = -1.0;
             assert!(eval(MetricKind::InverseMeanRatio, n, &flip, false).is_none());
             assert!(eval(MetricKind::TargetShapeSize, n, &flip, false).is_none());
+        }
+    }
+
+    #[test]
+    fn regularised_metrics_match_finite_differences_on_both_sides_of_zero() {
+        // positive, inverted and nearly flat corners, with eps large and small
+        // against |det S|
+        let s3 = [[1.1, 0.3, -0.2], [0.1, 0.9, 0.4], [-0.3, 0.2, 1.3]];
+        let mut inv3 = s3;
+        inv3[0] = inv3[0].map(|v| -v);
+        let flat3 = [[1.0, 0.2, 0.1], [0.3, 1.1, -0.2], [1.3, 1.3, -0.1]];
+        let s2 = [[1.2, 0.4, 0.0], [-0.3, 0.8, 0.0], [0.0, 0.0, 0.0]];
+        let inv2 = [[-1.2, -0.4, 0.0], [-0.3, 0.8, 0.0], [0.0, 0.0, 0.0]];
+        for m in [
+            MetricKind::InverseMeanRatio,
+            MetricKind::ConditionNumber,
+            MetricKind::TargetShapeSize,
+        ] {
+            for eps in [1e-2, 0.3, 2.0] {
+                for s in [s3, inv3, flat3] {
+                    fd_check_eps(m, 3, s, eps);
+                }
+                for s in [s2, inv2] {
+                    fd_check_eps(m, 2, s, eps);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn regularised_determinant_is_positive_monotone_and_exact_at_zero_eps() {
+        for d in [-1e3, -1.0, -1e-8, 0.0, 1e-8, 1.0, 1e3] {
+            for eps in [1e-6, 1e-2, 1.0] {
+                let (c, c1, c2) = chi(d, eps);
+                assert!(c > 0.0 && c1 > 0.0 && c2 > 0.0, "chi({d}, {eps}) = {c}, {c1}, {c2}");
+                // chi >= max(d, 0) and the bound is approached as eps -> 0
+                assert!(c >= d.max(0.0));
+                let (small, _, _) = chi(d, eps * 1e-3);
+                assert!((small - d.max(0.0)).abs() <= (c - d.max(0.0)).abs());
+            }
+        }
+        // at eps = 0 the metric is the barrier metric, bit for bit
+        let s3 = [[1.1, 0.3, -0.2], [0.1, 0.9, 0.4], [-0.3, 0.2, 1.3]];
+        for m in [MetricKind::InverseMeanRatio, MetricKind::ConditionNumber] {
+            let a = eval(m, 3, &s3, true).unwrap();
+            let b = eval_regularised(m, 3, &s3, true, 0.0).unwrap();
+            assert_eq!(a, b);
+            let c = eval_regularised(m, 3, &s3, true, 1e-4).unwrap();
+            assert!((a.0 - c.0).abs() < 1e-8 * a.0, "{m}: {} vs {}", a.0, c.0);
+        }
+    }
+
+    #[test]
+    fn regularised_value_of_an_inverted_corner_is_finite_and_decreases_as_it_unfolds() {
+        // S = diag(t, 1, 1): det = t; unfolding (t from -1 to 1) lowers the imr
+        // with eps > 0, and with eps = 0 the inverted corner is infeasible
+        let at = |t: f64| [[t, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        for m in [MetricKind::InverseMeanRatio, MetricKind::ConditionNumber] {
+            assert!(eval(m, 3, &at(-0.5), false).is_none());
+            let vals: Vec<f64> = [-1.0, -0.5, -0.1, 0.1, 0.5, 1.0]
+                .iter()
+                .map(|&t| eval_regularised(m, 3, &at(t), false, 0.1).unwrap().0)
+                .collect();
+            assert!(vals.windows(2).all(|w| w[1] < w[0]), "{m}: {vals:?}");
         }
     }
 }

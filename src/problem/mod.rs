@@ -138,6 +138,7 @@ impl Problem {
             model: Model {
                 metric: opts.metric,
                 template: opts.template,
+                eps: 0.0,
             },
             incidence: adj.incidence,
             neighbours: adj.neighbours,

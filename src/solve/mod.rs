@@ -13,9 +13,11 @@ pub mod line_search;
 pub mod newton;
 pub mod nlcg;
 pub mod pcg;
+pub mod untangle;
 pub mod wolfe;
 
 pub use history::{History, Record, StopReason};
+pub use untangle::{UntangleInfo, UntangleParams, untangle, untangle_mesh};
 
 use crate::Mesh;
 use crate::backend::Backend;

@@ -113,7 +113,7 @@ impl<'c> GpuBackend<'c> {
         let flat: Vec<f64> = x.iter().flatten().copied().collect();
         let partials = groups_of(nc.max(nv).max(nf));
         let mut bufs = HashMap::new();
-        bufs.insert(Buf::Model, ctx.uniform("model", &model));
+        bufs.insert(Buf::Model, ctx.uniform_bytes("model", model.bytes(ctx.real)));
         bufs.insert(
             Buf::LineSearch,
             ctx.uniform_real("line search", &[ls.beta, ls.sigma, 0.0, 0.0]),

@@ -92,6 +92,10 @@ impl GpuContext {
         self.init(label, self.real_bytes(v), wgpu::BufferUsages::UNIFORM)
     }
 
+    pub(crate) fn uniform_bytes(&self, label: &str, bytes: Vec<u8>) -> wgpu::Buffer {
+        self.init(label, bytes, wgpu::BufferUsages::UNIFORM)
+    }
+
     pub(crate) fn uniform<T: bytemuck::Pod>(&self, label: &str, v: &T) -> wgpu::Buffer {
         self.init(label, bytemuck::bytes_of(v).to_vec(), wgpu::BufferUsages::UNIFORM)
     }

@@ -127,7 +127,8 @@ pub(crate) const PRELUDE_CONSTANTS: &[(&str, u32)] = &[
     ("TEMPLATE_AVERAGE", TEMPLATE_AVERAGE),
 ];
 
-/// `struct Model` of `layout.wgsl`.
+/// `struct Model` of `layout.wgsl`: four u32, then `eps` in the shader's
+/// precision (so the struct's size depends on it: `ModelUniform::size`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub(crate) struct ModelUniform {
@@ -135,13 +136,34 @@ pub(crate) struct ModelUniform {
     pub metric: u32,
     pub tmpl: u32,
     pub fast: u32,
+    pub eps: f64,
 }
-const _: () = assert!(std::mem::size_of::<ModelUniform>() == 16);
+const _: () = assert!(std::mem::size_of::<ModelUniform>() == 24);
 
 impl ModelUniform {
+    /// Bytes of the u32 header before `eps`.
+    pub const HEADER_BYTES: usize = 16;
+
+    /// The WGSL struct's size in `real`.
+    pub fn size(real: Real) -> usize {
+        Self::HEADER_BYTES + real.size()
+    }
+
+    /// The uniform's bytes for `real`.
+    pub fn bytes(&self, real: Real) -> Vec<u8> {
+        let mut out = bytemuck::bytes_of(self)[..Self::HEADER_BYTES].to_vec();
+        match real {
+            Real::F64 => out.extend_from_slice(bytemuck::bytes_of(&self.eps)),
+            Real::F32 => out.extend_from_slice(bytemuck::bytes_of(&(self.eps as f32))),
+        }
+        debug_assert_eq!(out.len(), Self::size(real));
+        out
+    }
+
     pub fn of(p: &Problem) -> ModelUniform {
         let m = p.model;
         ModelUniform {
+            eps: m.eps,
             dim: p.dim as u32,
             metric: match m.metric {
                 MetricKind::InverseMeanRatio => METRIC_IMR,

@@ -496,7 +496,10 @@ mod tests {
             assert_eq!(span, Op::size(real), "{real:?}");
             let coef = members.iter().find(|m| m.name.as_deref() == Some("coef")).unwrap();
             assert_eq!(coef.offset as usize, Op::HEADER_BYTES);
-            assert_eq!(find(&m, "Model").1, std::mem::size_of::<ModelUniform>());
+            let (members, span) = find(&m, "Model");
+            assert_eq!(span, ModelUniform::size(real), "{real:?}");
+            let eps = members.iter().find(|m| m.name.as_deref() == Some("eps")).unwrap();
+            assert_eq!(eps.offset as usize, ModelUniform::HEADER_BYTES);
             let m2 = parse(Kernel::CbrtEval.for_model(true), real);
             assert_eq!(find(&m2, "Sizes").1, std::mem::size_of::<Sizes>());
         }
