@@ -109,6 +109,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             let cells = [a.cells[0], a.cells[1], a.cells[2]];
             let opts = generate::VoronoiOptions {
                 cells,
+                bcc: a.bcc,
                 jitter: a.jitter,
                 distorted: a.distorted,
                 seed: a.seed,

@@ -325,6 +325,9 @@ pub struct VoronoiArgs {
     /// How far each site moves from its lattice point, in spacings per axis (below 0.5).
     #[arg(long, default_value_t = meshsmooth::generate::voronoi::VORONOI_JITTER)]
     pub jitter: f64,
+    /// Body-centred lattice (2 sites per lattice cell): truncated octahedra, no short edges.
+    #[arg(long)]
+    pub bcc: bool,
     /// Add the prism mesh's long-wavelength distortion and short-wavelength noise.
     #[arg(long)]
     pub distorted: bool,

@@ -32,8 +32,14 @@ pub const VORONOI_JITTER: f64 = 0.35;
 /// Options of [`voronoi_mesh`].
 #[derive(Clone, Copy, Debug)]
 pub struct VoronoiOptions {
-    /// Sites per axis of the lattice (cells = their product).
+    /// Lattice cells per axis: one site each (twice that with `bcc`).
     pub cells: [usize; 3],
+    /// A body-centred lattice (two sites per lattice cell): its Voronoi cells
+    /// are truncated octahedra, every vertex shared by four cells, so a small
+    /// jitter leaves no short edge. The simple cubic lattice (the default)
+    /// splits each lattice vertex into several close ones: short edges and
+    /// poorly shaped corners, like the paper's mesh.
+    pub bcc: bool,
     /// Each site moves uniformly by up to this fraction of the spacing per axis.
     pub jitter: f64,
     /// Long-wave distortion plus short-wave noise on the interior nodes.
@@ -45,6 +51,7 @@ impl Default for VoronoiOptions {
     fn default() -> Self {
         VoronoiOptions {
             cells: VORONOI_CELLS,
+            bcc: false,
             jitter: VORONOI_JITTER,
             distorted: false,
             seed: 0,
@@ -65,7 +72,7 @@ pub fn voronoi_mesh(opts: &VoronoiOptions) -> Result<Mesh> {
     // a draw with a degenerate (non-trivalent) vertex is redrawn
     let mut last = String::new();
     for attempt in 0..16u64 {
-        let sites = jittered_sites(opts.cells, opts.jitter, opts.seed.wrapping_add(attempt << 32));
+        let sites = jittered_sites(opts, opts.seed.wrapping_add(attempt << 32));
         match tessellate(&sites) {
             Ok(mut mesh) => {
                 mesh.validate()?;
@@ -82,16 +89,21 @@ pub fn voronoi_mesh(opts: &VoronoiOptions) -> Result<Mesh> {
     )))
 }
 
-fn jittered_sites(n: [usize; 3], jitter: f64, seed: u64) -> Vec<Vec3> {
+fn jittered_sites(opts: &VoronoiOptions, seed: u64) -> Vec<Vec3> {
+    let (n, jitter) = (opts.cells, opts.jitter);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut out = Vec::with_capacity(n[0] * n[1] * n[2]);
+    // body-centred: the two cubic lattices a half diagonal apart
+    let shifts: &[f64] = if opts.bcc { &[0.25, 0.75] } else { &[0.5] };
+    let mut out = Vec::with_capacity(n[0] * n[1] * n[2] * shifts.len());
     for k in 0..n[2] {
         for j in 0..n[1] {
             for i in 0..n[0] {
-                let ijk = [i, j, k];
-                out.push(std::array::from_fn(|a| {
-                    (ijk[a] as f64 + 0.5 + jitter * rng.random_range(-1.0..=1.0)) / n[a] as f64
-                }));
+                for &shift in shifts {
+                    let ijk = [i, j, k];
+                    out.push(std::array::from_fn(|a| {
+                        (ijk[a] as f64 + shift + jitter * rng.random_range(-1.0..=1.0)) / n[a] as f64
+                    }));
+                }
             }
         }
     }

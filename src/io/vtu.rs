@@ -129,7 +129,12 @@ impl Ctx<'_> {
         let implied = match (s.section, self.counts) {
             (Section::Points | Section::PointData, Some((np, _))) => Some(np.saturating_mul(k)),
             (Section::CellData, Some((_, nc))) => Some(nc.saturating_mul(k)),
-            (Section::Cells, Some((_, nc))) if s.name != "connectivity" => Some(nc),
+            // one value per cell (a leading 0 allowed in polyhedron_offsets);
+            // connectivity and the face arrays are bounded by the file only
+            (Section::Cells, Some((_, nc))) if matches!(s.name.as_str(), "offsets" | "types" | "faceoffsets") => {
+                Some(nc)
+            }
+            (Section::Cells, Some((_, nc))) if s.name == "polyhedron_offsets" => Some(nc + 1),
             _ => None,
         };
         let implied = implied.or(s.tuples.map(|t| t.saturating_mul(k)));

@@ -110,13 +110,31 @@ pub fn rel_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
 }
 
 /// Every element kind the optimisers take.
-pub const KINDS: [ElementKind; 5] = [
+pub const KINDS: [ElementKind; 6] = [
     ElementKind::Triangle,
     ElementKind::Quadrilateral,
     ElementKind::Tetrahedron,
     ElementKind::Hexahedron,
     ElementKind::Prism,
+    ElementKind::Polyhedron,
 ];
+
+/// A Voronoi mesh of `2 n^3` jittered body-centred sites in a cube of side
+/// `side`: near truncated octahedra, clipped at the box.
+pub fn voronoi_box(n: usize, side: f64, seed: u64) -> Mesh {
+    let opts = generate::VoronoiOptions {
+        cells: [n; 3],
+        bcc: true,
+        jitter: 0.1,
+        seed,
+        ..Default::default()
+    };
+    let mut m = generate::voronoi_mesh(&opts).unwrap();
+    for p in &mut m.points {
+        *p = p.map(|c| c * side);
+    }
+    m
+}
 
 /// Triangles of a `n x n` grid extruded through `n` layers.
 pub fn prism_stack(n: usize) -> Mesh {
@@ -147,6 +165,7 @@ pub fn meshes(kind: ElementKind, seed: u64) -> (Mesh, Mesh) {
         ElementKind::Tetrahedron => generate::tet_box(3, 3, 3, [3.0; 3]),
         ElementKind::Hexahedron => generate::hex_box(3, 3, 3, [3.0; 3]),
         ElementKind::Prism => prism_stack(3),
+        ElementKind::Polyhedron => voronoi_box(3, 6.0, 2),
     };
     let mut mesh = reference.clone();
     let opts = PerturbOptions {
