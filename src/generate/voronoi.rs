@@ -35,10 +35,11 @@ pub struct VoronoiOptions {
     /// Lattice cells per axis: one site each (twice that with `bcc`).
     pub cells: [usize; 3],
     /// A body-centred lattice (two sites per lattice cell): its Voronoi cells
-    /// are truncated octahedra, every vertex shared by four cells, so a small
-    /// jitter leaves no short edge. The simple cubic lattice (the default)
+    /// are truncated octahedra, every vertex shared by four cells, so away
+    /// from the box a small jitter leaves no short edge (where the walls
+    /// clip cells, slivers remain). The simple cubic lattice (the default)
     /// splits each lattice vertex into several close ones: short edges and
-    /// poorly shaped corners, like the paper's mesh.
+    /// poorly shaped corners everywhere, like the paper's mesh.
     pub bcc: bool,
     /// Each site moves uniformly by up to this fraction of the spacing per axis.
     pub jitter: f64,
@@ -92,16 +93,26 @@ pub fn voronoi_mesh(opts: &VoronoiOptions) -> Result<Mesh> {
 fn jittered_sites(opts: &VoronoiOptions, seed: u64) -> Vec<Vec3> {
     let (n, jitter) = (opts.cells, opts.jitter);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    // body-centred: the two cubic lattices a half diagonal apart
-    let shifts: &[f64] = if opts.bcc { &[0.25, 0.75] } else { &[0.5] };
-    let mut out = Vec::with_capacity(n[0] * n[1] * n[2] * shifts.len());
+    // body-centred: two cubic lattices half a diagonal apart. A truncated
+    // octahedron's vertices and its faces parallel to a wall lie at offsets
+    // k/4 of the spacing from its site, and its edges run along (1, +-1, 0)
+    // and the like; the lattices are shifted per axis by (2, 0.8, 1.4)/16
+    // so that no vertex or wall-parallel face lies on a wall and no edge
+    // crosses a box edge (hexagonal faces may still pass near a box corner)
+    let base: [f64; 3] = [0.125, 0.05, 0.0875];
+    let lattices: Vec<[f64; 3]> = if opts.bcc {
+        vec![base, base.map(|b| b + 0.5)]
+    } else {
+        vec![[0.5; 3]]
+    };
+    let mut out = Vec::with_capacity(n[0] * n[1] * n[2] * lattices.len());
     for k in 0..n[2] {
         for j in 0..n[1] {
             for i in 0..n[0] {
-                for &shift in shifts {
+                for shift in &lattices {
                     let ijk = [i, j, k];
                     out.push(std::array::from_fn(|a| {
-                        (ijk[a] as f64 + shift + jitter * rng.random_range(-1.0..=1.0)) / n[a] as f64
+                        (ijk[a] as f64 + shift[a] + jitter * rng.random_range(-1.0..=1.0)) / n[a] as f64
                     }));
                 }
             }
