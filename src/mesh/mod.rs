@@ -94,20 +94,6 @@ impl Mesh {
         self.offsets.push(self.conn.len());
     }
 
-    /// The faces of element `e` as mesh vertex ids (facets: edges for 2D
-    /// kinds), outward for a well-oriented element.
-    pub fn element_facets(&self, e: usize) -> Vec<Cow<'_, [u32]>> {
-        let kind = self.kinds[e];
-        if kind == ElementKind::Polyhedron {
-            return self.faces.of(e).map(Cow::Borrowed).collect();
-        }
-        let vs = self.element(e);
-        kind.facets()
-            .iter()
-            .map(|f| Cow::Owned(f.iter().map(|&l| vs[l]).collect()))
-            .collect()
-    }
-
     /// The corners of element `e` (local vertex indices, see
     /// [`ElementKind::corners`]); a polyhedron's are computed from its faces,
     /// and the error names the vertex and the problem (see
