@@ -124,7 +124,7 @@ pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
         .map(|e| {
             let min_det = element_min_det(mesh, &measured, e);
             let eta = element_eta(mesh, &measured, e).filter(|_| min_det > 0.0);
-            (eta, element_volume(mesh.kinds[e], &gather(mesh, &measured, e)))
+            (eta, mesh_element_volume(mesh, &measured, e))
         })
         .collect();
 
@@ -204,7 +204,8 @@ fn worst_elements(mesh: &Mesh, points: &[[f64; 3]], per_element: &[(Option<f64>,
 /// trilinear) elements: tets and triangles by their determinant, quads by the
 /// shoelace formula, hexahedra by 2x2x2 Gauss quadrature of the trilinear
 /// Jacobian, prisms by centroid x 2-point Gauss (the Jacobian determinants are
-/// polynomials those rules integrate exactly).
+/// polynomials those rules integrate exactly). A polyhedron's volume needs
+/// its faces ([`mesh_element_volume`]): NaN here.
 pub fn element_volume(kind: ElementKind, x: &[[f64; 3]]) -> f64 {
     let d = |a: usize, b: usize| -> [f64; 3] { std::array::from_fn(|i| x[b][i] - x[a][i]) };
     match kind {
@@ -213,6 +214,17 @@ pub fn element_volume(kind: ElementKind, x: &[[f64; 3]]) -> f64 {
         ElementKind::Tetrahedron => det3(&d(0, 1), &d(0, 2), &d(0, 3)) / 6.0,
         ElementKind::Hexahedron => hex_volume(x),
         ElementKind::Prism => prism_volume(x),
+        ElementKind::Polyhedron => f64::NAN,
+    }
+}
+
+/// Signed volume of element `e` of `mesh` at `points` (see
+/// [`element_volume`]; a polyhedron's from its faces, each split into
+/// triangles about its centroid).
+pub fn mesh_element_volume(mesh: &Mesh, points: &[[f64; 3]], e: usize) -> f64 {
+    match mesh.kinds[e] {
+        ElementKind::Polyhedron => crate::mesh::polyhedron::volume(points, mesh.faces.of(e)),
+        kind => element_volume(kind, &gather(mesh, points, e)),
     }
 }
 

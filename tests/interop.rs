@@ -107,6 +107,7 @@ fn cell_counts(m: &Mesh) -> BTreeMap<String, usize> {
             ElementKind::Tetrahedron => "tetra",
             ElementKind::Hexahedron => "hexahedron",
             ElementKind::Prism => "wedge",
+            ElementKind::Polyhedron => "polyhedron",
         };
         *out.entry(name.to_string()).or_insert(0) += 1;
     }

@@ -28,16 +28,35 @@ fn ideal(kind: ElementKind) -> Vec<Vec3> {
         ElementKind::Tetrahedron => {
             vec![tri[0], tri[1], tri[2], [0.5, 3f64.sqrt() / 6.0, (2.0f64 / 3.0).sqrt()]]
         }
-        ElementKind::Hexahedron => (0..8)
+        // the polyhedron is the cube given by its faces: its corners are
+        // the octant corners, the polyhedron's ideal (W = I)
+        ElementKind::Hexahedron | ElementKind::Polyhedron => (0..8)
             .map(|i| [quad[i % 4][0], quad[i % 4][1], (i / 4) as f64])
             .collect(),
         ElementKind::Prism => (0..6).map(|i| [tri[i % 3][0], tri[i % 3][1], (i / 3) as f64]).collect(),
     }
 }
 
-/// The corners the solvers use: simplices one, the others all.
-fn corners(kind: ElementKind) -> &'static [[usize; 4]] {
-    kind.optimised_corners()
+/// The cube's faces, outward, in the order of VTK's polyhedron example.
+const CUBE_FACES: [[u32; 4]; 6] = [
+    [0, 3, 2, 1],
+    [0, 4, 7, 3],
+    [4, 5, 6, 7],
+    [5, 1, 2, 6],
+    [0, 1, 5, 4],
+    [2, 3, 7, 6],
+];
+
+/// The corners the solvers use: simplices one, the others all; the
+/// polyhedron's computed from its faces.
+fn corners(kind: ElementKind) -> Vec<[usize; 4]> {
+    match kind {
+        ElementKind::Polyhedron => {
+            let vs: Vec<u32> = (0..8).collect();
+            meshsmooth::mesh::polyhedron::corners(&vs, CUBE_FACES.iter().map(|f| &f[..])).unwrap()
+        }
+        _ => kind.optimised_corners().to_vec(),
+    }
 }
 
 struct Element {

@@ -84,8 +84,14 @@ fn build_mesh(
         let kind = *ElementKind::ALL
             .get(k as usize)
             .ok_or_else(|| PyValueError::new_err(format!("unknown element kind code {k}")))?;
+        // a polyhedron needs its faces, which this array interface does not carry
+        let Some(nv) = kind.num_vertices() else {
+            return Err(PyValueError::new_err(format!(
+                "element {e}: polyhedra are not supported through the Python array interface; use a .vtu or .vtk file"
+            )));
+        };
         let (a, b) = (offsets[e], offsets[e + 1]);
-        if a < 0 || b < a || b as usize > conn.len() || (b - a) as usize != kind.num_vertices() {
+        if a < 0 || b < a || b as usize > conn.len() || (b - a) as usize != nv {
             return Err(PyValueError::new_err(format!("element {e}: bad offsets {a}..{b}")));
         }
         mesh.push_element(kind, &conn[a as usize..b as usize]);
@@ -286,6 +292,12 @@ type FlatMesh<'py> = (
 #[pyfunction]
 fn read<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<FlatMesh<'py>> {
     let mesh = py.detach(|| io::read(&path)).map_err(py_err)?;
+    if let Some(e) = mesh.kinds.iter().position(|&k| k == ElementKind::Polyhedron) {
+        return Err(PyValueError::new_err(format!(
+            "{}: element {e} is a polyhedron; the Python array interface cannot carry polyhedron faces",
+            path.display()
+        )));
+    }
     let kinds: Vec<u8> = mesh
         .kinds
         .iter()

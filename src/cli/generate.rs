@@ -118,6 +118,17 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             Ok(())
         }
         GenerateCommand::Prism(a) => save(&a.out, &generate::prism_mesh(a.distorted, a.seed)),
+        GenerateCommand::Voronoi(a) => {
+            let cells = [a.cells[0], a.cells[1], a.cells[2]];
+            let opts = generate::VoronoiOptions {
+                cells,
+                bcc: a.bcc,
+                jitter: a.jitter,
+                distorted: a.distorted,
+                seed: a.seed,
+            };
+            save(&a.out, &generate::voronoi_mesh(&opts)?)
+        }
         GenerateCommand::Mixed(a) => {
             positive(&[a.cells, a.layers], "--cells and --layers")?;
             let mut mesh = generate::mixed_block(a.cells, a.layers);

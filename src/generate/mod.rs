@@ -1,6 +1,6 @@
 //! Mesh generators and perturbations for tests and benchmarks, including the
 //! test meshes of the papers (horseshoe family, distorted prism and hex
-//! boxes, graded tet boxes).
+//! boxes, graded tet boxes, the polyhedral Voronoi box).
 
 pub mod box_mesh;
 pub mod graded;
@@ -9,6 +9,7 @@ pub mod horseshoe;
 pub mod mixed;
 pub mod perturb;
 pub mod prism;
+pub mod voronoi;
 
 pub use box_mesh::{duct, tet_box};
 pub use graded::graded_tet_box;
@@ -17,3 +18,4 @@ pub use horseshoe::{HorseshoeKind, horseshoe};
 pub use mixed::mixed_block;
 pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb, perturb_unguarded};
 pub use prism::{distorted_hex_box, prism_mesh};
+pub use voronoi::{VoronoiOptions, voronoi_mesh};

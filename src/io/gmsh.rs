@@ -534,7 +534,8 @@ fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
     );
     let mut cells: Vec<OutCell> = (0..mesh.num_elements())
         .map(|e| OutCell {
-            t: mesh.kinds[e].gmsh_id(),
+            // polyhedra are refused before any writer runs (`io::write`)
+            t: mesh.kinds[e].gmsh_id().unwrap_or(0),
             dim: mesh.kinds[e].dim(),
             vs: mesh.element(e).to_vec(),
             physical: tag(ep, e, 0),

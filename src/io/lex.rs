@@ -9,6 +9,7 @@ use std::str::FromStr;
 
 use crate::error::{Error, Location};
 
+#[derive(Clone)]
 pub(crate) struct Cursor<'a> {
     pub path: &'a Path,
     data: &'a [u8],

@@ -153,6 +153,7 @@ fn keyword(k: ElementKind) -> &'static str {
         ElementKind::Tetrahedron => "Tetrahedra",
         ElementKind::Hexahedron => "Hexahedra",
         ElementKind::Prism => "Prisms",
+        ElementKind::Polyhedron => unreachable!("polyhedra are refused before any writer runs (io::write)"),
     }
 }
 

@@ -251,6 +251,7 @@ fn check_wedge_convention(path: &Path, mesh: &Mesh) -> Result<()> {
 /// `path` is left as it was.
 pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -> Result<()> {
     check_structure(mesh)?;
+    check_kinds_fit(path, mesh, format)?;
     mesh.data
         .check(mesh.num_points(), mesh.num_elements(), mesh.lower.len())
         .map_err(|e| match e {
@@ -269,6 +270,22 @@ pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -
         Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
         Format::Medit => medit::write(w, mesh, cell_data),
     })
+}
+
+/// Gmsh and Medit files have no polyhedral cells: refuse before writing anything.
+fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
+    let vtk = matches!(
+        format,
+        Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib
+    );
+    match mesh.kinds.iter().position(|&k| k == ElementKind::Polyhedron) {
+        Some(e) if !vtk => Err(Error::InvalidArgument(format!(
+            "cannot write {}: element {e} is a polyhedron, which the {format} format (Gmsh, Medit) cannot hold; \
+             write VTK (.vtk) or VTK XML (.vtu)",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// The writers index freely, so refuse meshes whose arrays disagree.
@@ -362,7 +379,8 @@ impl Shape {
         match self {
             Shape::Vertex => 1,
             Shape::Line => 2,
-            Shape::Elem(k) => k.num_vertices(),
+            // a polyhedron's count is per cell; readers check it themselves
+            Shape::Elem(k) => k.num_vertices().unwrap_or(0),
         }
     }
 }
@@ -374,6 +392,8 @@ pub(crate) struct RawMesh {
     pub shapes: Vec<Shape>,
     pub offsets: Vec<usize>,
     pub conn: Vec<u32>,
+    /// Faces of the polyhedral cells, by cell.
+    pub faces: crate::mesh::Faces,
     /// Fixed flags from the file (VTK `fixed` data, Medit RequiredVertices);
     /// empty when the file has none.
     pub fixed: Vec<bool>,
@@ -388,6 +408,17 @@ pub(crate) struct RawMesh {
 
 impl RawMesh {
     pub fn push(&mut self, shape: Shape, vertices: &[u32]) {
+        self.faces.push_none(self.shapes.len());
+        self.push_cell(shape, vertices);
+    }
+
+    /// A polyhedral cell with its vertex list and faces (vertex ids).
+    pub fn push_polyhedron(&mut self, vertices: &[u32], faces: &[Vec<u32>]) {
+        self.faces.push(self.shapes.len(), faces.iter().map(|f| &f[..]));
+        self.push_cell(Shape::Elem(ElementKind::Polyhedron), vertices);
+    }
+
+    fn push_cell(&mut self, shape: Shape, vertices: &[u32]) {
         if self.offsets.is_empty() {
             self.offsets.push(0);
         }
@@ -455,6 +486,11 @@ impl RawMesh {
                 ));
             }
             let lower = match shape {
+                Shape::Elem(ElementKind::Polyhedron) => {
+                    mesh.push_polyhedron(vs, self.faces.of(c));
+                    elem_ids.push(c);
+                    continue;
+                }
                 Shape::Elem(k) if k.dim() == 3 || !has3d => {
                     mesh.push_element(k, vs);
                     elem_ids.push(c);
@@ -485,7 +521,7 @@ impl RawMesh {
             return Err(Error::parse(
                 path,
                 None,
-                "the file has no elements (triangles, quadrilaterals, tetrahedra, hexahedra or prisms)",
+                "the file has no elements (triangles, quadrilaterals, tetrahedra, hexahedra, prisms or polyhedra)",
             ));
         }
         Ok(mesh)

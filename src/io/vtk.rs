@@ -47,6 +47,33 @@ pub(crate) fn vtk_type_name(t: i64) -> &'static str {
     }
 }
 
+/// The faces of a legacy VTK face stream (`nfaces, n0, ids.., n1, ids..`),
+/// as VTK writes a polyhedron in CELLS (VTK 5 to 9, classic and 5.1 layouts).
+pub(crate) fn face_stream(stream: &[u32], np: usize) -> std::result::Result<Vec<Vec<u32>>, String> {
+    let bad = |what: &str| format!("malformed face stream {:?}: {what}", &stream[..stream.len().min(12)]);
+    let (&nf, mut rest) = stream.split_first().ok_or_else(|| bad("empty"))?;
+    let mut faces = Vec::with_capacity(nf as usize);
+    for f in 0..nf {
+        let (&k, tail) = rest.split_first().ok_or_else(|| bad(&format!("face {f} is missing")))?;
+        let k = k as usize;
+        if tail.len() < k {
+            return Err(bad(&format!(
+                "face {f} announces {k} vertices, {} are left",
+                tail.len()
+            )));
+        }
+        if let Some(&v) = tail[..k].iter().find(|&&v| v as usize >= np) {
+            return Err(format!("face {f} refers to vertex {v}, but the file has {np} points"));
+        }
+        faces.push(tail[..k].to_vec());
+        rest = &tail[k..];
+    }
+    if !rest.is_empty() {
+        return Err(bad(&format!("{} values after the {nf} faces", rest.len())));
+    }
+    Ok(faces)
+}
+
 /// Map a VTK cell type to a shape, or explain why it is refused.
 pub(crate) fn vtk_shape(e: usize, t: i64) -> std::result::Result<Shape, String> {
     match t {
@@ -64,7 +91,7 @@ pub(crate) fn vtk_shape(e: usize, t: i64) -> std::result::Result<Shape, String> 
                 format!(
                     "element {e} is a {} (VTK type {t}), which is not supported; \
                      supported: vertex 1, line 3, triangle 5, quad 9, tetrahedron 10, \
-                     hexahedron 12, wedge 13",
+                     hexahedron 12, wedge 13, polyhedron 42",
                     vtk_type_name(t)
                 )
             }),
@@ -105,6 +132,8 @@ struct Reader<'a> {
     /// Cell offsets and connectivity, before CELL_TYPES gives the shapes.
     cells: Option<(Vec<usize>, Vec<u32>)>,
     has_types: bool,
+    /// Where the CELLS values start, with the section's two counts.
+    cells_at: Option<(Cursor<'a>, usize, usize)>,
 }
 
 pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
@@ -132,6 +161,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         npoints: None,
         cells: None,
         has_types: false,
+        cells_at: None,
     };
     r.sections()?;
     let path = r.c.path;
@@ -284,16 +314,31 @@ impl Reader<'_> {
     }
 
     fn cell_conn(&mut self, toks: &[&str]) -> Result<()> {
-        let Some(np) = self.npoints else {
+        if self.npoints.is_none() {
             return Err(self.c.err("CELLS before POINTS"));
-        };
+        }
         if self.cells.is_some() {
             return Err(self.c.err("a second CELLS section"));
         }
         let a = self.header_count(toks, 1)?;
         let b = self.header_count(toks, 2)?;
+        // a polyhedron's cell holds its face stream, whose counts may exceed
+        // the point count: ids are checked once CELL_TYPES tells which cells
+        // hold vertex ids, and a bad one re-read from here to name its line
+        let start = self.c.clone();
+        let (offsets, conn) = self.cell_values(a, b, &|_| false)?;
+        self.cells = Some((offsets, conn));
+        self.cells_at = Some((start, a, b));
+        Ok(())
+    }
+
+    /// The `a` cells (`b` values) of a CELLS section: offsets and values;
+    /// the values of the cells `checked(e)` must be vertex ids.
+    fn cell_values(&mut self, a: usize, b: usize, checked: &dyn Fn(usize) -> bool) -> Result<(Vec<usize>, Vec<u32>)> {
+        let np = self.npoints.unwrap_or(0);
         let ok_index = |e: usize, v: f64| {
-            as_index(v, np)
+            let limit = if checked(e) { np } else { u32::MAX as usize };
+            as_index(v, limit)
                 .map(|v| v as u32)
                 .ok_or_else(|| format!("element {e} refers to vertex {v}, but the file has {np} points"))
         };
@@ -333,7 +378,7 @@ impl Reader<'_> {
                 conn.push(ok_index(e, v)?);
                 Ok(())
             })?;
-            self.cells = Some((offsets, conn));
+            Ok((offsets, conn))
         } else {
             // Classic: per cell a vertex count, then the vertex ids.
             let ty = if self.binary { Scalar::I32 } else { Scalar::F64 };
@@ -365,9 +410,8 @@ impl Reader<'_> {
                     offsets.len() - 1
                 )));
             }
-            self.cells = Some((offsets, conn));
+            Ok((offsets, conn))
         }
-        Ok(())
     }
 
     fn cell_types(&mut self, toks: &[&str]) -> Result<()> {
@@ -382,21 +426,51 @@ impl Reader<'_> {
                 .err(format!("CELL_TYPES {n} does not match the {ncells} cells in CELLS")));
         }
         let ty = if self.binary { Scalar::I32 } else { Scalar::F64 };
-        let mut raw = std::mem::take(&mut self.raw);
+        let mut types = Vec::with_capacity(n);
         self.array(ty, n, "CELL_TYPES", |e, v| {
-            let shape = vtk_shape(e, v as i64)?;
-            let vs = &conn[offsets[e]..offsets[e + 1]];
-            if vs.len() != shape.num_vertices() {
-                return Err(format!(
-                    "element {e} is a {} (VTK type {v}) but has {} vertices instead of {}",
-                    vtk_type_name(v as i64),
-                    vs.len(),
-                    shape.num_vertices()
-                ));
+            let t = v as i64;
+            if t != ElementKind::Polyhedron.vtk_id() as i64 {
+                let shape = vtk_shape(e, t)?;
+                let len = offsets[e + 1] - offsets[e];
+                if len != shape.num_vertices() {
+                    return Err(format!(
+                        "element {e} is a {} (VTK type {t}) but has {len} vertices instead of {}",
+                        vtk_type_name(t),
+                        shape.num_vertices()
+                    ));
+                }
             }
-            raw.push(shape, vs);
+            types.push(t);
             Ok(())
         })?;
+        let np = self.npoints.unwrap_or(0);
+        let is_poly = |e: usize| types[e] == ElementKind::Polyhedron.vtk_id() as i64;
+        if let Some(e) =
+            (0..n).find(|&e| !is_poly(e) && conn[offsets[e]..offsets[e + 1]].iter().any(|&v| v as usize >= np))
+        {
+            // re-read CELLS, now checking the vertex ids, for the error's line or byte
+            let (cursor, a, b) = self.cells_at.take().expect("CELLS was read");
+            let here = std::mem::replace(&mut self.c, cursor);
+            let err = self.cell_values(a, b, &|e| !is_poly(e)).err();
+            self.c = here;
+            return Err(err.unwrap_or_else(|| {
+                self.c
+                    .err(format!("element {e} refers to a vertex outside the {np} points"))
+            }));
+        }
+        let mut raw = std::mem::take(&mut self.raw);
+        for (e, &t) in types.iter().enumerate() {
+            let vs = &conn[offsets[e]..offsets[e + 1]];
+            if is_poly(e) {
+                let faces = face_stream(vs, np).map_err(|m| self.c.err(format!("element {e} (polyhedron): {m}")))?;
+                raw.push_polyhedron(
+                    &crate::mesh::polyhedron::vertices_of_faces(faces.iter().map(|f| &f[..])),
+                    &faces,
+                );
+                continue;
+            }
+            raw.push(vtk_shape(e, t).map_err(|m| self.c.err(m))?, vs);
+        }
         self.raw = raw;
         self.cells = Some((offsets, Vec::new()));
         self.has_types = true;
@@ -796,10 +870,28 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
             writeln!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
         }
     }
-    writeln!(w, "CELLS {ne} {}", ne + mesh.conn.len())?;
+    // a polyhedron is written as its face stream, as VTK's own writer does
+    let cell_values = |e: usize| -> Vec<u32> {
+        if mesh.kinds[e] != ElementKind::Polyhedron {
+            return mesh.element(e).to_vec();
+        }
+        let mut stream = vec![mesh.faces.of(e).count() as u32];
+        for f in mesh.faces.of(e) {
+            stream.push(f.len() as u32);
+            stream.extend_from_slice(f);
+        }
+        stream
+    };
+    let size: usize = (0..ne)
+        .map(|e| match mesh.kinds[e] {
+            ElementKind::Polyhedron => 2 + mesh.faces.of(e).map(|f| 1 + f.len()).sum::<usize>(),
+            _ => 1 + mesh.element(e).len(),
+        })
+        .sum();
+    writeln!(w, "CELLS {ne} {size}")?;
     let mut buf = Vec::new();
     for e in 0..ne {
-        let vs = mesh.element(e);
+        let vs = cell_values(e);
         if binary {
             buf.extend_from_slice(&(vs.len() as i32).to_be_bytes());
             for &v in vs.iter() {

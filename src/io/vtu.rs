@@ -23,7 +23,7 @@ use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val}
 use super::vtk::{vtk_shape, vtk_type_name};
 use super::{CellData, RawMesh, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
 use crate::error::{Error, Location, Result};
-use crate::mesh::{DataArray, Mesh, ValueType, Values};
+use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
 
 /// Element type of an XML array.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -129,7 +129,12 @@ impl Ctx<'_> {
         let implied = match (s.section, self.counts) {
             (Section::Points | Section::PointData, Some((np, _))) => Some(np.saturating_mul(k)),
             (Section::CellData, Some((_, nc))) => Some(nc.saturating_mul(k)),
-            (Section::Cells, Some((_, nc))) if s.name != "connectivity" => Some(nc),
+            // one value per cell (a leading 0 allowed in polyhedron_offsets);
+            // connectivity and the face arrays are bounded by the file only
+            (Section::Cells, Some((_, nc))) if matches!(s.name.as_str(), "offsets" | "types" | "faceoffsets") => {
+                Some(nc)
+            }
+            (Section::Cells, Some((_, nc))) if s.name == "polyhedron_offsets" => Some(nc + 1),
             _ => None,
         };
         let implied = implied.or(s.tuples.map(|t| t.saturating_mul(k)));
@@ -638,9 +643,10 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
     let mut raw = RawMesh::default();
     let (mut pts, mut conn, mut offs, mut types) = (None, None, None, None);
     let mut fixed = None;
+    let mut poly = PolyArrays::default();
     for s in &specs {
-        if s.section == Section::Other || (s.section == Section::Cells && s.name.starts_with("face")) {
-            continue; // polyhedron faces and arrays outside the grid: not ours
+        if s.section == Section::Other {
+            continue; // arrays outside the grid: not ours
         }
         let d = ctx.decode(s, file_len)?;
         match s.section {
@@ -650,6 +656,12 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
                     "connectivity" => &mut conn,
                     "offsets" => &mut offs,
                     "types" => &mut types,
+                    "faces" => &mut poly.faces,
+                    "faceoffsets" => &mut poly.faceoffsets,
+                    "face_connectivity" => &mut poly.face_connectivity,
+                    "face_offsets" => &mut poly.face_offsets,
+                    "polyhedron_to_faces" => &mut poly.polyhedron_to_faces,
+                    "polyhedron_offsets" => &mut poly.polyhedron_offsets,
                     _ => continue,
                 };
                 *slot = Some((numbers(ctx, s, d)?, s.at));
@@ -705,6 +717,7 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
         }
         raw.points.push([p[0], p[1], p[2]]);
     }
+    let mut cell_faces = poly.cells(ctx, &types, np)?;
     let mut start = 0;
     let mut ids = Vec::new();
     for e in 0..nc {
@@ -730,6 +743,11 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
             })? as u32);
         }
         let t = types[e] as i64;
+        if let Some(faces) = cell_faces.get_mut(e).and_then(Option::take) {
+            raw.push_polyhedron(&ids, &faces);
+            start = end;
+            continue;
+        }
         let shape = vtk_shape(e, t).map_err(|m| ctx.err(tat, m))?;
         if ids.len() != shape.num_vertices() {
             return Err(ctx.err(
@@ -754,6 +772,130 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
         }
     }
     Ok(raw)
+}
+
+/// The Cells arrays of polyhedra: VTK's first layout (`faces`, one face
+/// stream per polyhedron, `faceoffsets`, its end per cell or -1) and VTK
+/// 9.4's (`face_connectivity`/`face_offsets` per face, `polyhedron_to_faces`/
+/// `polyhedron_offsets` per cell); offsets are ends, a leading 0 is accepted.
+#[derive(Default)]
+struct PolyArrays {
+    faces: Option<(Vec<f64>, usize)>,
+    faceoffsets: Option<(Vec<f64>, usize)>,
+    face_connectivity: Option<(Vec<f64>, usize)>,
+    face_offsets: Option<(Vec<f64>, usize)>,
+    polyhedron_to_faces: Option<(Vec<f64>, usize)>,
+    polyhedron_offsets: Option<(Vec<f64>, usize)>,
+}
+
+impl PolyArrays {
+    /// Per cell: the faces of a polyhedron, `None` for any other cell.
+    fn cells(self, ctx: &Ctx, types: &[f64], np: usize) -> Result<Vec<Option<Vec<Vec<u32>>>>> {
+        let nc = types.len();
+        let is_poly = |e: usize| types[e] == ElementKind::Polyhedron.vtk_id() as f64;
+        let Some(first) = (0..nc).find(|&e| is_poly(e)) else {
+            return Ok(Vec::new());
+        };
+        let mut out = vec![None; nc];
+        let index = |v: f64, limit: usize, at: usize, what: &str| {
+            as_index(v, limit).ok_or_else(|| ctx.err(at, format!("{what}: invalid value {v} (limit {limit})")))
+        };
+        // end offsets, a leading 0 dropped when there is one more than `n`
+        let ends = |a: &[f64], n: usize| {
+            if a.len() == n + 1 && a.first() == Some(&0.0) {
+                a[1..].to_vec()
+            } else {
+                a.to_vec()
+            }
+        };
+        if let (Some((stream, sat)), Some((offs, oat))) = (&self.faces, &self.faceoffsets) {
+            if offs.len() != nc {
+                return Err(ctx.err(*oat, format!("faceoffsets: expected {nc} values, found {}", offs.len())));
+            }
+            let mut start = 0;
+            for e in (0..nc).filter(|&e| is_poly(e)) {
+                let end = index(offs[e], stream.len() + 1, *oat, "faceoffsets")?;
+                let vals = stream
+                    .get(start..end)
+                    .ok_or_else(|| ctx.err(*oat, format!("faceoffsets: cell {e} ends at {end}, before {start}")))?
+                    .iter()
+                    .map(|&v| index(v, u32::MAX as usize, *sat, "faces").map(|v| v as u32))
+                    .collect::<Result<Vec<u32>>>()?;
+                let faces = super::vtk::face_stream(&vals, np)
+                    .map_err(|m| ctx.err(*sat, format!("element {e} (polyhedron): {m}")))?;
+                out[e] = Some(faces);
+                start = end;
+            }
+            return Ok(out);
+        }
+        let (Some((fc, fcat)), Some((fo, foat)), Some((pf, pfat)), Some((po, poat))) = (
+            &self.face_connectivity,
+            &self.face_offsets,
+            &self.polyhedron_to_faces,
+            &self.polyhedron_offsets,
+        ) else {
+            return Err(ctx.err(
+                0,
+                format!(
+                    "element {first} is a polyhedron (VTK type 42), but the Cells have no faces and \
+                     faceoffsets arrays (nor face_connectivity, face_offsets, polyhedron_to_faces and \
+                     polyhedron_offsets)"
+                ),
+            ));
+        };
+        let npoly = (0..nc).filter(|&e| is_poly(e)).count();
+        let fo = ends(fo, fo.len().saturating_sub(1));
+        // one offset per cell, as VTK writes, or one per polyhedron
+        let po = if po.len() == nc || po.len() == nc + 1 {
+            ends(po, nc)
+        } else {
+            ends(po, npoly)
+        };
+        let per_cell = po.len() == nc;
+        if !per_cell && po.len() != npoly {
+            return Err(ctx.err(
+                *poat,
+                format!("polyhedron_offsets: expected {nc} values, found {}", po.len()),
+            ));
+        }
+        let face = |f: usize| -> Result<Vec<u32>> {
+            let start = if f == 0 {
+                0
+            } else {
+                index(fo[f - 1], fc.len() + 1, *foat, "face_offsets")?
+            };
+            let end = index(fo[f], fc.len() + 1, *foat, "face_offsets")?;
+            fc.get(start..end)
+                .ok_or_else(|| ctx.err(*foat, format!("face_offsets: face {f} ends at {end}, before {start}")))?
+                .iter()
+                .map(|&v| index(v, np, *fcat, "face_connectivity").map(|v| v as u32))
+                .collect()
+        };
+        let mut start = 0;
+        for (k, e) in (0..nc).filter(|&e| per_cell || is_poly(e)).enumerate() {
+            let end = index(po[k], pf.len() + 1, *poat, "polyhedron_offsets")?;
+            let ids = pf.get(start..end).ok_or_else(|| {
+                ctx.err(
+                    *poat,
+                    format!("polyhedron_offsets: cell {e} ends at {end}, before {start}"),
+                )
+            })?;
+            if is_poly(e) {
+                let faces = ids
+                    .iter()
+                    .map(|&f| face(index(f, fo.len(), *pfat, "polyhedron_to_faces")?))
+                    .collect::<Result<Vec<_>>>()?;
+                out[e] = Some(faces);
+            } else if !ids.is_empty() {
+                return Err(ctx.err(
+                    *poat,
+                    format!("polyhedron_offsets: cell {e} is not a polyhedron but has faces"),
+                ));
+            }
+            start = end;
+        }
+        Ok(out)
+    }
 }
 
 /// Escape an attribute value.
@@ -977,6 +1119,31 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         "        ",
         &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
     )?;
+    if mesh.kinds.contains(&ElementKind::Polyhedron) {
+        // VTK's first polyhedron layout, which every VTK since 5.8 reads
+        // (9.4 writes `polyhedron_*` arrays but still reads these)
+        let (mut stream, mut ends) = (Vec::new(), Vec::with_capacity(ne));
+        for e in 0..ne {
+            if mesh.kinds[e] != ElementKind::Polyhedron {
+                ends.push(-1);
+                continue;
+            }
+            stream.push(mesh.faces.of(e).count() as i64);
+            for f in mesh.faces.of(e) {
+                stream.push(f.len() as i64);
+                stream.extend(f.iter().map(|&v| v as i64));
+            }
+            ends.push(stream.len() as i64);
+        }
+        o.array(
+            "        ",
+            &DataArray::new("faces", ValueType::I64, 1, Values::Int(stream)),
+        )?;
+        o.array(
+            "        ",
+            &DataArray::new("faceoffsets", ValueType::I64, 1, Values::Int(ends)),
+        )?;
+    }
     writeln!(o.w, "      </Cells>")?;
     check_cell_data(mesh, cell_data)?;
     let cells = out_cell_arrays(mesh, cell_data);

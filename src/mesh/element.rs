@@ -9,7 +9,10 @@ use std::fmt;
 ///
 /// Every corner of every kind has exactly `dim` incident edges inside the
 /// element, which the corner-based metrics need (pyramids do not, and are
-/// refused when a file is read).
+/// refused when a file is read). A polyhedron is given by its faces, stored
+/// with the mesh ([`Mesh::faces`](super::Mesh)); its vertex count, corners,
+/// faces and edges are per element ([`Mesh::element_corners`](super::Mesh::element_corners)),
+/// so the static tables below are empty for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum ElementKind {
     Triangle,
@@ -17,15 +20,19 @@ pub enum ElementKind {
     Tetrahedron,
     Hexahedron,
     Prism,
+    /// VTK_POLYHEDRON: any closed cell whose every vertex has exactly three
+    /// cell edges (see [`super::polyhedron`]).
+    Polyhedron,
 }
 
 impl ElementKind {
-    pub const ALL: [ElementKind; 5] = [
+    pub const ALL: [ElementKind; 6] = [
         ElementKind::Triangle,
         ElementKind::Quadrilateral,
         ElementKind::Tetrahedron,
         ElementKind::Hexahedron,
         ElementKind::Prism,
+        ElementKind::Polyhedron,
     ];
 
     /// Topological (and metric) dimension.
@@ -36,18 +43,21 @@ impl ElementKind {
         }
     }
 
-    pub fn num_vertices(self) -> usize {
+    /// Vertices per element; `None` for polyhedra, whose count is per element.
+    pub fn num_vertices(self) -> Option<usize> {
         match self {
-            ElementKind::Triangle => 3,
-            ElementKind::Quadrilateral => 4,
-            ElementKind::Tetrahedron => 4,
-            ElementKind::Hexahedron => 8,
-            ElementKind::Prism => 6,
+            ElementKind::Triangle => Some(3),
+            ElementKind::Quadrilateral => Some(4),
+            ElementKind::Tetrahedron => Some(4),
+            ElementKind::Hexahedron => Some(8),
+            ElementKind::Prism => Some(6),
+            ElementKind::Polyhedron => None,
         }
     }
 
     /// For each corner: the corner vertex followed by its `dim` neighbours, ordered
     /// so that det[x_a - x_c, x_b - x_c, ...] > 0 for a well-oriented element.
+    /// Empty for polyhedra (per element: [`Mesh::element_corners`](super::Mesh::element_corners)).
     pub fn corners(self) -> &'static [[usize; 4]] {
         match self {
             ElementKind::Triangle => &[[0, 1, 2, 0], [1, 2, 0, 0], [2, 0, 1, 0]],
@@ -71,6 +81,7 @@ impl ElementKind {
                 [4, 3, 5, 1],
                 [5, 4, 3, 2],
             ],
+            ElementKind::Polyhedron => &[],
         }
     }
 
@@ -105,6 +116,7 @@ impl ElementKind {
                 &[3, 0, 4, 7],
             ],
             ElementKind::Prism => &[&[0, 1, 2], &[3, 4, 5], &[0, 1, 4, 3], &[1, 2, 5, 4], &[2, 0, 3, 5]],
+            ElementKind::Polyhedron => &[],
         }
     }
 
@@ -129,6 +141,7 @@ impl ElementKind {
                 [3, 7],
             ],
             ElementKind::Prism => &[[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]],
+            ElementKind::Polyhedron => &[],
         }
     }
 
@@ -140,6 +153,7 @@ impl ElementKind {
             ElementKind::Tetrahedron => 10,
             ElementKind::Hexahedron => 12,
             ElementKind::Prism => 13,
+            ElementKind::Polyhedron => 42,
         }
     }
 
@@ -147,19 +161,20 @@ impl ElementKind {
         ElementKind::ALL.into_iter().find(|k| k.vtk_id() == id)
     }
 
-    /// Gmsh element type number.
-    pub fn gmsh_id(self) -> u32 {
+    /// Gmsh element type number; `None` for polyhedra, which Gmsh files cannot hold.
+    pub fn gmsh_id(self) -> Option<u32> {
         match self {
-            ElementKind::Triangle => 2,
-            ElementKind::Quadrilateral => 3,
-            ElementKind::Tetrahedron => 4,
-            ElementKind::Hexahedron => 5,
-            ElementKind::Prism => 6,
+            ElementKind::Triangle => Some(2),
+            ElementKind::Quadrilateral => Some(3),
+            ElementKind::Tetrahedron => Some(4),
+            ElementKind::Hexahedron => Some(5),
+            ElementKind::Prism => Some(6),
+            ElementKind::Polyhedron => None,
         }
     }
 
     pub fn from_gmsh_id(id: u32) -> Option<Self> {
-        ElementKind::ALL.into_iter().find(|k| k.gmsh_id() == id)
+        ElementKind::ALL.into_iter().find(|k| k.gmsh_id() == Some(id))
     }
 
     pub fn name(self) -> &'static str {
@@ -169,6 +184,7 @@ impl ElementKind {
             ElementKind::Tetrahedron => "tetrahedron",
             ElementKind::Hexahedron => "hexahedron",
             ElementKind::Prism => "prism",
+            ElementKind::Polyhedron => "polyhedron",
         }
     }
 }
@@ -186,10 +202,11 @@ mod tests {
     #[test]
     fn simplices_optimise_their_first_corner_the_others_all() {
         for kind in ElementKind::ALL {
+            let Some(nv) = kind.num_vertices() else { continue };
             let used = kind.optimised_corners();
-            let simplex = kind.num_vertices() == kind.dim() + 1;
+            let simplex = nv == kind.dim() + 1;
             assert_eq!(kind.is_simplex(), simplex, "{kind}");
-            assert_eq!(used.len(), if simplex { 1 } else { kind.num_vertices() }, "{kind}");
+            assert_eq!(used.len(), if simplex { 1 } else { nv }, "{kind}");
             assert_eq!(used, &kind.corners()[..used.len()], "{kind}");
         }
     }
@@ -197,12 +214,13 @@ mod tests {
     #[test]
     fn corner_tables_use_each_vertex_once_as_corner() {
         for kind in ElementKind::ALL {
+            let Some(nv) = kind.num_vertices() else { continue };
             let corners = kind.corners();
-            assert_eq!(corners.len(), kind.num_vertices(), "{kind}");
+            assert_eq!(corners.len(), nv, "{kind}");
             for (i, c) in corners.iter().enumerate() {
                 assert_eq!(c[0], i, "{kind}");
                 for &n in &c[1..=kind.dim()] {
-                    assert!(n < kind.num_vertices() && n != i, "{kind}");
+                    assert!(n < nv && n != i, "{kind}");
                     let is_edge = kind
                         .edges()
                         .iter()

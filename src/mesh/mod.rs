@@ -7,12 +7,15 @@ pub mod fixing;
 pub mod frame;
 pub mod order;
 pub mod plane;
+pub mod polyhedron;
 pub mod topology;
 
 pub use data::{DataArray, MeshData, PhysicalName, ValueType, Values};
 pub use element::ElementKind;
+pub use polyhedron::Faces;
 
 use crate::error::{Error, Result};
+use std::borrow::Cow;
 
 /// Cells of lower dimension than the mesh (Gmsh and Medit boundary lines,
 /// triangles, points). They are kept for round trips and their vertices are
@@ -48,6 +51,8 @@ pub struct Mesh {
     pub offsets: Vec<usize>,
     /// Vertex ids of all elements, concatenated.
     pub conn: Vec<u32>,
+    /// Faces of the polyhedral elements (empty when there are none).
+    pub faces: Faces,
     /// Lower-dimensional cells (boundary lines/faces, points) read from a file.
     pub lower: Vec<(LowerKind, Vec<u32>)>,
     /// Vertices the user marked fixed (empty means none).
@@ -66,14 +71,69 @@ impl Mesh {
         }
     }
 
+    /// Appends an element of a kind with a fixed vertex count (a polyhedron
+    /// needs its faces: [`push_polyhedron`](Self::push_polyhedron)).
     pub fn push_element(&mut self, kind: ElementKind, vertices: &[u32]) {
-        debug_assert_eq!(vertices.len(), kind.num_vertices());
+        debug_assert_eq!(Some(vertices.len()), kind.num_vertices());
+        self.faces.push_none(self.kinds.len());
+        self.push_vertices(kind, vertices);
+    }
+
+    /// Appends a polyhedron with `vertices` and `faces` (mesh vertex ids,
+    /// each face counter-clockwise seen from outside).
+    pub fn push_polyhedron<'a>(&mut self, vertices: &[u32], faces: impl IntoIterator<Item = &'a [u32]>) {
+        self.faces.push(self.kinds.len(), faces);
+        self.push_vertices(ElementKind::Polyhedron, vertices);
+    }
+
+    fn push_vertices(&mut self, kind: ElementKind, vertices: &[u32]) {
         if self.offsets.is_empty() {
             self.offsets.push(0);
         }
         self.kinds.push(kind);
         self.conn.extend_from_slice(vertices);
         self.offsets.push(self.conn.len());
+    }
+
+    /// The corners of element `e` (local vertex indices, see
+    /// [`ElementKind::corners`]); a polyhedron's are computed from its faces,
+    /// and the error names the vertex and the problem (see
+    /// [`polyhedron::corners`]).
+    pub fn element_corners(&self, e: usize) -> std::result::Result<Cow<'static, [[usize; 4]]>, String> {
+        match self.kinds[e] {
+            ElementKind::Polyhedron => polyhedron::corners(self.element(e), self.faces.of(e)).map(Cow::Owned),
+            kind => Ok(Cow::Borrowed(kind.corners())),
+        }
+    }
+
+    /// The corners of element `e` the objective and the metric reports
+    /// evaluate ([`ElementKind::optimised_corners`]; a polyhedron all of them).
+    pub fn optimised_corners(&self, e: usize) -> std::result::Result<Cow<'static, [[usize; 4]]>, String> {
+        match self.kinds[e] {
+            ElementKind::Polyhedron => self.element_corners(e),
+            kind => Ok(Cow::Borrowed(kind.optimised_corners())),
+        }
+    }
+
+    /// Element `e`'s edges as mesh vertex ids (each once).
+    pub fn element_edges(&self, e: usize) -> Vec<[u32; 2]> {
+        let vs = self.element(e);
+        match self.kinds[e] {
+            ElementKind::Polyhedron => {
+                let mut out: Vec<[u32; 2]> = Vec::new();
+                for f in self.faces.of(e) {
+                    for (i, &a) in f.iter().enumerate() {
+                        let b = f[(i + 1) % f.len()];
+                        let edge = [a.min(b), a.max(b)];
+                        if !out.contains(&edge) {
+                            out.push(edge);
+                        }
+                    }
+                }
+                out
+            }
+            kind => kind.edges().iter().map(|&[a, b]| [vs[a], vs[b]]).collect(),
+        }
     }
 
     pub fn num_points(&self) -> usize {
@@ -138,14 +198,33 @@ impl Mesh {
         }
         let n = self.points.len();
         let mut used = vec![false; n];
+        let polyhedra = self.kinds.contains(&ElementKind::Polyhedron);
+        if polyhedra
+            && (self.faces.elem.len() != self.kinds.len() + 1
+                || self.faces.offsets.last() != Some(&self.faces.conn.len()))
+        {
+            return Err(Error::InvalidMesh(
+                "polyhedron face offsets do not match the elements".into(),
+            ));
+        }
         for e in 0..self.num_elements() {
             let vs = self.element(e);
-            if vs.len() != self.kinds[e].num_vertices() {
+            if let Some(nv) = self.kinds[e].num_vertices().filter(|&nv| nv != vs.len()) {
                 return Err(Error::InvalidMesh(format!(
-                    "element {e} ({}) has {} vertices, expected {}",
+                    "element {e} ({}) has {} vertices, expected {nv}",
                     self.kinds[e],
                     vs.len(),
-                    self.kinds[e].num_vertices()
+                )));
+            }
+            if polyhedra && (self.kinds[e] == ElementKind::Polyhedron) != (self.faces.of(e).next().is_some()) {
+                return Err(Error::InvalidMesh(format!(
+                    "element {e} ({}) {} faces",
+                    self.kinds[e],
+                    if self.kinds[e] == ElementKind::Polyhedron {
+                        "has no"
+                    } else {
+                        "has polyhedron"
+                    }
                 )));
             }
             for (i, &v) in vs.iter().enumerate() {
@@ -159,6 +238,15 @@ impl Mesh {
                     return Err(Error::InvalidMesh(format!("element {e} uses vertex {v} twice: {vs:?}")));
                 }
                 used[v as usize] = true;
+            }
+            if self.kinds[e] == ElementKind::Polyhedron {
+                if let Some(&v) = self.faces.of(e).flatten().find(|&&v| v as usize >= n) {
+                    return Err(Error::InvalidMesh(format!(
+                        "element {e} (polyhedron) has a face with vertex {v}, but the mesh has only {n} vertices"
+                    )));
+                }
+                self.element_corners(e)
+                    .map_err(|m| Error::InvalidMesh(format!("element {e} (polyhedron): {m}")))?;
             }
         }
         for (kind, vs) in &self.lower {

@@ -1,6 +1,6 @@
 //! Vertex-to-element adjacency, vertex neighbours and the boundary skin.
 
-use super::Mesh;
+use super::{ElementKind, Mesh};
 use std::collections::HashMap;
 
 /// Compressed lists: `items[offsets[i]..offsets[i + 1]]` belong to entry `i`.
@@ -54,6 +54,12 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
     let mut pairs = Vec::new();
     for e in 0..mesh.num_elements() {
         let vs = mesh.element(e);
+        if mesh.kinds[e] == ElementKind::Polyhedron {
+            for [a, b] in mesh.element_edges(e) {
+                pairs.push((a, b));
+                pairs.push((b, a));
+            }
+        }
         for [a, b] in mesh.kinds[e].edges() {
             pairs.push((vs[*a], vs[*b]));
             pairs.push((vs[*b], vs[*a]));
@@ -67,6 +73,9 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
 /// Vertices on a facet (face in 3D, edge in 2D) used by exactly one element.
 pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
     let mut count: HashMap<[u32; 4], u32> = HashMap::with_capacity(mesh.num_elements() * 3);
+    // polyhedron faces with more than four vertices (a face of four or
+    // fewer may be shared with a hexahedron or prism, so it keys as theirs)
+    let mut long: HashMap<Vec<u32>, u32> = HashMap::new();
     let key = |vs: &[u32], local: &[usize]| {
         let mut k = [u32::MAX; 4];
         for (slot, &l) in k.iter_mut().zip(local) {
@@ -80,8 +89,25 @@ pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
         for f in mesh.kinds[e].facets() {
             *count.entry(key(vs, f)).or_default() += 1;
         }
+        for f in mesh.faces.of(e) {
+            if f.len() <= 4 {
+                let local: Vec<usize> = (0..f.len()).collect();
+                *count.entry(key(f, &local)).or_default() += 1;
+            } else {
+                let mut k = f.to_vec();
+                k.sort_unstable();
+                *long.entry(k).or_default() += 1;
+            }
+        }
     }
     let mut skin = vec![false; mesh.num_points()];
+    for (k, c) in long {
+        if c == 1 {
+            for v in k {
+                skin[v as usize] = true;
+            }
+        }
+    }
     for (k, c) in count {
         if c == 1 {
             for &v in k.iter().filter(|&&v| v != u32::MAX) {
@@ -104,7 +130,6 @@ pub fn fixed_vertices(mesh: &Mesh) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ElementKind;
 
     /// Two tets sharing face (1,2,3): every vertex is on the skin.
     fn two_tets() -> Mesh {

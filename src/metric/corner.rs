@@ -10,7 +10,11 @@ pub fn ideal_corner(kind: ElementKind) -> Mat3 {
     let h = 3f64.sqrt() / 2.0;
     match kind {
         ElementKind::Triangle => [[1.0, 0.5, 0.0], [0.0, h, 0.0], [0.0, 0.0, 1.0]],
-        ElementKind::Quadrilateral | ElementKind::Hexahedron => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        // a polyhedron corner's ideal is the cube's (octant) corner, as in the
+        // reference-Jacobian rezoning paper: three orthogonal unit edges
+        ElementKind::Quadrilateral | ElementKind::Hexahedron | ElementKind::Polyhedron => {
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        }
         ElementKind::Tetrahedron => [
             [1.0, 0.5, 0.5],
             [0.0, h, 3f64.sqrt() / 6.0],
@@ -50,9 +54,14 @@ pub fn corner_eta(a: &Mat3, winv: &Mat3, n: usize) -> Option<f64> {
 /// Element inverse mean ratio (mean over corners); `None` when any corner is
 /// inverted or degenerate.
 pub fn element_eta(kind: ElementKind, x: &[Vec3]) -> Option<f64> {
+    corners_eta(kind, kind.optimised_corners(), x)
+}
+
+/// Mean inverse mean ratio over `corners` (local indices into `x`) of an
+/// element of `kind` (a polyhedron's corners are per element).
+pub fn corners_eta(kind: ElementKind, corners: &[[usize; 4]], x: &[Vec3]) -> Option<f64> {
     let n = kind.dim();
     let winv = mat3::upper_inverse(&ideal_corner(kind));
-    let corners = kind.optimised_corners();
     let mut sum = 0.0;
     for c in corners {
         let mut a = [[0.0; 3]; 3];

@@ -15,10 +15,15 @@ use mat3::{Vec3, sub};
 /// Smallest corner Jacobian determinant of an element (2D kinds use the xy
 /// plane). An element is feasible when this is positive.
 pub fn min_corner_det(kind: ElementKind, x: &[Vec3]) -> f64 {
+    corners_min_det(kind.dim(), kind.corners(), x)
+}
+
+/// Smallest determinant over `corners` (local indices into `x`) in dimension `dim`.
+pub fn corners_min_det(dim: usize, corners: &[[usize; 4]], x: &[Vec3]) -> f64 {
     let mut min = f64::INFINITY;
-    for c in kind.corners() {
+    for c in corners {
         let o = &x[c[0]];
-        let d = if kind.dim() == 2 {
+        let d = if dim == 2 {
             let a = sub(&x[c[1]], o);
             let b = sub(&x[c[2]], o);
             a[0] * b[1] - a[1] * b[0]
@@ -31,14 +36,24 @@ pub fn min_corner_det(kind: ElementKind, x: &[Vec3]) -> f64 {
     min
 }
 
-/// Smallest corner determinant of element `e` of `mesh` at positions `points`.
+/// Smallest corner determinant of element `e` of `mesh` at positions
+/// `points`; -inf for a polyhedron without valid corners (see
+/// [`Mesh::element_corners`]).
 pub fn element_min_det(mesh: &Mesh, points: &[Vec3], e: usize) -> f64 {
+    let kind = mesh.kinds[e];
+    if kind == ElementKind::Polyhedron {
+        let x: Vec<Vec3> = mesh.element(e).iter().map(|&v| points[v as usize]).collect();
+        return match mesh.element_corners(e) {
+            Ok(cs) => corners_min_det(3, &cs, &x),
+            Err(_) => f64::NEG_INFINITY,
+        };
+    }
     let mut x = [[0.0; 3]; 8];
     let vs = mesh.element(e);
     for (slot, &v) in x.iter_mut().zip(vs) {
         *slot = points[v as usize];
     }
-    min_corner_det(mesh.kinds[e], &x[..vs.len()])
+    min_corner_det(kind, &x[..vs.len()])
 }
 
 /// Whether a planar mesh is wound clockwise: the signed areas of its
@@ -91,6 +106,12 @@ pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {
 
 /// Inverse mean ratio of element `e` at `points`, `None` if it is inverted.
 pub fn element_eta(mesh: &Mesh, points: &[Vec3], e: usize) -> Option<f64> {
+    let kind = mesh.kinds[e];
+    if kind == ElementKind::Polyhedron {
+        let x: Vec<Vec3> = mesh.element(e).iter().map(|&v| points[v as usize]).collect();
+        let cs = mesh.optimised_corners(e).ok()?;
+        return corner::corners_eta(kind, &cs, &x);
+    }
     let mut x = [[0.0; 3]; 8];
     let vs = mesh.element(e);
     for (slot, &v) in x.iter_mut().zip(vs) {

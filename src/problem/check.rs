@@ -61,7 +61,7 @@ fn check_same_connectivity(mesh: &Mesh, r: &Mesh) -> Result<()> {
         )));
     }
     for e in 0..mesh.num_elements() {
-        if r.kinds[e] != mesh.kinds[e] || r.element(e) != mesh.element(e) {
+        if r.kinds[e] != mesh.kinds[e] || r.element(e) != mesh.element(e) || !r.faces.of(e).eq(mesh.faces.of(e)) {
             return Err(Error::InvalidArgument(format!(
                 "reference mesh differs at element {e}: {} {:?} in the mesh, {} {:?} in the reference",
                 mesh.kinds[e],

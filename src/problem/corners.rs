@@ -86,8 +86,10 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
         let kind = mesh.kinds[old_e];
         let vs = element_vertices(mesh, old_e, flip);
         let rvs = opts.reference.map(|r| element_vertices(r, old_e, flip));
-        let used = kind.optimised_corners();
-        for c in used {
+        let used = mesh
+            .optimised_corners(old_e)
+            .map_err(|m| Error::InvalidMesh(format!("element {old_e} ({kind}): {m}")))?;
+        for c in used.iter() {
             let w = match (&reference, &rvs) {
                 (Some((_, rp)), Some(rvs)) => corner_matrix(rp, rvs, c, dim),
                 _ => ideal_corner(kind),
@@ -180,7 +182,7 @@ mod tests {
             assert!(cs.corners[c].iter().all(|v| m.element(e).contains(v)));
         }
         for e in 0..m.num_elements() {
-            assert_eq!(per_element[e], m.kinds[e].optimised_corners().len(), "element {e}");
+            assert_eq!(per_element[e], m.optimised_corners(e).unwrap().len(), "element {e}");
         }
         let total: f64 = cs.corner_weight.iter().sum();
         assert!((total - 1.0).abs() < 1e-12, "{total}");

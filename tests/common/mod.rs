@@ -110,13 +110,66 @@ pub fn rel_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
 }
 
 /// Every element kind the optimisers take.
-pub const KINDS: [ElementKind; 5] = [
+pub const KINDS: [ElementKind; 6] = [
     ElementKind::Triangle,
     ElementKind::Quadrilateral,
     ElementKind::Tetrahedron,
     ElementKind::Hexahedron,
     ElementKind::Prism,
+    ElementKind::Polyhedron,
 ];
+
+/// The cells of [`voronoi_box`] that are whole truncated octahedra (24
+/// vertices, 14 faces), vertices renumbered: clipping at the box leaves
+/// slivers near its walls, edges and corners.
+pub fn truncated_octahedra(n: usize, side: f64, seed: u64) -> Mesh {
+    let m = voronoi_box(n, side, seed);
+    let on_box = |v: u32| m.points[v as usize].iter().any(|&c| c == 0.0 || c == side);
+    let mut id = vec![u32::MAX; m.num_points()];
+    let mut points = Vec::new();
+    let mut cells = Vec::new();
+    for e in 0..m.num_elements() {
+        if m.element(e).len() != 24 || m.faces.of(e).count() != 14 || m.element(e).iter().any(|&v| on_box(v)) {
+            continue;
+        }
+        let mut renumber = |v: u32| {
+            if id[v as usize] == u32::MAX {
+                id[v as usize] = points.len() as u32;
+                points.push(m.points[v as usize]);
+            }
+            id[v as usize]
+        };
+        let vs: Vec<u32> = m.element(e).iter().map(|&v| renumber(v)).collect();
+        let faces: Vec<Vec<u32>> = m
+            .faces
+            .of(e)
+            .map(|f| f.iter().map(|&v| renumber(v)).collect())
+            .collect();
+        cells.push((vs, faces));
+    }
+    let mut out = Mesh::new(points);
+    for (vs, faces) in &cells {
+        out.push_polyhedron(vs, faces.iter().map(|f| &f[..]));
+    }
+    out
+}
+
+/// A Voronoi mesh of `2 n^3` jittered body-centred sites in a cube of side
+/// `side`: near truncated octahedra, clipped at the box.
+pub fn voronoi_box(n: usize, side: f64, seed: u64) -> Mesh {
+    let opts = generate::VoronoiOptions {
+        cells: [n; 3],
+        bcc: true,
+        jitter: 0.02,
+        seed,
+        ..Default::default()
+    };
+    let mut m = generate::voronoi_mesh(&opts).unwrap();
+    for p in &mut m.points {
+        *p = p.map(|c| c * side);
+    }
+    m
+}
 
 /// Triangles of a `n x n` grid extruded through `n` layers.
 pub fn prism_stack(n: usize) -> Mesh {
@@ -147,10 +200,14 @@ pub fn meshes(kind: ElementKind, seed: u64) -> (Mesh, Mesh) {
         ElementKind::Tetrahedron => generate::tet_box(3, 3, 3, [3.0; 3]),
         ElementKind::Hexahedron => generate::hex_box(3, 3, 3, [3.0; 3]),
         ElementKind::Prism => prism_stack(3),
+        ElementKind::Polyhedron => truncated_octahedra(5, 80.0, 2),
     };
     let mut mesh = reference.clone();
+    // a truncated octahedron's corners (120 degree faces) flatten sooner
+    // than the others' under the same noise
+    let alpha = if kind == ElementKind::Polyhedron { 0.1 } else { 0.25 };
     let opts = PerturbOptions {
-        perturbation: Perturbation::Random { alpha: 0.25 },
+        perturbation: Perturbation::Random { alpha },
         fraction: 1.0,
         seed,
     };
