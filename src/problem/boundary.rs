@@ -25,7 +25,9 @@
 //!   plane of the start is used throughout (the projection keeps the vertex on
 //!   the surface; only the search direction is from the start's plane). A
 //!   solve on a curved boundary may therefore end `Stalled` a little above the
-//!   tolerance instead of `Converged`.
+//!   tolerance instead of `Converged`. Refreshing P at the current closest
+//!   point does not fix that (measured, README "Sliding boundary"): the
+//!   boundary is faceted, and the minimiser sits on its creases.
 
 use super::numbering::Numbering;
 use crate::mesh::Mesh;
