@@ -572,3 +572,124 @@ fn gpu_sliding_matches_cpu_f32() {
         gpu_cylinder(&ctx, method, 1e-4, 1e-6);
     }
 }
+
+/// A planar mesh whose bottom side bends up by 16.7° at vertex b (an edge
+/// vertex: it slides along l-b-r) with an interior vertex i 0.03 above b-r.
+/// Points: l, b, r, tr, tl, i.
+fn bent_side() -> Mesh {
+    let mut m = Mesh::new(vec![
+        [-1.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [1.0, 0.3, 0.0],
+        [1.0, 2.0, 0.0],
+        [-1.0, 2.0, 0.0],
+        [0.5, 0.18, 0.0],
+    ]);
+    for t in [[0, 1, 4], [1, 5, 4], [1, 2, 5], [2, 3, 5], [5, 3, 4]] {
+        m.push_element(meshsmooth::ElementKind::Triangle, &t);
+    }
+    m
+}
+
+/// A step of b along its tangent line that leaves every element valid, but
+/// whose projection back onto the original side b-r crosses the line i-tl and
+/// inverts (b, i, tl): the line search's trial (CPU, and the GPU where there is
+/// one) is infeasible, so the step is rejected; a solve keeps every element valid.
+#[test]
+fn projection_that_inverts_an_element_is_rejected() {
+    use meshsmooth::backend::cpu::CpuBackend;
+    use meshsmooth::backend::gpu::GpuBackend;
+    use meshsmooth::backend::{Backend, Coef, EvalSlots, Points, Slot};
+    let mesh = bent_side();
+    let p = Problem::with_options(&mesh, &slide()).unwrap();
+    let x0 = p.gather(&mesh.points);
+    let b = p.order.iter().position(|&o| o == 1).unwrap();
+    let s = p.sliding.as_ref().unwrap();
+    assert!(s.slides(b));
+    assert_eq!(s.counts, [0, 1, 4], "b slides along the side, the rest are corners");
+    // the tangent at b is the mean of its sides' directions
+    let t = {
+        let (e1, e2) = ([1.0, 0.3, 0.0f64], [1.0, 0.0, 0.0f64]);
+        let n1 = dot(&e1, &e1).sqrt();
+        let m = [e1[0] / n1 + e2[0], e1[1] / n1 + e2[1], 0.0];
+        let nm = dot(&m, &m).sqrt();
+        m.map(|c| c / nm)
+    };
+    let step = 0.566;
+    let mut d = vec![[0.0; 3]; p.free_vertices.len()];
+    let k = p.free_vertices.iter().position(|&v| v as usize == b).unwrap();
+    d[k] = t.map(|c| c * step);
+    let mut unprojected = x0.clone();
+    for c in 0..3 {
+        unprojected[b][c] += d[k][c];
+    }
+    assert!(
+        p.infeasible_elements(&unprojected).is_empty(),
+        "the unprojected step is valid"
+    );
+    let q = {
+        let mut x = unprojected.clone();
+        meshsmooth::backend::cpu::project_boundary::project(s, &p.free_vertices, &mut x);
+        x
+    };
+    assert!(
+        (q[b][1] - 0.3 * q[b][0]).abs() < 1e-12,
+        "projected onto b-r: {:?}",
+        q[b]
+    );
+    assert!(q[b][0] > 0.52, "{:?}", q[b]);
+    assert_eq!(p.infeasible_elements(&q).len(), 1, "the projection inverts (b, i, tl)");
+
+    let (value, infeasible) = (Slot(0), Slot(1));
+    let out = EvalSlots {
+        value,
+        infeasible,
+        min_det: None,
+    };
+    let probe = |be: &mut dyn Backend, name: &str| {
+        let v = be.vector().unwrap();
+        be.write_vector(v, &d).unwrap();
+        be.evaluate(Points::Current, out, None).unwrap();
+        let f0 = be.flush().unwrap();
+        assert!(
+            f0[value.0 as usize].is_finite() && f0[infeasible.0 as usize] == 0.0,
+            "{name}"
+        );
+        be.trial(Coef::value(1.0), v).unwrap();
+        be.evaluate(Points::Trial, out, None).unwrap();
+        let f = be.flush().unwrap();
+        // the line search rejects a trial with inverted corners
+        assert!(
+            f[infeasible.0 as usize] > 0.0,
+            "{name}: the projected trial counts inverted corners"
+        );
+        // half the step stays short of the crossing: feasible
+        be.trial(Coef::value(0.5), v).unwrap();
+        be.evaluate(Points::Trial, out, None).unwrap();
+        let f = be.flush().unwrap();
+        assert!(
+            f[infeasible.0 as usize] == 0.0 && f[value.0 as usize].is_finite(),
+            "{name}"
+        );
+    };
+    let ls = Default::default();
+    probe(&mut CpuBackend::new(&p, &x0, &ls).unwrap(), "cpu");
+    for precision in [Precision::F32, Precision::F64] {
+        if let Some(ctx) = context(precision) {
+            probe(&mut GpuBackend::new(&ctx, &p, &x0, &ls).unwrap(), "gpu");
+        }
+    }
+
+    // a full solve: b slides, stays on its side, nothing inverts
+    for method in [Method::Newton, Method::Bcd, Method::Laplace] {
+        let mut m = mesh.clone();
+        let info = smooth(&mut m, &slide(), method, Device::Cpu);
+        let pm = Problem::new(&m).unwrap();
+        assert!(pm.infeasible_elements(&pm.gather(&m.points)).is_empty(), "{method}");
+        let xb = m.points[1];
+        let on_left = xb[0] <= 0.0 && xb[1].abs() < 1e-12;
+        let on_right = xb[0] >= 0.0 && (xb[1] - 0.3 * xb[0]).abs() < 1e-12;
+        assert!(on_left || on_right, "{method}: b left its side: {xb:?}");
+        assert!(info.objective.is_finite(), "{method}");
+    }
+}

@@ -31,6 +31,7 @@ from . import _core
 __all__ = [
     "MeshArrays",
     "Result",
+    "UntangleResult",
     "devices",
     "from_meshio",
     "quality",
@@ -39,6 +40,7 @@ __all__ = [
     "smooth_meshio",
     "smooth_pyvista",
     "to_meshio",
+    "untangle",
     "write",
 ]
 
@@ -91,6 +93,8 @@ class Result:
         quality: per-cell inverse mean ratio at the new positions (1 is ideal).
         info: everything else the solver reported (device, seconds,
             setup_seconds, memory_bytes, colors, cg_iterations, method).
+        untangle: what untangling a tangled input did first (the keys of
+            :func:`untangle`'s ``info``), or None for an untangled input.
     """
 
     points: np.ndarray
@@ -111,7 +115,8 @@ class Result:
         self.history = dict(info["history"])
         self.quality = info["quality"]
         self._report: Dict[str, Any] = info["report"]
-        self.info = {k: v for k, v in info.items() if k not in ("history", "quality", "report")}
+        self.untangle: Optional[Dict[str, Any]] = info.get("untangle")
+        self.info = {k: v for k, v in info.items() if k not in ("history", "quality", "report", "untangle")}
 
     def report(self) -> Dict[str, Any]:
         """The quality report of the result (the keys of ``meshsmooth quality --json``)."""
@@ -259,8 +264,11 @@ def smooth(
     max_iter: int = 1000,
     time_limit: Optional[float] = None,
     callback: Optional[Callback] = None,
+    untangle: bool = True,
 ) -> Result:
     """Smooths a mesh: moves its free vertices to minimise the objective F.
+    A mesh with inverted elements is untangled first (as the CLI's ``smooth``;
+    ``untangle=False`` refuses it instead, like ``--no-untangle``).
 
     Args:
         points: (n, 2) or (n, 3) float32/float64 array of vertex coordinates (any
@@ -298,6 +306,8 @@ def smooth(
             grad_norm) for the start and after every iteration; returning
             False stops the solve (``stop == "cancelled"``). An exception it
             raises propagates, with the input unchanged.
+        untangle: untangle a tangled input first (``Result.untangle`` says
+            what that did); False raises ValueError on inverted elements.
 
     Returns:
         A :class:`Result`; ``Result.points`` is a new float64 array.
@@ -341,8 +351,96 @@ def smooth(
         int(max_iter),
         None if time_limit is None else float(time_limit),
         callback,
+        bool(untangle),
+        False,
     )
     return Result(np.ascontiguousarray(out[:, : p.shape[1]]), info)
+
+
+class UntangleResult:
+    """What :func:`untangle` returns.
+
+    Attributes:
+        points: the untangled positions, a new float64 array with the input's shape.
+        info: None when the input had no inverted element, else a dict:
+            inverted_before / inverted_after (elements), inverted_corners_before,
+            corners_before / corners_after (corners below the margin), rounds
+            (eps values tried), iterations (inner iterations in all), seconds, device.
+        quality: per-cell inverse mean ratio at the new positions.
+    """
+
+    def __init__(self, points: np.ndarray, info: Dict[str, Any]) -> None:
+        self.points = points
+        self.info: Optional[Dict[str, Any]] = info["untangle"]
+        self.quality = info["quality"]
+        self._report: Dict[str, Any] = info["report"]
+
+    def report(self) -> Dict[str, Any]:
+        """The quality report of the result (the keys of ``meshsmooth quality --json``)."""
+        import copy
+
+        return copy.deepcopy(self._report)
+
+    def __repr__(self) -> str:
+        return f"UntangleResult(info={self.info!r})"
+
+
+def untangle(
+    points: npt.ArrayLike,
+    cells: CellsLike,
+    *,
+    method: str = "newton",
+    metric: str = "imr",
+    template: str = "harmonic",
+    fixed: Optional[npt.ArrayLike] = None,
+    boundary: str = "fixed",
+    feature_angle: float = 30.0,
+    device: str = "cpu",
+    precision: str = "auto",
+    adapter: Optional[str] = None,
+) -> UntangleResult:
+    """Untangles a mesh with inverted elements, and only that (the library's
+    ``solve::untangle_mesh``, the CLI's ``meshsmooth untangle``): the free
+    vertices move until no element is inverted; an untangled input comes back
+    unchanged with ``info`` None. Arguments as for :func:`smooth` (``laplace``
+    untangles with ``newton``).
+
+    Raises:
+        ValueError: as for :func:`smooth`, and when elements stay inverted
+            (the message counts them).
+        RuntimeError: the GPU failed.
+    """
+    p = _check_points(points)
+    blocks = _check_cells(cells, p)
+    mask = _check_fixed(fixed, p.shape[0])
+    if boundary not in ("fixed", "slide"):
+        raise ValueError(f"boundary must be 'fixed' or 'slide', got {boundary!r}")
+    for arg, value in (("method", method), ("metric", metric), ("template", template), ("device", device), ("precision", precision)):
+        if not isinstance(value, str):
+            raise TypeError(f"{arg} must be a string, got {type(value).__name__}")
+    kinds, offsets, conn = _flatten(blocks)
+    out, info = _core.smooth(
+        _as3(p),
+        kinds,
+        offsets,
+        conn,
+        mask,
+        method,
+        metric,
+        template,
+        boundary,
+        float(feature_angle),
+        device,
+        precision,
+        adapter,
+        1e-6,
+        1000,
+        None,
+        None,
+        True,
+        True,
+    )
+    return UntangleResult(np.ascontiguousarray(out[:, : p.shape[1]]), info)
 
 
 def quality(points: npt.ArrayLike, cells: CellsLike, metric: str = "imr") -> Dict[str, Any]:

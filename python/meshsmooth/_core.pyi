@@ -26,6 +26,8 @@ def smooth(
     max_iter: int,
     time_limit: Optional[float],
     callback: Optional[Callable[[Dict[str, float]], Optional[bool]]],
+    untangle: bool = True,
+    untangle_only: bool = False,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def quality(
     points: npt.NDArray[np.float64],

@@ -119,7 +119,7 @@ fn report_dict<'py>(py: Python<'py>, mesh: &Mesh) -> PyResult<Bound<'py, PyAny>>
 
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback))]
+#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false))]
 fn smooth<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -139,6 +139,8 @@ fn smooth<'py>(
     max_iter: usize,
     time_limit: Option<f64>,
     callback: Option<Py<PyAny>>,
+    untangle: bool,
+    untangle_only: bool,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
     let mut mesh = build_mesh(&points, &kinds, &offsets, &conn, fixed.as_ref())?;
     let method: Method = parse(method)?;
@@ -190,7 +192,8 @@ fn smooth<'py>(
     };
     // the first exception raised by the callback or a signal handler (Ctrl-C)
     let mut raised: Option<PyErr> = None;
-    let solved = py.detach(|| -> meshsmooth::Result<solve::Info> {
+    let mut untangled: Option<solve::UntangleInfo> = None;
+    let solved = py.detach(|| -> meshsmooth::Result<Option<solve::Info>> {
         problem.check(&mesh)?;
         let ctx = if use_gpu {
             Some(GpuContext::new(&gpu_options)?)
@@ -221,13 +224,58 @@ fn smooth<'py>(
                 false
             })
         };
-        solve::smooth_mesh(&mut mesh, &problem, &opts, &mut progress)
+        // a tangled mesh is untangled first (as the CLI's smooth), unless refused
+        if untangle && !meshsmooth::metric::inverted_elements(&mesh, &mesh.points).is_empty() {
+            if let Some(msg) = solve::untangle::convention_problem(&mesh) {
+                return Err(Error::InvalidMesh(msg));
+            }
+            let uopts = Options {
+                method: match method {
+                    Method::Laplace => Method::Newton,
+                    m => m,
+                },
+                ..opts.clone()
+            };
+            let params = solve::UntangleParams::default();
+            untangled = Some(solve::untangle_mesh(&mut mesh, &problem, &uopts, &params, &mut |_| {
+                true
+            })?);
+        }
+        if untangle_only {
+            return Ok(None);
+        }
+        solve::smooth_mesh(&mut mesh, &problem, &opts, &mut progress).map(Some)
     });
     if let Some(e) = raised {
         return Err(e);
     }
-    let info = solved.map_err(py_err)?;
+    let solved = solved.map_err(py_err)?;
+    let untangle_dict = match &untangled {
+        None => None,
+        Some(u) => {
+            let d = PyDict::new(py);
+            d.set_item("inverted_before", u.inverted_before)?;
+            d.set_item("inverted_after", u.inverted_after)?;
+            d.set_item("inverted_corners_before", u.inverted_corners_before)?;
+            d.set_item("corners_before", u.corners_before)?;
+            d.set_item("corners_after", u.corners_after)?;
+            d.set_item("rounds", u.rounds)?;
+            d.set_item("iterations", u.iterations)?;
+            d.set_item("seconds", u.seconds)?;
+            d.set_item("device", &u.device)?;
+            Some(d)
+        }
+    };
+    let Some(info) = solved else {
+        // untangle only: what untangling did, and the quality of the result
+        let d = PyDict::new(py);
+        d.set_item("untangle", untangle_dict)?;
+        d.set_item("quality", io::eta_field(&mesh).into_pyarray(py))?;
+        d.set_item("report", report_dict(py, &mesh)?)?;
+        return Ok((points_array(py, &mesh.points), d));
+    };
     let d = PyDict::new(py);
+    d.set_item("untangle", untangle_dict)?;
     d.set_item("method", info.method.name())?;
     d.set_item("device", &info.device)?;
     d.set_item("iterations", info.iterations)?;

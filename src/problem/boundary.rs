@@ -19,13 +19,17 @@
 //!   closest point of its candidates (`backend::cpu::project_boundary`), so it
 //!   stays on the original triangulation exactly (to rounding), and never on a
 //!   neighbouring patch or on the far side of a thin wall. The candidate lists
-//!   limit how far a vertex can slide (two rings) — far more than a smoothing
-//!   step moves it; a vertex at the end of its list stays on the list's rim.
+//!   limit how far a vertex can slide: the rim of its list can be as close
+//!   as 0.4–0.5 mean edge lengths (measured on Gmsh spheres and cylinders,
+//!   README "Sliding boundary"), while a solve there moved boundary vertices
+//!   at most 0.37; a vertex at the end of its list stays on the list's rim.
 //! - P is not updated as a vertex slides over a curved surface: the tangent
 //!   plane of the start is used throughout (the projection keeps the vertex on
 //!   the surface; only the search direction is from the start's plane). A
 //!   solve on a curved boundary may therefore end `Stalled` a little above the
-//!   tolerance instead of `Converged`.
+//!   tolerance instead of `Converged`. Refreshing P at the current closest
+//!   point does not fix that (measured, README "Sliding boundary"): the
+//!   boundary is faceted, and the minimiser sits on its creases.
 
 use super::numbering::Numbering;
 use crate::mesh::Mesh;
