@@ -7,6 +7,7 @@
 #import mean_ratio
 #import condition
 #import target
+#import reference_jacobian
 
 alias Hess9 = array<array<real, 9>, 9>;
 
@@ -97,8 +98,9 @@ fn finite(v: real) -> bool {
     return v >= -REAL_MAX && v <= REAL_MAX;
 }
 
-// `smetric::eval`: ok = false when the corner is inverted or degenerate.
-fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, hess: bool) -> MetricEval {
+// `smetric::eval_with`: ok = false when the corner is inverted or degenerate;
+// `rjm` is the reference-Jacobian metric's M (`rj_weight`), which the others ignore.
+fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, rjm: mat3x3<real>, hess: bool) -> MetricEval {
     let d = det_n(s, n);
     if !is_finite_pos(d) {
         var bad: MetricEval;
@@ -108,6 +110,8 @@ fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, hess: bool) -> MetricEval {
     var out: MetricEval;
     if metric == METRIC_TMP {
         out = tmp(n, s);
+    } else if metric == METRIC_RJ {
+        out = rj(s, d, rjm, hess);
     } else if metric == METRIC_CN && n == 3u {
         out = cn3(s, d, hess);
     } else {

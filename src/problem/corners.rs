@@ -81,15 +81,22 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
         Some(r) => Some((r, in_plane(Plane::fit(r, &r.points)?.as_ref(), &r.points))),
         None => None,
     };
+    // the rezoning paper's metrics: every corner against the octant corner,
+    // each weighted 1 / (corners in the mesh)
+    let every = opts.metric.every_corner();
+    let used_by = |kind: ElementKind| if every { kind.corners() } else { kind.optimised_corners() };
+    let total: usize = mesh.kinds.iter().map(|&k| used_by(k).len()).sum();
+    const OCTANT: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for (new_e, &old_e) in numbering.elem_order.iter().enumerate() {
         let old_e = old_e as usize;
         let kind = mesh.kinds[old_e];
         let vs = element_vertices(mesh, old_e, flip);
         let rvs = opts.reference.map(|r| element_vertices(r, old_e, flip));
-        let used = kind.optimised_corners();
+        let used = used_by(kind);
         for c in used {
             let w = match (&reference, &rvs) {
                 (Some((_, rp)), Some(rvs)) => corner_matrix(rp, rvs, c, dim),
+                _ if every => OCTANT,
                 _ => ideal_corner(kind),
             };
             let shape = CornerShape::from_w(&w, dim).ok_or_else(|| {
@@ -113,7 +120,11 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
             out.corners.push(cv);
             out.corner_element.push(new_e as u32);
             out.corner_shape.push(id);
-            out.corner_weight.push(1.0 / (ne as f64 * used.len() as f64));
+            out.corner_weight.push(if every {
+                1.0 / total as f64
+            } else {
+                1.0 / (ne as f64 * used.len() as f64)
+            });
         }
     }
     Ok(out)

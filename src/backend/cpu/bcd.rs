@@ -16,7 +16,7 @@ use std::time::Instant;
 /// points then cost one rank-one update per corner instead of a gather.
 #[derive(Default)]
 pub struct Patch {
-    rest: Vec<(Mat3, Vec3, f64)>,
+    rest: Vec<(Mat3, Vec3, f64, u32)>,
 }
 
 impl Patch {
@@ -29,6 +29,7 @@ impl Patch {
                 shape.tet.s_rest(&p.corner_points(x, c), k),
                 *shape.tet.b(k),
                 p.corner_weight[c],
+                p.corner_shape[c],
             ));
         }
     }
@@ -40,12 +41,12 @@ impl Patch {
         let mut sum = 0.0;
         // the branch hoisted out of the loop keeps the common case tight
         if p.model.fast(p.dim) {
-            for (rest, b, w) in &self.rest {
+            for (rest, b, w, _) in &self.rest {
                 sum += w * TetShape::value_of_s(&s_with(rest, b, at))?;
             }
         } else {
-            for (rest, b, w) in &self.rest {
-                sum += w * p.model.value_of_s(p.dim, &s_with(rest, b, at))?;
+            for (rest, b, w, shape) in &self.rest {
+                sum += w * p.model.value_of_s(&p.shapes[*shape as usize], &s_with(rest, b, at))?;
             }
         }
         Some(sum)
@@ -58,12 +59,12 @@ impl Patch {
         let mut g = [0.0; 3];
         let mut h = [[0.0; 3]; 3];
         let fast = p.model.fast(p.dim);
-        for (rest, b, w) in &self.rest {
+        for (rest, b, w, shape) in &self.rest {
             let s = s_with(rest, b, at);
             let (eta, ge, he) = if fast {
                 TetShape::vertex_gradient_hessian_at(s, b)?
             } else {
-                p.model.vertex_gradient_hessian_of_s(p.dim, s, b)?
+                p.model.vertex_gradient_hessian_of_s(&p.shapes[*shape as usize], s, b)?
             };
             f += w * eta;
             for i in 0..3 {

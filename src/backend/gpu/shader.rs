@@ -47,6 +47,10 @@ const SHARED: &[(&str, &str)] = &[
     ("mean_ratio", include_str!("../../../shaders/metric/mean_ratio.wgsl")),
     ("condition", include_str!("../../../shaders/metric/condition.wgsl")),
     ("target", include_str!("../../../shaders/metric/target.wgsl")),
+    (
+        "reference_jacobian",
+        include_str!("../../../shaders/metric/reference_jacobian.wgsl"),
+    ),
     ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
     (
         "corner_model",
