@@ -184,6 +184,26 @@ fn check_bcd(pair: &mut Pair, c: &Case, tol: f64) {
     );
 }
 
+fn check_reference_position(pair: &mut Pair, c: &Case, tol: f64) {
+    let edge = c.p.mean_edge_length(&c.x);
+    let (g, cp) = pair.both(|be| be.reference_positions(6).unwrap());
+    let worst = g
+        .iter()
+        .flatten()
+        .zip(cp.iter().flatten())
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(
+        worst <= tol * edge,
+        "{}: reference positions differ by {:.1e} edges",
+        c.name,
+        worst / edge
+    );
+    assert!(rel_diff(&cp, &c.x) > 1e-3, "{}: no vertex has a reference elsewhere", c.name);
+    // nothing moved
+    let (gx, cx) = pair.both(|be| be.download().unwrap());
+    assert_eq!((gx.as_slice(), cx.as_slice()), (c.x.as_slice(), c.x.as_slice()));
+}
+
 /// Prepares and assembles the Hessian on both; returns the gradient vector.
 fn assembled(pair: &mut Pair, c: &Case) -> Vector {
     let g = pair.vectors(&[vec![[0.0; 3]; c.p.free_vertices.len()]])[0];
@@ -386,6 +406,7 @@ kernel_tests! {
     check_reduce: reduce_matches_cpu_f32(1e-5), reduce_matches_cpu_f64(1e-13);
     check_gradient_gather: gradient_gather_matches_cpu_f32(1e-4), gradient_gather_matches_cpu_f64(1e-12);
     check_bcd: bcd_matches_cpu_f32(1e-3), bcd_matches_cpu_f64(1e-11);
+    check_reference_position: reference_position_matches_cpu_f32(1e-3), reference_position_matches_cpu_f64(1e-10);
     check_hessian_assemble: hessian_assemble_matches_cpu_f32(1e-4), hessian_assemble_matches_cpu_f64(1e-12);
     check_hessian_gather: hessian_gather_matches_cpu_f32(1e-4), hessian_gather_matches_cpu_f64(1e-12);
     check_bsr_spmv: bsr_spmv_matches_cpu_f32(1e-4), bsr_spmv_matches_cpu_f64(1e-12);

@@ -308,7 +308,8 @@ pub struct PrismArgs {
     /// Add the paper's long-wavelength distortion and short-wavelength noise.
     #[arg(long)]
     pub distorted: bool,
-    #[arg(long, default_value_t = 1)]
+    /// The default is the seed closest to the paper's original mesh.
+    #[arg(long, default_value_t = meshsmooth::generate::prism::PAPER_SEED)]
     pub seed: u64,
     #[command(flatten)]
     pub out: OutputArgs,

@@ -9,6 +9,7 @@ pub mod laplace;
 pub mod line_search;
 pub mod newton;
 pub mod pcg;
+pub mod rezone;
 
 pub use history::{History, Record, StopReason};
 

@@ -95,7 +95,13 @@ fn s_with(rest: &Mat3, b: &Vec3, y: &Vec3) -> Mat3 {
 #[inline]
 pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &mut Patch) -> Option<Vec3> {
     patch.load(p, x, v);
-    let (f0, g, h) = patch.gradient_hessian(p, &x[v])?;
+    patch_step(p, patch, &x[v], ls)
+}
+
+/// The step of [`newton_step`] on a loaded patch with its vertex at `xv`.
+#[inline]
+pub fn patch_step(p: &Problem, patch: &Patch, xv: &Vec3, ls: &LineSearch) -> Option<Vec3> {
+    let (f0, g, h) = patch.gradient_hessian(p, xv)?;
     let neg_g = [-g[0], -g[1], -g[2]];
     // the block is positive definite for the mean ratio; fall back to a scaled
     // steepest descent step should rounding say otherwise
@@ -110,7 +116,7 @@ pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &m
     }
     let mut alpha = 1.0;
     for _ in 0..=ls.max_backtracks {
-        let trial = [x[v][0] + alpha * d[0], x[v][1] + alpha * d[1], x[v][2] + alpha * d[2]];
+        let trial = [xv[0] + alpha * d[0], xv[1] + alpha * d[1], xv[2] + alpha * d[2]];
         if let Some(f) = patch.value(p, &trial)
             && f <= f0 + ls.sigma * alpha * slope
         {

@@ -148,6 +148,10 @@ kernels! {
         MODEL, b("ls", U, V4), OP, b("x", RW, Re), b("corners", R, Ui), b("shapes", R, V4),
         b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
     ];
+    ReferencePosition = "reference_position", variants: true, [
+        MODEL, b("ls", U, V4), OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("free_vertices", R, Ui), b("xr", RW, Re),
+    ];
     HessianAssemble = "hessian_assemble", variants: true, [
         MODEL, OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4), b("elem", RW, Re),
     ];
