@@ -198,7 +198,11 @@ fn check_reference_position(pair: &mut Pair, c: &Case, tol: f64) {
         c.name,
         worst / edge
     );
-    assert!(rel_diff(&cp, &c.x) > 1e-3, "{}: no vertex has a reference elsewhere", c.name);
+    assert!(
+        rel_diff(&cp, &c.x) > 1e-3,
+        "{}: no vertex has a reference elsewhere",
+        c.name
+    );
     // nothing moved
     let (gx, cx) = pair.both(|be| be.download().unwrap());
     assert_eq!((gx.as_slice(), cx.as_slice()), (c.x.as_slice(), c.x.as_slice()));

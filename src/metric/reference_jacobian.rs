@@ -124,7 +124,11 @@ mod tests {
                 (-e(&at(2.0)) + 8.0 * e(&at(1.0)) - 8.0 * e(&at(-1.0)) + e(&at(-2.0))) / (12.0 * step)
             };
             let gd = fd(&|p| f(p).0);
-            assert!((gd - g[x / 3][x % 3]).abs() < 1e-8, "grad {x}: {} vs {gd}", g[x / 3][x % 3]);
+            assert!(
+                (gd - g[x / 3][x % 3]).abs() < 1e-8,
+                "grad {x}: {} vs {gd}",
+                g[x / 3][x % 3]
+            );
             for y in 0..9 {
                 let hd = fd(&|p| f(p).1[y / 3][y % 3]);
                 assert!((hd - h[x][y]).abs() < 1e-7, "H[{x}][{y}]: {} vs {hd}", h[x][y]);

@@ -84,7 +84,13 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
     // the rezoning paper's metrics: every corner against the octant corner,
     // each weighted 1 / (corners in the mesh)
     let every = opts.metric.every_corner();
-    let used_by = |kind: ElementKind| if every { kind.corners() } else { kind.optimised_corners() };
+    let used_by = |kind: ElementKind| {
+        if every {
+            kind.corners()
+        } else {
+            kind.optimised_corners()
+        }
+    };
     let total: usize = mesh.kinds.iter().map(|&k| used_by(k).len()).sum();
     const OCTANT: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for (new_e, &old_e) in numbering.elem_order.iter().enumerate() {
