@@ -16,6 +16,8 @@ use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::mat3::Vec3;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::Problem;
+use meshsmooth::solve::Device;
+use meshsmooth::solve::rezone;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -48,6 +50,23 @@ fn cases() -> Vec<Case> {
                 p,
                 x,
             });
+        }
+        if kind.dim() == 3 {
+            // rezoning's two problems: the paper's measure (step 1) and F_RJ
+            // with per-corner reference Jacobians (step 2)
+            let p1 = Problem::with_options(&mesh, &rezone::cn_paper_options()).unwrap();
+            let xl = p1.gather(&mesh.points);
+            let xr = p1.scatter(&rezone::reference_positions(&p1, &xl, Device::Cpu, 20).unwrap());
+            let p2 = rezone::rj_problem(&mesh, &xr).unwrap();
+            for (metric, p) in [("cn-paper", p1), ("rj", p2)] {
+                let x: Vec<Vec3> = p.gather(&mesh.points).iter().map(|c| c.map(quantise)).collect();
+                assert!(p.check_feasible(&x).is_ok(), "quantising inverted a {kind}");
+                out.push(Case {
+                    name: format!("{kind} {metric}"),
+                    p,
+                    x,
+                });
+            }
         }
     }
     out
