@@ -279,3 +279,77 @@ fn example_1_rj_removes_bad_prisms_with_little_motion_and_cn_restores_the_grid()
         .fold(0.0, f64::max);
     assert!(worst < 1e-5, "CN ends {worst} from the grid");
 }
+
+/// Both steps on a GPU (f64) against the CPU, from the same start: step 1's
+/// kernel and step 2's F_RJ solve (objective, gradient, Hessian kernels).
+#[test]
+fn rezone_on_the_gpu_matches_the_cpu_f64() {
+    let Some(ctx) = common::context(meshsmooth::backend::gpu::Precision::F64) else {
+        return;
+    };
+    for kind in [ElementKind::Prism, ElementKind::Hexahedron, ElementKind::Tetrahedron] {
+        let mesh = small(kind, 8);
+        let p1 = Problem::with_options(&mesh, &cn_paper_options()).unwrap();
+        let x = p1.gather(&mesh.points);
+        let h = p1.mean_edge_length(&x);
+        let cpu_ref = reference_positions(&p1, &x, Device::Cpu, 20).unwrap();
+        let gpu_ref = reference_positions(&p1, &x, Device::Gpu(&ctx), 20).unwrap();
+        let worst = |a: &[Vec3], b: &[Vec3]| {
+            a.iter()
+                .flatten()
+                .zip(b.iter().flatten())
+                .fold(0.0f64, |m, (u, v)| m.max((u - v).abs()))
+        };
+        assert!(
+            worst(&cpu_ref, &gpu_ref) <= 1e-10 * h,
+            "{kind}: step 1 differs by {:.1e} h",
+            worst(&cpu_ref, &gpu_ref) / h
+        );
+        let run = |device| {
+            let mut m = mesh.clone();
+            let opts = rezone::RezoneOptions {
+                solve: Options {
+                    device,
+                    ..Options::cpu(Method::Newton, &Params::default())
+                },
+                reference_iters: 20,
+            };
+            let info = rezone::rezone_mesh(&mut m, &opts, &mut |_| true).unwrap();
+            (m, info)
+        };
+        let (cpu, ci) = run(Device::Cpu);
+        let (gpu, gi) = run(Device::Gpu(&ctx));
+        assert_eq!(ci.info.iterations, gi.info.iterations, "{kind}");
+        assert!(
+            worst(&cpu.points, &gpu.points) <= 1e-8 * h,
+            "{kind}: rezoned meshes differ by {:.1e} h",
+            worst(&cpu.points, &gpu.points) / h
+        );
+        assert!(worst(&cpu.points, &mesh.points) > 1e-3 * h, "{kind}: nothing moved");
+    }
+}
+
+/// Units do not matter: a scaled, shifted mesh rezones to the scaled, shifted result.
+#[test]
+fn rezoning_does_not_depend_on_units() {
+    let mesh = small(ElementKind::Prism, 9);
+    let mut a = mesh.clone();
+    rezone::rezone_mesh(&mut a, &rezone::default_options(Device::Cpu), &mut |_| true).unwrap();
+    let (scale, shift) = (1e3 * 3.0f64.sqrt(), [17.0, -4.0, 250.0]);
+    let mut b = mesh.clone();
+    for p in &mut b.points {
+        for c in 0..3 {
+            p[c] = p[c] * scale + shift[c];
+        }
+    }
+    rezone::rezone_mesh(&mut b, &rezone::default_options(Device::Cpu), &mut |_| true).unwrap();
+    let h = Problem::new(&mesh).unwrap().mean_edge_length(&mesh.points);
+    let mut worst = 0.0f64;
+    for (p, q) in a.points.iter().zip(&b.points) {
+        for c in 0..3 {
+            worst = worst.max(((q[c] - shift[c]) / scale - p[c]).abs());
+        }
+    }
+    assert!(worst < 1e-9 * h, "scaled result differs by {:.1e} h", worst / h);
+    assert_ne!(a.points, mesh.points);
+}
