@@ -12,7 +12,8 @@
 @group(0) @binding(0) var<uniform> model: Model;
 // x = beta, y = sigma
 @group(0) @binding(1) var<uniform> ls: vec4<real>;
-// n = free vertices, aux = most backtracks, aux2 = most Newton steps
+// n = free vertices, aux = most backtracks, aux2 = most Newton steps,
+// coef.x = STEP_TOL^2 (Newton stops on a direction below STEP_TOL local sizes)
 @group(0) @binding(2) var<uniform> op: Op;
 @group(0) @binding(3) var<storage, read> x: array<real>;
 @group(0) @binding(4) var<storage, read> corners: array<u32>;
@@ -57,7 +58,7 @@ struct Step {
 }
 
 // `bcd::patch_step`
-fn patch_step(v: u32, xv: vec3<real>) -> Step {
+fn patch_step(v: u32, xv: vec3<real>, min_step_sq: real) -> Step {
     var out = Step(xv, false);
     var f0 = real(0.0);
     var g = vec3<real>(real(0.0));
@@ -92,7 +93,7 @@ fn patch_step(v: u32, xv: vec3<real>) -> Step {
         d = vec3<real>(neg_g[0] * s, neg_g[1] * s, neg_g[2] * s);
     }
     let slope = dot3(g, d);
-    if !(slope < real(0.0)) {
+    if !(slope < real(0.0)) || dot3(d, d) <= min_step_sq {
         return out;
     }
     var alpha = real(1.0);
@@ -125,8 +126,18 @@ fn main(
         rest_cache[it - first] = s_rest(corner_points(packed >> 2u), corner_ref(packed >> 2u).b, packed & 3u);
     }
     var y = corner_point(v);
+    // `reference_position::local_size_sq`
+    var h = real(0.0);
+    for (var it = first; it < inc_offsets[v + 1u]; it++) {
+        let pts = corner_points(inc_items[it] >> 2u);
+        for (var q = 0u; q < 4u; q++) {
+            let e = vec3<real>(pts[q][0] - y[0], pts[q][1] - y[1], pts[q][2] - y[2]);
+            h = max(h, e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        }
+    }
+    let min_step_sq = op.coef.x * h;
     for (var i = 0u; i < op.aux2; i++) {
-        let step = patch_step(v, y);
+        let step = patch_step(v, y, min_step_sq);
         if !step.ok {
             break;
         }

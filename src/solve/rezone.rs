@@ -86,11 +86,7 @@ pub fn reference_positions(p: &Problem, x: &[Vec3], device: Device, iters: usize
 /// is its reference Jacobian. Fails when a reference Jacobian is singular or
 /// inverted (a reference position outside its feasible region).
 pub fn rj_problem(mesh: &Mesh, reference: &[Vec3]) -> Result<Problem> {
-    if mesh.dim() != 3 {
-        return Err(Error::InvalidArgument(
-            "reference-Jacobian rezoning is three-dimensional; this mesh is planar".into(),
-        ));
-    }
+    check_volume(mesh)?;
     if reference.len() != mesh.num_points() {
         return Err(Error::InvalidArgument(format!(
             "{} reference positions for a mesh of {} vertices",
@@ -129,6 +125,15 @@ pub fn rj_problem(mesh: &Mesh, reference: &[Vec3]) -> Result<Problem> {
     Ok(p)
 }
 
+fn check_volume(mesh: &Mesh) -> Result<()> {
+    if mesh.dim() != 3 {
+        return Err(Error::Unsupported(
+            "reference-Jacobian rezoning is three-dimensional; this mesh is planar".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// Rezones `mesh` in place: step 1 and step 2 of the module doc, in the
 /// mesh's frame; fixed vertices keep their bits. `progress` sees step 2's
 /// history.
@@ -142,6 +147,7 @@ pub fn rezone_mesh(
     } else {
         opts.reference_iters
     };
+    check_volume(mesh)?;
     let frame = Frame::of(&mesh.points);
     let mut local = mesh.clone();
     local.points = mesh.points.iter().map(|q| frame.to_local(q)).collect();

@@ -95,12 +95,13 @@ fn s_with(rest: &Mat3, b: &Vec3, y: &Vec3) -> Mat3 {
 #[inline]
 pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &mut Patch) -> Option<Vec3> {
     patch.load(p, x, v);
-    patch_step(p, patch, &x[v], ls)
+    patch_step(p, patch, &x[v], ls, 0.0)
 }
 
-/// The step of [`newton_step`] on a loaded patch with its vertex at `xv`.
+/// The step of [`newton_step`] on a loaded patch with its vertex at `xv`;
+/// `None` also when the Newton direction d has |d|^2 <= `min_step_sq`.
 #[inline]
-pub fn patch_step(p: &Problem, patch: &Patch, xv: &Vec3, ls: &LineSearch) -> Option<Vec3> {
+pub fn patch_step(p: &Problem, patch: &Patch, xv: &Vec3, ls: &LineSearch, min_step_sq: f64) -> Option<Vec3> {
     let (f0, g, h) = patch.gradient_hessian(p, xv)?;
     let neg_g = [-g[0], -g[1], -g[2]];
     // the block is positive definite for the mean ratio; fall back to a scaled
@@ -111,7 +112,7 @@ pub fn patch_step(p: &Problem, patch: &Patch, xv: &Vec3, ls: &LineSearch) -> Opt
         neg_g.map(|c| c * s)
     });
     let slope = dot(&g, &d);
-    if !(slope < 0.0) {
+    if !(slope < 0.0) || dot(&d, &d) <= min_step_sq {
         return None;
     }
     let mut alpha = 1.0;

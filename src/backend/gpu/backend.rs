@@ -457,9 +457,11 @@ impl Backend for GpuBackend<'_> {
         // fixed vertices are their own reference
         self.copy(Buf::X, Buf::Reference);
         if self.n_free > 0 {
+            let tol = crate::backend::cpu::reference_position::STEP_TOL;
             let op = Op {
                 aux: self.max_backtracks,
                 aux2: iters as u32,
+                a: Coef::value(tol * tol),
                 ..Op::n(self.n_free)
             };
             self.record(
