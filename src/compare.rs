@@ -76,7 +76,7 @@ fn paper_memory(method: Method, vertices: usize, elements: usize) -> Option<usiz
     match method {
         Method::Bcd | Method::BcdColored => Some(4 * (23 * vertices + 12 * elements)),
         Method::Newton => Some(4 * (64 * vertices + 37 * elements)),
-        Method::Laplace => None,
+        Method::Laplace | Method::Nlcg => None,
     }
 }
 

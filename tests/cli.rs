@@ -106,17 +106,48 @@ fn generate_smooth_and_quality_work_together() {
 }
 
 #[test]
-fn laplace_and_colored_methods_run() {
+fn laplace_colored_and_nlcg_methods_run() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("box.msh");
     generate_box(&input, [4, 4, 4], "random:0.3", 1);
-    for method in ["laplace", "bcd-colored"] {
+    for method in ["laplace", "bcd-colored", "nlcg"] {
         let out = dir.path().join(format!("{method}.mesh"));
         let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--method", method, "--quiet"]);
         assert!(o.status.success(), "{method}: {}", text(&o));
         assert!(text(&o).contains(method));
         assert!(out.exists());
     }
+}
+
+#[test]
+fn nlcg_stops_on_tol_x_and_refuses_a_negative_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.vtk");
+    generate_box(&input, [4, 4, 4], "random:0.3", 2);
+    let out = dir.path().join("out.vtk");
+    let run = |tol_x: &str| {
+        let tol_x = format!("--tol-x={tol_x}");
+        meshsmooth(&[
+            "smooth",
+            s(&input),
+            "-o",
+            s(&out),
+            "--method",
+            "nlcg",
+            "--tol",
+            "1e-12",
+            &tol_x,
+            "--quiet",
+        ])
+    };
+    let o = run("1e-3");
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("step below tolerance"), "{}", text(&o));
+    std::fs::remove_file(&out).unwrap();
+    let o = run("-1");
+    assert!(!o.status.success());
+    assert!(text(&o).contains("--tol-x"), "{}", text(&o));
+    assert!(!out.exists());
 }
 
 #[test]

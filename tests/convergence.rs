@@ -213,7 +213,7 @@ fn mixed_tet_prism_hex_meshes_optimise_with_every_metric() {
     };
     generate::perturb(&mut base, &opts).unwrap();
     for metric in [MetricKind::InverseMeanRatio, MetricKind::ConditionNumber] {
-        for method in [Method::Newton, Method::Bcd] {
+        for method in [Method::Newton, Method::Bcd, Method::Nlcg] {
             let mut mesh = base.clone();
             let po = ProblemOptions {
                 metric,
@@ -274,7 +274,7 @@ fn clockwise_planar_meshes_are_smoothed_like_counter_clockwise_ones() {
 
 #[test]
 fn a_target_objective_stops_at_the_first_iterate_that_reaches_it() {
-    for method in [Method::Newton, Method::Bcd] {
+    for method in [Method::Newton, Method::Bcd, Method::Nlcg] {
         let mesh = perturbed_box(6, 0.3, 5);
         let mut full = mesh.clone();
         let done = smooth(&mut full, method, &Params::default());

@@ -40,7 +40,7 @@ fn run(mesh: &Mesh, scale: f64, shift: f64, method: Method, device: Device) -> (
 
 fn check(device: Device, label: &str) {
     let mesh = start();
-    for method in [Method::Bcd, Method::Newton] {
+    for method in [Method::Bcd, Method::Newton, Method::Nlcg] {
         let (base, out) = run(&mesh, 1.0, 0.0, method, device);
         assert!(base.iterations > 2, "{label} {method}: the start should need work");
         for (scale, shift) in [(1e-9, 0.0), (1e9, 0.0), (1.0, 1e9), (1.0, -1e9), (1e9, 1e9)] {

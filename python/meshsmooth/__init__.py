@@ -82,10 +82,10 @@ class Result:
         objective: F at the end (unit-free; 1 for ideal elements).
         grad_norm: 2-norm of the free-vertex gradient of F, lengths measured in
             mean edge lengths of the start (unit-free; the quantity ``tol`` bounds).
-        iterations: Newton iterations or sweeps (bcd, laplace) run.
+        iterations: Newton or NLCG iterations or sweeps (bcd, laplace) run.
         stop: why it stopped: "converged", "stalled", "max_iterations",
-            "time_limit", "target_reached" or "cancelled" (the callback
-            returned False).
+            "time_limit", "target_reached", "small_step" (nlcg: a step moved no
+            vertex measurably) or "cancelled" (the callback returned False).
         history: numpy arrays per column: "iteration", "seconds", "objective",
             "grad_norm"; row 0 is the start.
         quality: per-cell inverse mean ratio at the new positions (1 is ideal).
@@ -271,7 +271,8 @@ def smooth(
             "hexahedron", "wedge" (meshio ``CellBlock``s work too).
         method: "newton" (inexact Newton with block-Jacobi PCG), "bcd" (block
             coordinate descent, per-vertex Newton), "bcd-colored" (the same,
-            colour by colour) or "laplace" (smart Laplacian, CPU only).
+            colour by colour), "nlcg" (nonlinear conjugate gradients with a
+            strong-Wolfe line search) or "laplace" (smart Laplacian, CPU only).
         metric: "imr" (inverse mean ratio), "cn" (condition number) or "tmp"
             (target matrix; needs a reference, not available here).
         template: "harmonic" (minimise the mean metric) or "average" (maximise

@@ -54,6 +54,7 @@ fn stop_name(s: StopReason) -> &'static str {
         StopReason::TimeLimit => "time_limit",
         StopReason::Cancelled => "cancelled",
         StopReason::TargetReached => "target_reached",
+        StopReason::SmallStep => "small_step",
     }
 }
 

@@ -41,7 +41,7 @@ def write_vtk(path, points, cell_type, cells):
     Path(path).write_text("\n".join(lines) + "\n")
 
 
-@pytest.mark.parametrize("method", ["newton", "bcd"])
+@pytest.mark.parametrize("method", ["newton", "bcd", "nlcg"])
 def test_box_reaches_the_clis_objective(tmp_path, method):
     points, hexes, _ = box(n=5)
     tets = hex_to_tets(hexes)

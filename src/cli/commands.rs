@@ -47,13 +47,21 @@ impl StopArgs {
                 "--target-objective must be a finite number, got {t}"
             )));
         }
-        Ok(Params {
+        if !(self.tol_x.is_finite() && self.tol_x >= 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "--tol-x must be a non-negative number, got {}",
+                self.tol_x
+            )));
+        }
+        let mut params = Params {
             tol,
             max_iter,
             time_limit,
             target_objective: self.target_objective,
             ..Params::default()
-        })
+        };
+        params.nlcg.tol_x = self.tol_x;
+        Ok(params)
     }
 }
 
@@ -120,7 +128,7 @@ fn summary(info: &Info, f0: f64) -> String {
         info.stop,
         info.iterations,
         match info.method {
-            Method::Newton => "iterations".to_string(),
+            Method::Newton | Method::Nlcg => "iterations".to_string(),
             Method::BcdColored => format!("sweeps of {} colours", info.colors),
             _ => "sweeps".to_string(),
         },

@@ -74,7 +74,7 @@ pub fn choose(device: DeviceArg, gpu: &GpuArgs, methods: &[Method]) -> Result<Ch
 fn gpu_allowed(method: Method) -> Result<()> {
     if method == Method::Laplace {
         return Err(Error::InvalidArgument(format!(
-            "{method} runs on the CPU only (the GPU runs bcd, colour by colour, and newton); use --device cpu"
+            "{method} runs on the CPU only (the GPU runs bcd, colour by colour, newton and nlcg); use --device cpu"
         )));
     }
     Ok(())

@@ -121,7 +121,8 @@ pub struct SmoothArgs {
 pub struct SolverArgs {
     /// newton: inexact Newton with block-Jacobi PCG (reaches the optimum first on every
     /// mesh measured); bcd: block coordinate descent (per-vertex Newton); bcd-colored: the
-    /// same, colour by colour in parallel; laplace: smart Laplacian smoothing (CPU only).
+    /// same, colour by colour in parallel; nlcg: nonlinear conjugate gradients (gradients
+    /// only); laplace: smart Laplacian smoothing (CPU only).
     #[arg(long, value_enum, default_value_t = Method::default())]
     pub method: Method,
     /// cpu: f64 on all cores; gpu: wgpu (bcd runs colour by colour); auto: a hardware GPU if
@@ -180,6 +181,10 @@ pub struct StopArgs {
     /// edge lengths (unit-free, like the objective), falls below this.
     #[arg(long, default_value_t = Params::default().tol)]
     pub tol: f64,
+    /// nlcg: also stop after a step that moved no vertex farther than this many mean edge
+    /// lengths.
+    #[arg(long, default_value_t = Params::default().nlcg.tol_x)]
+    pub tol_x: f64,
     /// Most sweeps (bcd, laplace) or iterations (newton).
     #[arg(long, default_value_t = Params::default().max_iter)]
     pub max_iter: usize,

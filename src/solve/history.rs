@@ -73,6 +73,8 @@ pub enum StopReason {
     Cancelled,
     /// F reached `Params::target_objective`.
     TargetReached,
+    /// A step moved no vertex farther than `NlcgParams::tol_x` (NLCG).
+    SmallStep,
 }
 
 impl fmt::Display for StopReason {
@@ -84,6 +86,7 @@ impl fmt::Display for StopReason {
             StopReason::TimeLimit => "time limit reached",
             StopReason::Cancelled => "cancelled",
             StopReason::TargetReached => "target objective reached",
+            StopReason::SmallStep => "converged (step below tolerance)",
         })
     }
 }

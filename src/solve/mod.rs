@@ -1,15 +1,20 @@
 //! Solvers: they own the iteration loop, line searches, termination and
 //! history, and reach the numerics only through `backend::Backend`. Each
-//! method is written once (`bcd`, `newton` with `pcg`); `solve` picks the
-//! backend from a `Device` and runs the one loop (`iterate`) over it.
+//! method is written once (`bcd`, `newton` with `pcg`, `nlcg` with `wolfe`);
+//! `solve` picks the backend from a `Device` and runs the one loop
+//! (`iterate`) over it.
 
 pub mod bcd;
+#[cfg(test)]
+mod function_backend;
 pub mod history;
 pub mod laplace;
 pub mod line_search;
 pub mod newton;
+pub mod nlcg;
 pub mod pcg;
 pub mod rezone;
+pub mod wolfe;
 
 pub use history::{History, Record, StopReason};
 
@@ -23,6 +28,7 @@ use crate::metric::mat3::Vec3;
 use crate::problem::{Problem, ProblemOptions};
 use line_search::LineSearch;
 use newton::{Newton, NewtonParams};
+use nlcg::{Nlcg, NlcgParams};
 use std::time::{Duration, Instant};
 
 /// Which optimiser moves the vertices.
@@ -38,6 +44,9 @@ pub enum Method {
     Newton,
     /// Smart Laplacian smoothing (a baseline, not an optimiser; CPU only).
     Laplace,
+    /// Nonlinear conjugate gradients (Polak–Ribière+) with a feasibility-aware
+    /// strong-Wolfe line search: gradients only, no Hessian.
+    Nlcg,
 }
 
 impl Method {
@@ -47,6 +56,7 @@ impl Method {
             Method::BcdColored => "bcd-colored",
             Method::Newton => "newton",
             Method::Laplace => "laplace",
+            Method::Nlcg => "nlcg",
         }
     }
 }
@@ -91,7 +101,7 @@ pub struct Params {
     /// measured in mean edge lengths of the start (so unit-free, like F), is
     /// below this.
     pub tol: f64,
-    /// Most sweeps (BCD, Laplace) or iterations (Newton).
+    /// Most sweeps (BCD, Laplace) or iterations (Newton, NLCG).
     pub max_iter: usize,
     pub time_limit: Option<Duration>,
     /// Stop as soon as F is at or below this (a baseline-derived stop, as in
@@ -100,6 +110,7 @@ pub struct Params {
     pub bcd: BcdParams,
     pub newton: NewtonParams,
     pub laplace: LaplaceParams,
+    pub nlcg: NlcgParams,
 }
 
 impl Default for Params {
@@ -112,6 +123,7 @@ impl Default for Params {
             bcd: BcdParams::default(),
             newton: NewtonParams::default(),
             laplace: LaplaceParams::default(),
+            nlcg: NlcgParams::default(),
         }
     }
 }
@@ -202,7 +214,7 @@ pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnM
         Device::Gpu(ctx) => {
             if opts.method == Method::Laplace {
                 return Err(Error::InvalidArgument(
-                    "method 'laplace' has no GPU version (use bcd, bcd-colored or newton)".into(),
+                    "method 'laplace' has no GPU version (use bcd, bcd-colored, newton or nlcg)".into(),
                 ));
             }
             run(&mut GpuBackend::new(ctx, p, x, &ls)?, p, x, opts, progress)
@@ -215,6 +227,7 @@ enum Solver {
     Bcd(bcd::Bcd),
     Newton(Box<Newton>),
     Laplace(laplace::Laplace),
+    Nlcg(Box<Nlcg>),
 }
 
 /// `solve` on a backend already holding the problem and the start.
@@ -227,10 +240,14 @@ pub fn run<B: Backend + ?Sized>(
 ) -> Result<Info> {
     let params = &opts.params;
     let method = opts.method;
+    // F is unit-free; its gradient scales as 1/length: measured in mean edge
+    // lengths it is unit-free too, and so is the stopping test
+    let edge = p.mean_edge_length(x);
     let mut solver = match method {
         Method::Bcd | Method::BcdColored => Solver::Bcd(bcd::Bcd::new(be, method == Method::Bcd)?),
         Method::Newton => Solver::Newton(Box::new(Newton::new(be, params.newton)?)),
         Method::Laplace => Solver::Laplace(laplace::Laplace::new(be)?),
+        Method::Nlcg => Solver::Nlcg(Box::new(Nlcg::new(be, params.nlcg, edge)?)),
     };
     let solver_setup = match &solver {
         Solver::Newton(n) => n.setup_time,
@@ -238,14 +255,12 @@ pub fn run<B: Backend + ?Sized>(
     };
     let start = Instant::now();
     let deadline = params.time_limit.map(|t| start + t);
-    // F is unit-free; its gradient scales as 1/length: measured in mean edge
-    // lengths it is unit-free too, and so is the stopping test
-    let edge = p.mean_edge_length(x);
     let unit_free = |(f, g): (f64, f64)| (f, g * edge);
     let first = match &mut solver {
         Solver::Bcd(b) => b.start(be)?,
         Solver::Newton(n) => n.start(be)?,
         Solver::Laplace(l) => l.start(be)?,
+        Solver::Nlcg(n) => n.start(be)?,
     }
     .map(unit_free)
     .ok_or_else(|| {
@@ -271,6 +286,7 @@ pub fn run<B: Backend + ?Sized>(
                 Solver::Bcd(b) => b.step(be, deadline)?,
                 Solver::Newton(n) => n.step(be)?,
                 Solver::Laplace(l) => l.step(be, deadline)?,
+                Solver::Nlcg(n) => n.step(be)?,
             };
             sweep.grad_norm *= edge;
             steps += 1;
@@ -410,6 +426,12 @@ fn iterate(
         history.push(record);
         if !progress(&record) {
             stop = Some(StopReason::Cancelled);
+        } else if gnorm >= params.tol
+            && method == Method::Nlcg
+            && sweep.max_move_sq > 0.0
+            && sweep.max_move_sq.sqrt() <= params.nlcg.tol_x * begin.edge
+        {
+            stop = Some(StopReason::SmallStep);
         } else if gnorm >= params.tol
             && (no_move(method, sweep.max_move_sq, params.laplace.min_move * begin.edge)
                 || no_progress(&history, STALL_WINDOW))
