@@ -24,14 +24,9 @@
 // reference positions, 3 reals per vertex (fixed vertices: copied from x)
 @group(0) @binding(9) var<storage, read_write> xr: array<real>;
 
-// As in bcd.wgsl: the S-without-the-vertex's-term of up to CACHE corners.
-const CACHE: u32 = 32u;
-var<private> rest_cache: array<mat3x3<real>, CACHE>;
-
+// S without the vertex's term of incidence item `it` (recomputed: the
+// corners a vertex has under the paper's measure outnumber any private cache).
 fn rest_of(it: u32, first: u32) -> mat3x3<real> {
-    if it - first < CACHE {
-        return rest_cache[it - first];
-    }
     let packed = inc_items[it];
     return s_rest(corner_points(packed >> 2u), corner_ref(packed >> 2u).b, packed & 3u);
 }
@@ -120,11 +115,6 @@ fn main(
     }
     let v = free_vertices[t];
     let first = inc_offsets[v];
-    let last = min(inc_offsets[v + 1u], first + CACHE);
-    for (var it = first; it < last; it++) {
-        let packed = inc_items[it];
-        rest_cache[it - first] = s_rest(corner_points(packed >> 2u), corner_ref(packed >> 2u).b, packed & 3u);
-    }
     var y = corner_point(v);
     // `reference_position::local_size_sq`
     var h = real(0.0);
