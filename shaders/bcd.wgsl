@@ -47,7 +47,7 @@ fn patch_value(v: u32, at: vec3<real>) -> Eta {
         } else {
             rest = s_rest(corner_points(packed >> 2u), cr.b, k);
         }
-        let r = model_value_of_s(model, s_with(rest, cr.b[k], at));
+        let r = model_value_of_s(model, s_with(rest, cr.b[k], at), model_rjm(model, cr.b));
         if !r.ok {
             return Eta(real(0.0), false);
         }
@@ -85,7 +85,7 @@ fn main(
         if it - first < CACHE {
             rest_cache[it - first] = rest;
         }
-        let r = model_vertex_gh(model, s_with(rest, cr.b[k], xv), cr.b[k]);
+        let r = model_vertex_gh(model, s_with(rest, cr.b[k], xv), cr.b[k], model_rjm(model, cr.b));
         if !r.ok {
             return;
         }

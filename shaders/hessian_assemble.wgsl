@@ -29,7 +29,7 @@ fn store_block(base: u32, k: u32, l: u32, blk: mat3x3<real>, w: real) {
 // `Model::blocks` through the dense S-Hessian.
 fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) -> bool {
     let n = model.dim;
-    let m = model_eval(model, s, true);
+    let m = model_eval(model, s, model_rjm(model, b), true);
     if !m.ok {
         return false;
     }

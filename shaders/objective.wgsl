@@ -39,7 +39,7 @@ fn main(
         term = p.eta;
         g_s = p.grad_s;
 #else
-        let m = model_eval(model, s, false);
+        let m = model_eval(model, s, model_rjm(model, cr.b), false);
         ok = m.ok;
         term = m.v;
         g_s = m.g;

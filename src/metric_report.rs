@@ -25,6 +25,9 @@ pub struct MetricSummary {
     pub max: f64,
     /// (lower edge, upper edge or None, percent of elements); inverted elements are left out.
     pub bands: Vec<(f64, Option<f64>, f64)>,
+    /// Percent of elements below the first band (values under 1, which some
+    /// metrics reach: tmp's ideal is 0); not counted in any band.
+    pub below: f64,
     pub inverted: usize,
 }
 
@@ -69,20 +72,18 @@ pub fn metric_summary(
         .enumerate()
         .map(|(i, &lo)| {
             let hi = PAPER_BANDS.get(i + 1).copied();
-            let first = i == 0;
-            let count = ok
-                .iter()
-                .filter(|&&v| (first || v >= lo) && hi.is_none_or(|h| v < h))
-                .count();
+            let count = ok.iter().filter(|&&v| v >= lo && hi.is_none_or(|h| v < h)).count();
             (lo, hi, 100.0 * count as f64 / n)
         })
         .collect();
+    let below = 100.0 * ok.iter().filter(|&&v| v < PAPER_BANDS[0]).count() as f64 / n;
     Ok(MetricSummary {
         metric: metric.to_string(),
         min: ok.iter().copied().fold(f64::INFINITY, f64::min),
         avg: ok.iter().sum::<f64>() / n,
         max: ok.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         bands,
+        below,
         inverted: values.len() - ok.len(),
     })
 }
@@ -137,27 +138,76 @@ pub struct Comparison<'a> {
 
 impl fmt::Display for Comparison<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let (b, a) = (self.before, self.after);
-        writeln!(f, "element quality ({} per element, mean over corners)", b.metric)?;
-        writeln!(f, "{:<16} {:>12} {:>12}", "", "original", "optimised")?;
-        for (name, x, y) in [("min", b.min, a.min), ("avg", b.avg, a.avg), ("max", b.max, a.max)] {
-            writeln!(f, "{name:<16} {x:>12.4} {y:>12.4}")?;
+        let table = SideBySide {
+            quality: vec![("original", self.before), ("optimised", self.after)],
+            displacement: self.displacement.map(|d| ("optimised", d)).into_iter().collect(),
+        };
+        table.fmt(f)
+    }
+}
+
+/// Any number of columns side by side, as section 6 of the rezoning paper
+/// prints Original / RJ-optimised / CN-optimised: element quality (min, avg,
+/// max, bands) per column, then node displacement per column.
+pub struct SideBySide<'a> {
+    pub quality: Vec<(&'a str, &'a MetricSummary)>,
+    pub displacement: Vec<(&'a str, SpacingDisplacement)>,
+}
+
+impl fmt::Display for SideBySide<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let row = |f: &mut fmt::Formatter<'_>, name: &str, values: &mut dyn Iterator<Item = String>| {
+            write!(f, "{name:<16}")?;
+            for v in values {
+                write!(f, " {v:>12}")?;
+            }
+            writeln!(f)
+        };
+        if let Some((_, first)) = self.quality.first() {
+            writeln!(f, "element quality ({} per element, mean over corners)", first.metric)?;
+            row(f, "", &mut self.quality.iter().map(|(n, _)| n.to_string()))?;
+            type Pick = fn(&MetricSummary) -> f64;
+            let stats: [(&str, Pick); 3] = [("min", |s| s.min), ("avg", |s| s.avg), ("max", |s| s.max)];
+            for (name, pick) in stats {
+                row(
+                    f,
+                    name,
+                    &mut self.quality.iter().map(|(_, s)| format!("{:.4}", pick(s))),
+                )?;
+            }
+            writeln!(f, "fraction of elements, %")?;
+            if self.quality.iter().any(|(_, s)| s.below > 0.0) {
+                let label = format!("below {:.2}", PAPER_BANDS[0]);
+                row(
+                    f,
+                    &label,
+                    &mut self.quality.iter().map(|(_, s)| format!("{:.1}", s.below)),
+                )?;
+            }
+            for (i, (lo, hi, _)) in first.bands.iter().enumerate() {
+                let band = match hi {
+                    Some(h) => format!("{lo:.2} - {h:.2}"),
+                    None => format!("{lo:.2} - inf"),
+                };
+                row(
+                    f,
+                    &band,
+                    &mut self.quality.iter().map(|(_, s)| format!("{:.1}", s.bands[i].2)),
+                )?;
+            }
         }
-        writeln!(f, "fraction of elements, %")?;
-        for ((lo, hi, x), (_, _, y)) in b.bands.iter().zip(&a.bands) {
-            let band = match hi {
-                Some(h) => format!("{lo:.2} - {h:.2}"),
-                None => format!("{lo:.2} - inf"),
-            };
-            writeln!(f, "{band:<16} {x:>12.1} {y:>12.1}")?;
-        }
-        if let Some(d) = self.displacement {
+        if !self.displacement.is_empty() {
             writeln!(f, "node displacement, % of the average local spacing")?;
-            writeln!(
-                f,
-                "{:<16} {:>12.1}\n{:<16} {:>12.1}\n{:<16} {:>12.1}",
-                "min", d.min, "avg", d.avg, "max", d.max
-            )?;
+            row(f, "", &mut self.displacement.iter().map(|(n, _)| n.to_string()))?;
+            type Pick = fn(&SpacingDisplacement) -> f64;
+            let stats: [(&str, Pick); 3] = [("min", |d| d.min), ("avg", |d| d.avg), ("max", |d| d.max)];
+            for (name, pick) in stats {
+                row(
+                    f,
+                    name,
+                    &mut self.displacement.iter().map(|(_, d)| format!("{:.1}", pick(d))),
+                )?;
+            }
         }
         Ok(())
     }

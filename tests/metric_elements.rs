@@ -134,7 +134,7 @@ impl Element {
                 let s = shape.tet.s_rest(&self.local(x, c), usize::MAX);
                 let (_, gv, hv) = self
                     .model
-                    .vertex_gradient_hessian_of_s(shape.n, s, shape.tet.b(a))
+                    .vertex_gradient_hessian_of_s(shape, s, shape.tet.b(a))
                     .unwrap();
                 for i in 0..n {
                     assert!((gv[i] - gc[a][i]).abs() <= 1e-12 * (1.0 + gc[a][i].abs()));

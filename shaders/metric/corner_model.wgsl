@@ -31,8 +31,17 @@ fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
     return out;
 }
 
-fn model_eval(model: Model, s: mat3x3<real>, hess: bool) -> MetricEval {
-    let m = eval_metric(model.metric, model.dim, s, hess, model.eps);
+// The reference-Jacobian metric's M of a corner with B rows `b` (`Model::eval`
+// on the CPU); the other metrics do not read it.
+fn model_rjm(model: Model, b: array<vec3<real>, 4>) -> mat3x3<real> {
+    if model.metric == METRIC_RJ {
+        return rj_weight(b);
+    }
+    return mat3x3<real>();
+}
+
+fn model_eval(model: Model, s: mat3x3<real>, rjm: mat3x3<real>, hess: bool) -> MetricEval {
+    let m = eval_metric(model.metric, model.dim, s, rjm, hess, model.eps);
     if !m.ok {
         return m;
     }
@@ -40,24 +49,24 @@ fn model_eval(model: Model, s: mat3x3<real>, hess: bool) -> MetricEval {
 }
 
 // `Model::value_of_s`
-fn model_value_of_s(model: Model, s: mat3x3<real>) -> Eta {
+fn model_value_of_s(model: Model, s: mat3x3<real>, rjm: mat3x3<real>) -> Eta {
 #if FAST
     return value_of_s(s);
 #else
-    let m = model_eval(model, s, false);
+    let m = model_eval(model, s, rjm, false);
     return Eta(m.v, m.ok);
 #endif
 }
 
 // `Model::vertex_gradient_hessian_of_s`: in 2D the z diagonal is 1 so the
 // block stays invertible, and the z gradient is 0, so z never moves.
-fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>) -> VertexGH {
+fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<real>) -> VertexGH {
 #if FAST
     return vertex_gradient_hessian_of_s(s, b);
 #else
     var out: VertexGH;
     let n = model.dim;
-    let m = model_eval(model, s, true);
+    let m = model_eval(model, s, rjm, true);
     out.ok = m.ok;
     if !m.ok {
         return out;

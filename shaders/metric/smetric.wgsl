@@ -7,6 +7,7 @@
 #import mean_ratio
 #import condition
 #import target
+#import reference_jacobian
 
 alias Hess9 = array<array<real, 9>, 9>;
 
@@ -117,9 +118,11 @@ fn chi(d: real, eps: real) -> Chi {
     return Chi(c, c / r, real(0.5) * eps * eps / (r * r * r));
 }
 
-// `smetric::eval_regularised`: ok = false when the corner is inverted or
-// degenerate and eps = 0; with eps > 0 det S is chi(det S, eps).
-fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, hess: bool, eps: real) -> MetricEval {
+// `smetric::eval_with`: ok = false when the corner is inverted or degenerate
+// and eps = 0 (with eps > 0 det S is chi(det S, eps), untangling's
+// regularisation); `rjm` is the reference-Jacobian metric's M (`rj_weight`),
+// which the others ignore.
+fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, rjm: mat3x3<real>, hess: bool, eps: real) -> MetricEval {
     let d = det_n(s, n);
     if !finite(d) || (eps == real(0.0) && !is_finite_pos(d)) {
         var bad: MetricEval;
@@ -130,6 +133,8 @@ fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, hess: bool, eps: real) -> M
     var out: MetricEval;
     if metric == METRIC_TMP {
         out = tmp(n, s);
+    } else if metric == METRIC_RJ {
+        out = rj(s, d, rjm, hess);
     } else if metric == METRIC_CN && n == 3u {
         out = cn3(s, x, hess);
     } else {

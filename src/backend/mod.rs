@@ -163,6 +163,13 @@ pub trait Backend {
         Ok(false)
     }
 
+    /// Step 1 of reference-Jacobian rezoning: every free vertex's position
+    /// minimising the objective of its corners with all other vertices at
+    /// the current positions, by up to `iters` safeguarded Newton steps (the
+    /// BCD step); nothing moves. Fixed vertices are their own reference.
+    /// Returns positions for every vertex (a read-back).
+    fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>>;
+
     /// Builds the Hessian's block pattern and the preconditioner's storage;
     /// returns the bytes they hold. Called once, before `assemble`.
     fn prepare_hessian(&mut self) -> Result<usize>;

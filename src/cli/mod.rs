@@ -7,6 +7,7 @@ mod compare;
 mod device;
 mod generate;
 mod progress;
+mod rezone;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use meshsmooth::backend::gpu::Precision;
@@ -53,6 +54,42 @@ pub enum Command {
     Generate(GenerateCommand),
     /// Smooth a built-in perturbed mesh and print the reports.
     Demo(DemoArgs),
+    /// Reference-Jacobian rezoning (the rezoning paper): improve the bad elements while
+    /// keeping the mesh close to the input; prints section 6's tables in the paper's
+    /// shape measure (cn-paper).
+    Rezone(RezoneArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct RezoneArgs {
+    /// Input mesh (.vtk, .vtu, .msh, .mesh), three-dimensional.
+    pub input: PathBuf,
+    /// Output mesh (the rezoned one).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also run the paper's CN optimisation (the cn-paper measure minimised) from the same
+    /// start and write its mesh here.
+    #[arg(long, value_name = "CN_OUTPUT")]
+    pub compare_cn: Option<PathBuf>,
+    /// Step 2's optimiser (and the CN comparison's).
+    #[arg(long, value_enum, default_value_t = meshsmooth::solve::rezone::DEFAULT_METHOD)]
+    pub method: Method,
+    /// cpu, gpu or auto (as for smooth); step 1 runs as one GPU kernel there.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
+    pub device: DeviceArg,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    #[command(flatten)]
+    pub stop: StopArgs,
+    /// Most Newton steps per vertex in step 1 (the reference positions).
+    #[arg(long, default_value_t = meshsmooth::solve::rezone::REFERENCE_ITERS)]
+    pub reference_iters: usize,
+    /// Output format (as for smooth); --compare-cn's follows its extension.
+    #[arg(long)]
+    pub format: Option<String>,
+    /// No progress display.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -351,7 +388,8 @@ pub struct PrismArgs {
     /// Add the paper's long-wavelength distortion and short-wavelength noise.
     #[arg(long)]
     pub distorted: bool,
-    #[arg(long, default_value_t = 1)]
+    /// The default is the seed closest to the paper's original mesh.
+    #[arg(long, default_value_t = meshsmooth::generate::prism::PAPER_SEED)]
     pub seed: u64,
     #[command(flatten)]
     pub out: OutputArgs,
@@ -432,6 +470,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
             _ => unreachable!("`demo` parses as the demo command"),
         },
         Some(Command::Demo(a)) => commands::demo(&a),
+        Some(Command::Rezone(a)) => rezone::rezone(&a),
         Some(Command::Smooth(a)) => commands::smooth(&a),
         Some(Command::Untangle(a)) => commands::untangle(&a),
         Some(Command::Quality(a)) => commands::quality(&a),

@@ -17,5 +17,5 @@ pub use grid::{hex_box, quad_grid, tri_grid};
 pub use horseshoe::{HorseshoeKind, horseshoe};
 pub use mixed::mixed_block;
 pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb, perturb_unguarded};
-pub use prism::{distorted_hex_box, prism_mesh};
+pub use prism::{Distortion, distorted_hex_box, distorted_prism_mesh, prism_mesh};
 pub use voronoi::{VoronoiOptions, voronoi_mesh};

@@ -9,6 +9,7 @@
 
 use super::mat3::{Mat3, Vec3, inverse};
 use super::mean_ratio::TetShape;
+use super::reference_jacobian;
 use super::smetric::{self, Hess9, MetricKind};
 
 /// How corner values are combined into the objective.
@@ -62,6 +63,11 @@ impl CornerShape {
             n,
         })
     }
+
+    /// W^-1 (rows b_1..b_n).
+    pub fn winv(&self) -> Mat3 {
+        [*self.tet.b(1), *self.tet.b(2), *self.tet.b(3)]
+    }
 }
 
 /// Metric, template and dimension: everything that turns corner positions
@@ -103,13 +109,24 @@ impl Model {
         }
     }
 
-    /// Objective term of a corner from its S.
+    /// The metric of S for a corner of `shape` (the reference-Jacobian metric
+    /// reads the corner's M from it; the others only its dimension).
     #[inline]
-    pub fn value_of_s(&self, n: usize, s: &Mat3) -> Option<f64> {
-        if self.fast(n) {
+    fn eval(&self, shape: &CornerShape, s: &Mat3, hess: bool) -> Option<(f64, Mat3, Hess9)> {
+        if self.metric == MetricKind::ReferenceJacobian {
+            let m = reference_jacobian::weight(&shape.winv())?;
+            return smetric::eval_with(self.metric, shape.n, s, Some(&m), hess);
+        }
+        smetric::eval_regularised(self.metric, shape.n, s, hess, self.eps)
+    }
+
+    /// Objective term of a corner of `shape` from its S.
+    #[inline]
+    pub fn value_of_s(&self, shape: &CornerShape, s: &Mat3) -> Option<f64> {
+        if self.fast(shape.n) {
             return TetShape::value_of_s(s);
         }
-        let m = smetric::eval_regularised(self.metric, n, s, false, self.eps)?.0;
+        let m = self.eval(shape, s, false)?.0;
         Some(match self.template {
             Template::Harmonic => m,
             Template::Average => 1.0 - 1.0 / m,
@@ -118,18 +135,19 @@ impl Model {
 
     #[inline]
     pub fn value(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<f64> {
-        self.value_of_s(shape.n, &shape.tet.s_rest(x, usize::MAX))
+        self.value_of_s(shape, &shape.tet.s_rest(x, usize::MAX))
     }
 
     /// Term, gradient and 3x3 Hessian with respect to vertex `k`, from S. In
     /// 2D the z row and column carry 1 on the diagonal so the blocks stay
     /// invertible; the z gradient is 0, so z never moves.
     #[inline]
-    pub fn vertex_gradient_hessian_of_s(&self, n: usize, s: Mat3, b: &Vec3) -> Option<(f64, Vec3, Mat3)> {
+    pub fn vertex_gradient_hessian_of_s(&self, shape: &CornerShape, s: Mat3, b: &Vec3) -> Option<(f64, Vec3, Mat3)> {
+        let n = shape.n;
         if self.fast(n) {
             return TetShape::vertex_gradient_hessian_at(s, b);
         }
-        let (v, g, h) = self.templated(smetric::eval_regularised(self.metric, n, &s, true, self.eps)?, true);
+        let (v, g, h) = self.templated(self.eval(shape, &s, true)?, true);
         let mut gv = [0.0; 3];
         let mut hv = [[0.0; 3]; 3];
         for i in 0..n {
@@ -157,7 +175,7 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
-        let (v, g, _) = self.templated(smetric::eval_regularised(self.metric, n, &s, false, self.eps)?, false);
+        let (v, g, _) = self.templated(self.eval(shape, &s, false)?, false);
         let mut out = [[0.0; 3]; 4];
         for (k, o) in out.iter_mut().enumerate().take(n + 1) {
             let b = shape.tet.b(k);
@@ -175,7 +193,7 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
-        let (v, g, h) = self.templated(smetric::eval_regularised(self.metric, n, &s, true, self.eps)?, true);
+        let (v, g, h) = self.templated(self.eval(shape, &s, true)?, true);
         let nv = n + 1;
         let mut grad = [[0.0; 3]; 4];
         // t[l][(i,j)][q] = sum_m H[(i,j),(q,m)] b_l[m]

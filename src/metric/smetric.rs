@@ -20,6 +20,18 @@ pub enum MetricKind {
     /// Target-matrix shape+size |S - I|^2 >= 0, 0 only when the corner equals its target.
     #[value(name = "tmp")]
     TargetShapeSize,
+    /// The rezoning paper's shape measure: the Frobenius condition number
+    /// |J| |J^-1| / 3 of the raw edge matrix J at every corner of every
+    /// element (target: the octant corner, W = I), each corner weighted
+    /// 1 / (corners in the mesh); an element's value is the mean over all its
+    /// corners (its "SQM").
+    #[value(name = "cn-paper")]
+    ConditionNumberPaper,
+    /// The reference-Jacobian rezoning objective's corner term (equation 4 of
+    /// the rezoning paper) over every corner; its per-corner references come
+    /// from `rezone`, so it is not offered on the command line.
+    #[value(skip)]
+    ReferenceJacobian,
 }
 
 impl MetricKind {
@@ -28,7 +40,16 @@ impl MetricKind {
             MetricKind::InverseMeanRatio => "imr",
             MetricKind::ConditionNumber => "cn",
             MetricKind::TargetShapeSize => "tmp",
+            MetricKind::ConditionNumberPaper => "cn-paper",
+            MetricKind::ReferenceJacobian => "rj",
         }
+    }
+
+    /// Evaluated at every corner of every element against the octant corner
+    /// (W = I unless a corner's reference is set), each corner weighted
+    /// 1 / (corners in the mesh), as the rezoning paper does.
+    pub fn every_corner(self) -> bool {
+        matches!(self, MetricKind::ConditionNumberPaper | MetricKind::ReferenceJacobian)
     }
 }
 
@@ -76,7 +97,7 @@ fn frob_n(s: &Mat3, n: usize) -> f64 {
 }
 
 /// Second derivative of det: 3D sum_{m,l} eps_ikm eps_jln S[m][l]; 2D eps_ik eps_jl.
-fn d2det(s: &Mat3, n: usize) -> Hess9 {
+pub(crate) fn d2det(s: &Mat3, n: usize) -> Hess9 {
     let mut h = [[0.0; 9]; 9];
     for i in 0..n {
         for j in 0..n {
@@ -124,8 +145,11 @@ fn flat(m: &Mat3) -> [f64; 9] {
 /// Value, gradient and (if `hess`) Hessian of `metric` at S; `None` when the
 /// corner is inverted or degenerate (det <= 0), which every metric treats as
 /// infeasible.
+///
+/// # Panics
+/// For the reference-Jacobian metric, which needs the corner's M: use [`eval_with`].
 pub fn eval(metric: MetricKind, n: usize, s: &Mat3, hess: bool) -> Option<(f64, Mat3, Hess9)> {
-    eval_regularised(metric, n, s, hess, 0.0)
+    eval_full(metric, n, s, None, hess, 0.0)
 }
 
 /// The regularised determinant of Garanzha et al. ("Foldover-free maps in 50
@@ -152,6 +176,26 @@ pub fn chi(d: f64, eps: f64) -> (f64, f64, f64) {
 /// towards untangling it. The target metric has no determinant and is the
 /// same for every eps. eps = 0 is `eval`.
 pub fn eval_regularised(metric: MetricKind, n: usize, s: &Mat3, hess: bool, eps: f64) -> Option<(f64, Mat3, Hess9)> {
+    eval_full(metric, n, s, None, hess, eps)
+}
+
+/// [`eval`] with the reference-Jacobian metric's per-corner weight M
+/// (`reference_jacobian::weight`), which the other metrics ignore.
+pub fn eval_with(metric: MetricKind, n: usize, s: &Mat3, rj: Option<&Mat3>, hess: bool) -> Option<(f64, Mat3, Hess9)> {
+    eval_full(metric, n, s, rj, hess, 0.0)
+}
+
+/// [`eval_with`] and [`eval_regularised`] in one: the reference-Jacobian
+/// weight and untangling's eps (the reference-Jacobian term is never
+/// regularised: rezoning starts from a valid mesh).
+pub fn eval_full(
+    metric: MetricKind,
+    n: usize,
+    s: &Mat3,
+    rj: Option<&Mat3>,
+    hess: bool,
+    eps: f64,
+) -> Option<(f64, Mat3, Hess9)> {
     let d = det_n(s, n);
     if !d.is_finite() || (eps == 0.0 && !(d > 0.0)) {
         return None;
@@ -159,9 +203,16 @@ pub fn eval_regularised(metric: MetricKind, n: usize, s: &Mat3, hess: bool, eps:
     let x = chi(d, eps);
     let out = match metric {
         MetricKind::InverseMeanRatio => imr(n, s, x, hess),
-        MetricKind::ConditionNumber if n == 2 => imr(n, s, x, hess),
-        MetricKind::ConditionNumber => cn3(s, x, hess),
+        MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper if n == 2 => imr(n, s, x, hess),
+        MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper => cn3(s, x, hess),
         MetricKind::TargetShapeSize => tmp(n, s),
+        MetricKind::ReferenceJacobian => {
+            if !(d > 0.0) {
+                return None;
+            }
+            let m = rj.expect("the reference-Jacobian metric needs its corner's M");
+            super::reference_jacobian::rj(s, d, m, hess)
+        }
     };
     out.0.is_finite().then_some(out)
 }

@@ -81,17 +81,29 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
         Some(r) => Some((r, in_plane(Plane::fit(r, &r.points)?.as_ref(), &r.points))),
         None => None,
     };
+    // the rezoning paper's metrics: every corner against the octant corner,
+    // each weighted 1 / (corners in the mesh)
+    let every = opts.metric.every_corner();
+    let used_by = |e: usize| {
+        if every {
+            mesh.element_corners(e)
+        } else {
+            mesh.optimised_corners(e)
+        }
+    };
+    // (an element whose corners are refused is reported in the loop below)
+    let total: usize = (0..mesh.num_elements()).map(|e| used_by(e).map_or(0, |c| c.len())).sum();
+    const OCTANT: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for (new_e, &old_e) in numbering.elem_order.iter().enumerate() {
         let old_e = old_e as usize;
         let kind = mesh.kinds[old_e];
         let vs = element_vertices(mesh, old_e, flip);
         let rvs = opts.reference.map(|r| element_vertices(r, old_e, flip));
-        let used = mesh
-            .optimised_corners(old_e)
-            .map_err(|m| Error::InvalidMesh(format!("element {old_e} ({kind}): {m}")))?;
+        let used = used_by(old_e).map_err(|m| Error::InvalidMesh(format!("element {old_e} ({kind}): {m}")))?;
         for c in used.iter() {
             let w = match (&reference, &rvs) {
                 (Some((_, rp)), Some(rvs)) => corner_matrix(rp, rvs, c, dim),
+                _ if every => OCTANT,
                 _ => ideal_corner(kind),
             };
             let shape = CornerShape::from_w(&w, dim).ok_or_else(|| {
@@ -115,7 +127,11 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
             out.corners.push(cv);
             out.corner_element.push(new_e as u32);
             out.corner_shape.push(id);
-            out.corner_weight.push(1.0 / (ne as f64 * used.len() as f64));
+            out.corner_weight.push(if every {
+                1.0 / total as f64
+            } else {
+                1.0 / (ne as f64 * used.len() as f64)
+            });
         }
     }
     Ok(out)

@@ -105,6 +105,9 @@ impl Backend for FunctionBackend<'_> {
     fn max_move(&mut self, _out: Slot) -> Result<()> {
         self.unsupported("bcd")
     }
+    fn reference_positions(&mut self, _iters: usize) -> Result<Vec<Vec3>> {
+        self.unsupported("reference positions")
+    }
     fn prepare_hessian(&mut self) -> Result<usize> {
         self.unsupported("a Hessian")
     }

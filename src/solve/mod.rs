@@ -13,6 +13,7 @@ pub mod line_search;
 pub mod newton;
 pub mod nlcg;
 pub mod pcg;
+pub mod rezone;
 pub mod untangle;
 pub mod wolfe;
 

@@ -17,7 +17,7 @@ use std::time::Instant;
 /// points then cost one rank-one update per corner instead of a gather.
 #[derive(Default)]
 pub struct Patch {
-    rest: Vec<(Mat3, Vec3, f64)>,
+    rest: Vec<(Mat3, Vec3, f64, u32)>,
 }
 
 impl Patch {
@@ -30,6 +30,7 @@ impl Patch {
                 shape.tet.s_rest(&p.corner_points(x, c), k),
                 *shape.tet.b(k),
                 p.corner_weight[c],
+                p.corner_shape[c],
             ));
         }
     }
@@ -41,12 +42,12 @@ impl Patch {
         let mut sum = 0.0;
         // the branch hoisted out of the loop keeps the common case tight
         if p.model.fast(p.dim) {
-            for (rest, b, w) in &self.rest {
+            for (rest, b, w, _) in &self.rest {
                 sum += w * TetShape::value_of_s(&s_with(rest, b, at))?;
             }
         } else {
-            for (rest, b, w) in &self.rest {
-                sum += w * p.model.value_of_s(p.dim, &s_with(rest, b, at))?;
+            for (rest, b, w, shape) in &self.rest {
+                sum += w * p.model.value_of_s(&p.shapes[*shape as usize], &s_with(rest, b, at))?;
             }
         }
         Some(sum)
@@ -59,12 +60,12 @@ impl Patch {
         let mut g = [0.0; 3];
         let mut h = [[0.0; 3]; 3];
         let fast = p.model.fast(p.dim);
-        for (rest, b, w) in &self.rest {
+        for (rest, b, w, shape) in &self.rest {
             let s = s_with(rest, b, at);
             let (eta, ge, he) = if fast {
                 TetShape::vertex_gradient_hessian_at(s, b)?
             } else {
-                p.model.vertex_gradient_hessian_of_s(p.dim, s, b)?
+                p.model.vertex_gradient_hessian_of_s(&p.shapes[*shape as usize], s, b)?
             };
             f += w * eta;
             for i in 0..3 {
@@ -95,7 +96,14 @@ fn s_with(rest: &Mat3, b: &Vec3, y: &Vec3) -> Mat3 {
 #[inline]
 pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &mut Patch) -> Option<Vec3> {
     patch.load(p, x, v);
-    let (f0, g, h) = patch.gradient_hessian(p, &x[v])?;
+    patch_step(p, patch, v, &x[v], ls, 0.0)
+}
+
+/// The step of [`newton_step`] on a loaded patch of vertex `v` placed at `xv`;
+/// `None` also when the Newton direction d has |d|^2 <= `min_step_sq`.
+#[inline]
+pub fn patch_step(p: &Problem, patch: &Patch, v: usize, xv: &Vec3, ls: &LineSearch, min_step_sq: f64) -> Option<Vec3> {
+    let (f0, g, h) = patch.gradient_hessian(p, xv)?;
     // a sliding vertex: the step in its tangent space, each trial put back on the boundary
     let slide = p.sliding.as_ref().filter(|s| s.slides(v));
     let (g, h) = match slide {
@@ -111,12 +119,12 @@ pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &m
         neg_g.map(|c| c * s)
     });
     let slope = dot(&g, &d);
-    if !(slope < 0.0) {
+    if !(slope < 0.0) || dot(&d, &d) <= min_step_sq {
         return None;
     }
     let mut alpha = 1.0;
     for _ in 0..=ls.max_backtracks {
-        let mut trial = [x[v][0] + alpha * d[0], x[v][1] + alpha * d[1], x[v][2] + alpha * d[2]];
+        let mut trial = [xv[0] + alpha * d[0], xv[1] + alpha * d[1], xv[2] + alpha * d[2]];
         if let Some(s) = slide {
             trial = project_vertex(s, v, &trial);
         }

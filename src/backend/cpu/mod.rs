@@ -20,6 +20,7 @@ pub mod mean_ratio_eval;
 pub mod objective;
 pub mod project_boundary;
 pub mod reduce;
+pub mod reference_position;
 pub mod set_slot;
 
 use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, guard_passes};
@@ -250,6 +251,15 @@ impl Backend for CpuBackend<'_> {
         let m = laplace::sweep(self.problem()?, &mut self.x, deadline);
         self.set(out, m);
         Ok(true)
+    }
+
+    fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
+        Ok(reference_position::reference_positions(
+            self.problem()?,
+            &self.x,
+            &self.ls,
+            iters,
+        ))
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {

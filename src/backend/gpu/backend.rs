@@ -50,6 +50,8 @@ enum Buf {
     SlideReal,
     /// Sliding-boundary candidate lists.
     SlideIdx,
+    /// Step 1 of rezoning's output.
+    Reference,
 }
 
 /// Operations recorded between two submissions (the `Op` buffer's capacity).
@@ -514,6 +516,42 @@ impl Backend for GpuBackend<'_> {
         let moves = self.bufs[&Buf::Moves].clone();
         self.encoder().clear_buffer(&moves, 0, None);
         Ok(())
+    }
+
+    fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
+        if !self.bufs.contains_key(&Buf::Reference) {
+            let buf = self.ctx.zeros_real("reference positions", 3 * self.n_vertices);
+            self.bufs.insert(Buf::Reference, buf);
+        }
+        // fixed vertices are their own reference
+        self.copy(Buf::X, Buf::Reference);
+        if self.n_free > 0 {
+            let tol = crate::backend::cpu::reference_position::STEP_TOL;
+            let op = Op {
+                aux: self.max_backtracks,
+                aux2: iters as u32,
+                a: Coef::value(tol * tol),
+                ..Op::n(self.n_free)
+            };
+            self.record(
+                Kernel::ReferencePosition.for_model(self.fast),
+                &[
+                    Buf::Model,
+                    Buf::LineSearch,
+                    Buf::Ops,
+                    Buf::X,
+                    Buf::Corners,
+                    Buf::Shapes,
+                    Buf::IncOffsets,
+                    Buf::Inc,
+                    Buf::Free,
+                    Buf::Reference,
+                ],
+                op,
+                self.n_free,
+            )?;
+        }
+        self.read_vec3(Buf::Reference, self.n_vertices)
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {

@@ -110,6 +110,7 @@ pub(crate) const CORNER_STRIDE: u32 = 5;
 pub(crate) const METRIC_IMR: u32 = 0;
 pub(crate) const METRIC_CN: u32 = 1;
 pub(crate) const METRIC_TMP: u32 = 2;
+pub(crate) const METRIC_RJ: u32 = 3;
 pub(crate) const TEMPLATE_HARMONIC: u32 = 0;
 pub(crate) const TEMPLATE_AVERAGE: u32 = 1;
 
@@ -123,6 +124,7 @@ pub(crate) const PRELUDE_CONSTANTS: &[(&str, u32)] = &[
     ("METRIC_IMR", METRIC_IMR),
     ("METRIC_CN", METRIC_CN),
     ("METRIC_TMP", METRIC_TMP),
+    ("METRIC_RJ", METRIC_RJ),
     ("TEMPLATE_HARMONIC", TEMPLATE_HARMONIC),
     ("TEMPLATE_AVERAGE", TEMPLATE_AVERAGE),
 ];
@@ -167,8 +169,9 @@ impl ModelUniform {
             dim: p.dim as u32,
             metric: match m.metric {
                 MetricKind::InverseMeanRatio => METRIC_IMR,
-                MetricKind::ConditionNumber => METRIC_CN,
+                MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper => METRIC_CN,
                 MetricKind::TargetShapeSize => METRIC_TMP,
+                MetricKind::ReferenceJacobian => METRIC_RJ,
             },
             tmpl: match m.template {
                 Template::Harmonic => TEMPLATE_HARMONIC,

@@ -48,6 +48,10 @@ const SHARED: &[(&str, &str)] = &[
     ("mean_ratio", include_str!("../../../shaders/metric/mean_ratio.wgsl")),
     ("condition", include_str!("../../../shaders/metric/condition.wgsl")),
     ("target", include_str!("../../../shaders/metric/target.wgsl")),
+    (
+        "reference_jacobian",
+        include_str!("../../../shaders/metric/reference_jacobian.wgsl"),
+    ),
     ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
     (
         "corner_model",
@@ -147,6 +151,10 @@ kernels! {
         MODEL, b("ls", U, V4), OP, b("x", RW, Re), b("corners", R, Ui), b("shapes", R, V4),
         b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
         SLIDE_REAL, SLIDE_IDX,
+    ];
+    ReferencePosition = "reference_position", variants: true, [
+        MODEL, b("ls", U, V4), OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("free_vertices", R, Ui), b("xr", RW, Re),
     ];
     HessianAssemble = "hessian_assemble", variants: true, [
         MODEL, OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4), b("elem", RW, Re),

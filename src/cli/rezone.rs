@@ -1,0 +1,114 @@
+//! `meshsmooth rezone`: reference-Jacobian rezoning, optionally beside the
+//! paper's CN optimisation from the same start, with section 6's tables.
+
+use super::RezoneArgs;
+use super::commands::{output_format, refuse_overwrite};
+use super::device;
+use super::progress::Progress;
+use meshsmooth::io::{self, Format};
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::metric_report::{SideBySide, displacement_percent, metric_summary};
+use meshsmooth::solve::rezone::{RezoneOptions, cn_optimise_mesh, rezone_mesh};
+use meshsmooth::solve::{self, Info};
+use meshsmooth::{Error, Mesh, Result, metric};
+
+pub fn rezone(a: &RezoneArgs) -> Result<()> {
+    let format = output_format(&a.output, a.format.as_deref())?;
+    refuse_overwrite(&a.input, &a.output)?;
+    let cn_format = match &a.compare_cn {
+        Some(cn) => {
+            refuse_overwrite(&a.input, cn)?;
+            if io::same_target(cn, &a.output) {
+                return Err(Error::InvalidArgument(format!(
+                    "--compare-cn {} is the output mesh (-o); give the CN mesh its own file",
+                    cn.display()
+                )));
+            }
+            Some(Format::from_path(cn)?)
+        }
+        None => None,
+    };
+    let mesh = io::read(&a.input)?;
+    let bad = metric::inverted_elements(&mesh, &mesh.points);
+    if !bad.is_empty() {
+        return Err(io::in_file(
+            &a.input,
+            Error::Inverted {
+                count: bad.len(),
+                first: bad.into_iter().take(5).collect(),
+            },
+        ));
+    }
+    let params = a.stop.params()?;
+    let choice = device::choose(a.device, &a.gpu, &[a.method])?;
+    let opts = RezoneOptions {
+        solve: solve::Options {
+            method: a.method,
+            params,
+            device: choice.device(),
+            ..Default::default()
+        },
+        reference_iters: a.reference_iters,
+    };
+    let show = !a.quiet;
+    let measure = |m: &Mesh| metric_summary(m, &m.points, MetricKind::ConditionNumberPaper, None);
+    let original = measure(&mesh).map_err(|e| io::in_file(&a.input, e))?;
+
+    let mut rj = mesh.clone();
+    let mut progress = Progress::new(opts.solve.params.max_iter, show);
+    let result = rezone_mesh(&mut rj, &opts, &mut |r| progress.update(r));
+    progress.finish(result.as_ref().ok().and_then(|i| i.info.history.last()));
+    let rj_info = result.map_err(|e| io::in_file(&a.input, e))?;
+    io::write_mesh(&a.output, &rj, format)?;
+    println!(
+        "step 1 (reference positions): {:.3} s; step 2 (F_RJ): {}",
+        rj_info.reference_seconds,
+        line(&rj_info.info)
+    );
+
+    let cn = match (&a.compare_cn, cn_format) {
+        (Some(path), Some(fmt)) => {
+            let mut cn = mesh.clone();
+            let mut progress = Progress::new(opts.solve.params.max_iter, show);
+            let result = cn_optimise_mesh(&mut cn, &opts.solve, &mut |r| progress.update(r));
+            progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
+            let info = result.map_err(|e| io::in_file(&a.input, e))?;
+            io::write_mesh(path, &cn, fmt)?;
+            println!("CN optimisation (cn-paper): {}", line(&info));
+            Some(cn)
+        }
+        _ => None,
+    };
+
+    let rj_quality = measure(&rj)?;
+    let cn_quality = cn.as_ref().map(measure).transpose()?;
+    let mut table = SideBySide {
+        quality: vec![("original", &original), ("RJ", &rj_quality)],
+        displacement: vec![("RJ", displacement_percent(&mesh, &mesh.points, &rj.points))],
+    };
+    if let (Some(cn), Some(q)) = (&cn, &cn_quality) {
+        table.quality.push(("CN", q));
+        table
+            .displacement
+            .push(("CN", displacement_percent(&mesh, &mesh.points, &cn.points)));
+    }
+    println!("\n{table}");
+    println!("wrote {}", a.output.display());
+    if let Some(path) = &a.compare_cn {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn line(info: &Info) -> String {
+    format!(
+        "{} on {}: {} after {} iterations in {:.3} s, F {:.6} -> {:.6}",
+        info.method,
+        info.device,
+        info.stop,
+        info.iterations,
+        info.seconds,
+        info.history.first().map_or(info.objective, |r| r.objective),
+        info.objective
+    )
+}
