@@ -5,7 +5,7 @@ mod common;
 
 use meshsmooth::backend::cpu::CpuBackend;
 use meshsmooth::backend::{Backend, EvalSlots, Points, Slot};
-use meshsmooth::generate::{self, prism::PAPER_SEED};
+use meshsmooth::generate::{self, VoronoiOptions, prism::PAPER_SEED};
 use meshsmooth::mesh::topology::fixed_vertices;
 use meshsmooth::metric::mat3::Vec3;
 use meshsmooth::metric::smetric::MetricKind;
@@ -92,73 +92,100 @@ fn value_and_gradient(p: &Problem, x: &[Vec3]) -> (f64, Vec<Vec3>) {
     (s[0], be.read_vector(g).unwrap())
 }
 
+/// F_RJ's gradient against central differences and its Hessian-vector
+/// product against differences of the gradient, at a point moved away from
+/// the Lagrangian positions by up to `jiggle` mean edge lengths; `step` is the
+/// difference step over the mean edge length.
+fn check_rj_derivatives(what: &str, mesh: &Mesh, jiggle: f64, step: f64) {
+    let reference = reference_of(mesh);
+    let p = rj_problem(mesh, &reference).unwrap();
+    // start away from the Lagrangian positions, where F_RJ's gradient is not small
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let h = p.mean_edge_length(&p.gather(&mesh.points));
+    let mut x = p.gather(&mesh.points);
+    for &v in &p.free_vertices {
+        for c in 0..3 {
+            x[v as usize][c] += jiggle * h * rng.random_range(-1.0..1.0);
+        }
+    }
+    let (f0, g) = value_and_gradient(&p, &x);
+    assert!(f0 > 0.0 && f0.is_finite(), "{what}: F {f0}");
+    let gmax = g.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(gmax > 0.0, "{what}: zero gradient");
+    let step = step * h;
+    for (i, &v) in p.free_vertices.iter().enumerate() {
+        for c in 0..3 {
+            let at = |t: f64| {
+                let mut y = x.clone();
+                y[v as usize][c] += t * step;
+                value_and_gradient(&p, &y).0
+            };
+            let fd = (at(1.0) - at(-1.0)) / (2.0 * step);
+            assert!(
+                (fd - g[i][c]).abs() <= 1e-6 * gmax,
+                "{what}: dF/dx[{v}][{c}] {} vs {fd}",
+                g[i][c]
+            );
+        }
+    }
+    // the Hessian Newton uses: H d against the change of the gradient along d
+    let mut be = CpuBackend::new(&p, &x, &Default::default()).unwrap();
+    be.prepare_hessian().unwrap();
+    let (gv, dv, hd) = (be.vector().unwrap(), be.vector().unwrap(), be.vector().unwrap());
+    be.assemble(gv).unwrap();
+    let d: Vec<Vec3> = (0..p.free_vertices.len())
+        .map(|_| [0; 3].map(|_: i32| rng.random_range(-1.0..1.0)))
+        .collect();
+    be.write_vector(dv, &d).unwrap();
+    be.hess_mul(dv, hd).unwrap();
+    let hd = be.read_vector(hd).unwrap();
+    let shifted = |t: f64| {
+        let mut y = x.clone();
+        for (i, &v) in p.free_vertices.iter().enumerate() {
+            for c in 0..3 {
+                y[v as usize][c] += t * step * d[i][c];
+            }
+        }
+        value_and_gradient(&p, &y).1
+    };
+    let (gp, gm) = (shifted(1.0), shifted(-1.0));
+    let hmax = hd.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(hmax > 0.0, "{what}: zero Hessian product");
+    for i in 0..hd.len() {
+        for c in 0..3 {
+            let fd = (gp[i][c] - gm[i][c]) / (2.0 * step);
+            assert!(
+                (fd - hd[i][c]).abs() <= 1e-5 * hmax,
+                "{what}: (H d)[{i}][{c}] {} vs {fd}",
+                hd[i][c]
+            );
+        }
+    }
+}
+
 #[test]
 fn rj_gradient_and_hessian_match_finite_differences_for_every_3d_kind() {
     for kind in [ElementKind::Tetrahedron, ElementKind::Prism, ElementKind::Hexahedron] {
-        let mesh = small(kind, 3);
-        let reference = reference_of(&mesh);
-        let p = rj_problem(&mesh, &reference).unwrap();
-        // start away from the Lagrangian positions, where F_RJ's gradient is not small
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let h = p.mean_edge_length(&p.gather(&mesh.points));
-        let mut x = p.gather(&mesh.points);
-        for &v in &p.free_vertices {
-            for c in 0..3 {
-                x[v as usize][c] += 0.05 * h * rng.random_range(-1.0..1.0);
-            }
-        }
-        let (f0, g) = value_and_gradient(&p, &x);
-        assert!(f0 > 0.0 && f0.is_finite(), "{kind}: F {f0}");
-        let gmax = g.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        let step = 1e-6 * h;
-        for (i, &v) in p.free_vertices.iter().enumerate() {
-            for c in 0..3 {
-                let at = |t: f64| {
-                    let mut y = x.clone();
-                    y[v as usize][c] += t * step;
-                    value_and_gradient(&p, &y).0
-                };
-                let fd = (at(1.0) - at(-1.0)) / (2.0 * step);
-                assert!(
-                    (fd - g[i][c]).abs() <= 1e-6 * gmax,
-                    "{kind}: dF/dx[{v}][{c}] {} vs {fd}",
-                    g[i][c]
-                );
-            }
-        }
-        // the Hessian Newton uses: H d against the change of the gradient along d
-        let mut be = CpuBackend::new(&p, &x, &Default::default()).unwrap();
-        be.prepare_hessian().unwrap();
-        let (gv, dv, hd) = (be.vector().unwrap(), be.vector().unwrap(), be.vector().unwrap());
-        be.assemble(gv).unwrap();
-        let d: Vec<Vec3> = (0..p.free_vertices.len())
-            .map(|_| [0; 3].map(|_: i32| rng.random_range(-1.0..1.0)))
-            .collect();
-        be.write_vector(dv, &d).unwrap();
-        be.hess_mul(dv, hd).unwrap();
-        let hd = be.read_vector(hd).unwrap();
-        let shifted = |t: f64| {
-            let mut y = x.clone();
-            for (i, &v) in p.free_vertices.iter().enumerate() {
-                for c in 0..3 {
-                    y[v as usize][c] += t * step * d[i][c];
-                }
-            }
-            value_and_gradient(&p, &y).1
-        };
-        let (gp, gm) = (shifted(1.0), shifted(-1.0));
-        let hmax = hd.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        for i in 0..hd.len() {
-            for c in 0..3 {
-                let fd = (gp[i][c] - gm[i][c]) / (2.0 * step);
-                assert!(
-                    (fd - hd[i][c]).abs() <= 1e-5 * hmax,
-                    "{kind}: (H d)[{i}][{c}] {} vs {fd}",
-                    hd[i][c]
-                );
-            }
-        }
+        check_rj_derivatives(&kind.to_string(), &small(kind, 3), 0.05, 1e-6);
     }
+}
+
+#[test]
+fn rj_gradient_and_hessian_match_finite_differences_on_polyhedra() {
+    // whole truncated octahedra (tests/common), perturbed
+    check_rj_derivatives("truncated octahedra", &small(ElementKind::Polyhedron, 3), 0.02, 1e-6);
+    // the generated Voronoi cells, distorted like example 2's mesh: box
+    // slivers, short edges and poor corners included
+    let opts = VoronoiOptions {
+        cells: [3, 3, 3],
+        distorted: true,
+        seed: 3,
+        ..Default::default()
+    };
+    let voronoi = generate::voronoi_mesh(&opts).unwrap();
+    // F_RJ's gradient is not small at the Lagrangian positions already; a
+    // jiggle there would flatten the shortest edges' corners
+    check_rj_derivatives("distorted Voronoi", &voronoi, 0.0, 1e-8);
 }
 
 #[test]
@@ -278,6 +305,79 @@ fn example_1_rj_removes_bad_prisms_with_little_motion_and_cn_restores_the_grid()
         .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
         .fold(0.0, f64::max);
     assert!(worst < 1e-5, "CN ends {worst} from the grid");
+}
+
+/// Example 2 of the paper (the distorted polyhedral Voronoi mesh), end to end
+/// on the CPU: RJ and CN from the same start. The paper's table: worst shape
+/// 6662.7 -> RJ 5.9 (CN 1.8), average 12.4 -> 2.1 (CN 1.3); displacement RJ
+/// 7.1 % against CN 183.3 % of the local spacing on average.
+#[test]
+fn example_2_rj_removes_bad_polyhedra_with_little_motion() {
+    let opts = VoronoiOptions {
+        distorted: true,
+        ..Default::default()
+    };
+    let mesh = generate::voronoi_mesh(&opts).unwrap();
+    let before = metric_summary(&mesh, &mesh.points, MetricKind::ConditionNumberPaper, None).unwrap();
+    let mut rj = mesh.clone();
+    let mut newton = rezone::default_options(Device::Cpu);
+    newton.solve.method = Method::Newton;
+    let info = rezone::rezone_mesh(&mut rj, &newton, &mut |_| true).unwrap();
+    let after_rj = metric_summary(&rj, &rj.points, MetricKind::ConditionNumberPaper, None).unwrap();
+    let mut cn = mesh.clone();
+    let cn_info = rezone::cn_optimise_mesh(&mut cn, &Options::cpu(Method::Newton, &Params::default()), &mut |_| {
+        true
+    })
+    .unwrap();
+    let after_cn = metric_summary(&cn, &cn.points, MetricKind::ConditionNumberPaper, None).unwrap();
+    let d_rj = displacement_percent(&mesh, &mesh.points, &rj.points);
+    let d_cn = displacement_percent(&mesh, &mesh.points, &cn.points);
+    eprintln!(
+        "RJ {:?} {:?}\nCN {:?} {:?}",
+        info.info.stop, info.info.iterations, cn_info.stop, cn_info.iterations
+    );
+    eprintln!("before {before:?}\nrj {after_rj:?}\ncn {after_cn:?}\nd_rj {d_rj:?}\nd_cn {d_cn:?}");
+    // every corner of every output cell positive
+    for (what, m) in [("RJ", &rj), ("CN", &cn)] {
+        assert!(meshsmooth::metric::inverted_elements(m, &m.points).is_empty(), "{what}");
+        assert_eq!(m.faces, mesh.faces);
+    }
+    assert_eq!(after_rj.inverted + after_cn.inverted, 0);
+    eprintln!(
+        "RJ {:.1} s + {:.1} s, CN {:.1} s",
+        info.reference_seconds, info.info.seconds, cn_info.seconds
+    );
+    // the start has very bad cells (ours far worse than the paper's: worst
+    // ~2.7e5, average ~1100, against 6662.7 and 12.4)
+    assert!(before.max > 100.0, "{before:?}");
+    assert!(after_rj.max < 1e-3 * before.max, "{before:?} {after_rj:?}");
+    assert!(after_rj.avg < 0.5 * before.avg, "{before:?} {after_rj:?}");
+    // Not reproduced over the whole mesh: the paper's RJ worst of 5.9. Ours
+    // ends at ~34 (CN at ~32): the worst cells are the box's clipped slivers,
+    // whose vertices on the box are fixed, so no optimiser of the interior
+    // can repair them. RJ's worst is within reach of CN's there...
+    assert!(after_rj.max < 2.0 * after_cn.max, "{after_rj:?} {after_cn:?}");
+    // ...and on the cells that touch no fixed vertex the paper's finding
+    // holds: RJ's worst is single-digit (ours ~5.1, the paper 5.9), CN's
+    // under 2 (ours ~1.79, the paper 1.8)
+    let fixed = fixed_vertices(&mesh);
+    let values = |m: &Mesh| element_values(m, &m.points, MetricKind::ConditionNumberPaper, None).unwrap();
+    let (v_rj, v_cn) = (values(&rj), values(&cn));
+    let interior: Vec<usize> = (0..mesh.num_elements())
+        .filter(|&e| mesh.element(e).iter().all(|&v| !fixed[v as usize]))
+        .collect();
+    assert!(interior.len() > mesh.num_elements() / 3, "{}", interior.len());
+    let worst = |v: &[Option<f64>]| interior.iter().map(|&e| v[e].unwrap()).fold(0.0, f64::max);
+    let (worst_before, worst_rj, worst_cn) = (worst(&values(&mesh)), worst(&v_rj), worst(&v_cn));
+    eprintln!(
+        "interior cells {}: worst {worst_before} -> RJ {worst_rj}, CN {worst_cn}",
+        interior.len()
+    );
+    assert!(worst_before > 100.0 && worst_rj < 9.0 && worst_cn < 2.0);
+    // CN is the better shape, RJ the much smaller motion (the paper: 7.1 %
+    // against 183.3 %, 26x; ours ~21 % against ~78 %, ~3.8x: not as far apart)
+    assert!(after_cn.avg < after_rj.avg && after_cn.max < after_rj.max);
+    assert!(d_cn.avg > 3.0 * d_rj.avg, "displacement RJ {d_rj:?} vs CN {d_cn:?}");
 }
 
 /// Step 2 on a GPU (f64) against the CPU from the same references: the F_RJ

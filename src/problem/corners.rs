@@ -92,7 +92,9 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
         }
     };
     // (an element whose corners are refused is reported in the loop below)
-    let total: usize = (0..mesh.num_elements()).map(|e| used_by(e).map_or(0, |c| c.len())).sum();
+    let total: usize = (0..mesh.num_elements())
+        .map(|e| used_by(e).map_or(0, |c| c.len()))
+        .sum();
     const OCTANT: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for (new_e, &old_e) in numbering.elem_order.iter().enumerate() {
         let old_e = old_e as usize;
