@@ -322,6 +322,7 @@ fn example_2_rj_removes_bad_polyhedra_with_little_motion() {
     let mesh = generate::voronoi_mesh(&opts).unwrap();
     let before = metric_summary(&mesh, &mesh.points, MetricKind::ConditionNumberPaper, None).unwrap();
     let mut rj = mesh.clone();
+    // Newton: the default NLCG stops at its iteration limit on this mesh (README)
     let mut newton = rezone::default_options(Device::Cpu);
     newton.solve.method = Method::Newton;
     let info = rezone::rezone_mesh(&mut rj, &newton, &mut |_| true).unwrap();
