@@ -32,8 +32,8 @@
 //!   boundary is faceted, and the minimiser sits on its creases.
 
 use super::numbering::Numbering;
-use crate::mesh::Mesh;
 use crate::mesh::topology::Csr;
+use crate::mesh::{ElementKind, Mesh};
 use crate::metric::mat3::{Mat3, Vec3, dot, sub};
 use std::collections::{HashMap, VecDeque};
 
@@ -177,11 +177,22 @@ struct Facet {
 
 /// Facets used by one element, with normals pointing away from that element.
 fn skin_facets(mesh: &Mesh, points: &[Vec3]) -> Vec<Facet> {
+    // a polyhedron's facets are its stored faces, the other kinds' their tables
+    let facets_of = |e: usize| -> Vec<Vec<u32>> {
+        let vs = mesh.element(e);
+        match mesh.kinds[e] {
+            ElementKind::Polyhedron => mesh.faces.of(e).map(|f| f.to_vec()).collect(),
+            kind => kind
+                .facets()
+                .iter()
+                .map(|local| local.iter().map(|&l| vs[l]).collect())
+                .collect(),
+        }
+    };
     let mut seen: HashMap<Vec<u32>, (u32, usize, usize)> = HashMap::new();
     for e in 0..mesh.num_elements() {
-        for (f, local) in mesh.kinds[e].facets().iter().enumerate() {
-            let vs = mesh.element(e);
-            let mut key: Vec<u32> = local.iter().map(|&l| vs[l]).collect();
+        for (f, vertices) in facets_of(e).into_iter().enumerate() {
+            let mut key = vertices;
             key.sort_unstable();
             seen.entry(key).or_insert((0, e, f)).0 += 1;
         }
@@ -191,7 +202,7 @@ fn skin_facets(mesh: &Mesh, points: &[Vec3]) -> Vec<Facet> {
     once.into_iter()
         .map(|(e, f)| {
             let vs = mesh.element(e);
-            let vertices: Vec<u32> = mesh.kinds[e].facets()[f].iter().map(|&l| vs[l]).collect();
+            let vertices: Vec<u32> = facets_of(e).swap_remove(f);
             let centre = centroid(points, vs);
             let fc = centroid(points, &vertices);
             let mut normal = if vertices.len() == 2 {

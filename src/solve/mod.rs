@@ -473,6 +473,18 @@ pub fn smooth_mesh(
     opts: &Options,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
+    in_mesh_frame(mesh, problem, true, |p, x| solve(p, x, opts, progress))
+}
+
+/// Builds the problem of `mesh` in its `Frame` (see [`smooth_mesh`]), runs
+/// `run` on it and writes back what moved, in the mesh's numbering and units:
+/// always when `keep_failed`, otherwise only when `run` succeeds.
+pub(crate) fn in_mesh_frame<T>(
+    mesh: &mut Mesh,
+    problem: &ProblemOptions,
+    keep_failed: bool,
+    run: impl FnOnce(&Problem, &mut Vec<Vec3>) -> Result<T>,
+) -> Result<T> {
     let frame = Frame::of(&mesh.points);
     let local = |m: &Mesh| -> Vec<Vec3> { m.points.iter().map(|q| frame.to_local(q)).collect() };
     let reference = problem.reference.map(|r| Mesh {
@@ -490,16 +502,18 @@ pub fn smooth_mesh(
     let p = built?;
     let mut x = p.gather(&local_points);
     let x0 = x.clone();
-    let result = solve(&p, &mut x, opts, progress);
-    // back from the plane (a planar mesh outside z = constant moves in all
-    // three coordinates, on its plane) and from the frame; a vertex that did
-    // not move keeps its bits
-    let moved = p.scatter(&x);
-    let coords = if p.plane.is_some() { 3 } else { p.dim };
-    for (new, &old) in p.order.iter().enumerate() {
-        if p.free[new] && x[new] != x0[new] {
-            let global = frame.to_global(&moved[old as usize]);
-            mesh.points[old as usize][..coords].copy_from_slice(&global[..coords]);
+    let result = run(&p, &mut x);
+    if result.is_ok() || keep_failed {
+        // back from the plane (a planar mesh outside z = constant moves in all
+        // three coordinates, on its plane) and from the frame; a vertex that
+        // did not move keeps its bits
+        let moved = p.scatter(&x);
+        let coords = if p.plane.is_some() { 3 } else { p.dim };
+        for (new, &old) in p.order.iter().enumerate() {
+            if p.free[new] && x[new] != x0[new] {
+                let global = frame.to_global(&moved[old as usize]);
+                mesh.points[old as usize][..coords].copy_from_slice(&global[..coords]);
+            }
         }
     }
     result

@@ -31,12 +31,11 @@
 //! targets. The template is always the harmonic one (the average template's
 //! 1 - 1/m is bounded and would let an inverted corner stay cheap).
 
-use super::{Device, Options, Record, StopReason, run};
+use super::{Device, Options, Record, StopReason, in_mesh_frame, run};
 use crate::Mesh;
 use crate::backend::cpu::CpuBackend;
 use crate::backend::gpu::GpuBackend;
 use crate::error::{Error, Result};
-use crate::mesh::frame::Frame;
 use crate::metric::corner_model::{Model, Template};
 use crate::metric::mat3::Vec3;
 use crate::metric::smetric::{self, MetricKind};
@@ -321,35 +320,9 @@ fn untangle_mesh_with(
     if let Some(msg) = convention_problem(mesh) {
         return Err(Error::InvalidMesh(msg));
     }
-    let frame = Frame::of(&mesh.points);
-    let local = |m: &Mesh| -> Vec<Vec3> { m.points.iter().map(|q| frame.to_local(q)).collect() };
-    let reference = problem.reference.map(|r| Mesh {
-        points: local(r),
-        ..r.clone()
-    });
-    let problem = ProblemOptions {
-        reference: reference.as_ref(),
-        ..*problem
-    };
-    let in_frame = local(mesh);
-    let original = std::mem::replace(&mut mesh.points, in_frame);
-    let built = Problem::with_options(mesh, &problem);
-    let local_points = std::mem::replace(&mut mesh.points, original);
-    let p = built?;
-    let mut x = p.gather(&local_points);
-    let x0 = x.clone();
-    let result = untangle(&p, &mut x, opts, params, progress);
-    if result.is_ok() || keep_partial {
-        let moved = p.scatter(&x);
-        let coords = if p.plane.is_some() { 3 } else { p.dim };
-        for (new, &old) in p.order.iter().enumerate() {
-            if p.free[new] && x[new] != x0[new] {
-                let global = frame.to_global(&moved[old as usize]);
-                mesh.points[old as usize][..coords].copy_from_slice(&global[..coords]);
-            }
-        }
-    }
-    result
+    in_mesh_frame(mesh, problem, keep_partial, |p, x| {
+        untangle(p, x, opts, params, progress)
+    })
 }
 
 /// A node-ordering convention problem rather than a tangle: every element of
