@@ -34,14 +34,15 @@ fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
 // The reference-Jacobian metric's M of a corner with B rows `b` (`Model::eval`
 // on the CPU); the other metrics do not read it.
 fn model_rjm(model: Model, b: array<vec3<real>, 4>) -> mat3x3<real> {
-    if model.metric == METRIC_RJ {
-        return rj_weight(b);
-    }
+#if RJ
+    return rj_weight(b);
+#else
     return mat3x3<real>();
+#endif
 }
 
 fn model_eval(model: Model, s: mat3x3<real>, rjm: mat3x3<real>, hess: bool) -> MetricEval {
-    let m = eval_metric(model.metric, model.dim, s, rjm, hess, model.eps);
+    let m = eval_metric(model.dim, s, rjm, hess, model.eps);
     if !m.ok {
         return m;
     }

@@ -7,7 +7,9 @@
 #import mean_ratio
 #import condition
 #import target
+#if RJ
 #import reference_jacobian
+#endif
 
 alias Hess9 = array<array<real, 9>, 9>;
 
@@ -122,7 +124,7 @@ fn chi(d: real, eps: real) -> Chi {
 // and eps = 0 (with eps > 0 det S is chi(det S, eps), untangling's
 // regularisation); `rjm` is the reference-Jacobian metric's M (`rj_weight`),
 // which the others ignore.
-fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, rjm: mat3x3<real>, hess: bool, eps: real) -> MetricEval {
+fn eval_metric(n: u32, s: mat3x3<real>, rjm: mat3x3<real>, hess: bool, eps: real) -> MetricEval {
     let d = det_n(s, n);
     if !finite(d) || (eps == real(0.0) && !is_finite_pos(d)) {
         var bad: MetricEval;
@@ -131,15 +133,27 @@ fn eval_metric(metric: u32, n: u32, s: mat3x3<real>, rjm: mat3x3<real>, hess: bo
     }
     let x = chi(d, eps);
     var out: MetricEval;
-    if metric == METRIC_TMP {
-        out = tmp(n, s);
-    } else if metric == METRIC_RJ {
-        out = rj(s, d, rjm, hess);
-    } else if metric == METRIC_CN && n == 3u {
+    // one metric per compiled instance (`shader::Form`)
+#if TMP
+    out = tmp(n, s);
+#endif
+#if RJ
+    out = rj(s, d, rjm, hess);
+#endif
+#if CN
+    if n == 3u {
         out = cn3(s, x, hess);
     } else {
         out = imr(n, s, x, hess);
     }
+#endif
+#if IMR
+    out = imr(n, s, x, hess);
+#endif
+#if FAST
+    // the closed forms are the inverse mean ratio's; this is their general twin
+    out = imr(n, s, x, hess);
+#endif
     out.ok = finite(out.v);
     return out;
 }

@@ -8,7 +8,7 @@
 use super::buffers::{BindingLimits, check_bindings};
 use super::context::GpuContext;
 use super::layout::{ELEM_STRIDE, ModelUniform, Op, corner_tables};
-use super::shader::{Kernel, Variant};
+use super::shader::{Form, Kernel, Variant};
 use crate::backend::cpu::hessian_assemble::HessianPattern;
 use crate::backend::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::{Error, Result};
@@ -65,7 +65,8 @@ pub struct GpuBackend<'c> {
     /// (offset, count) of each colour in `Buf::Colors`.
     colors: Vec<(u32, u32)>,
     /// Closed-form (tetrahedral mean ratio) kernels or the general ones.
-    fast: bool,
+    /// The instance of the corner kernels this problem's model compiles to.
+    form: Form,
     max_backtracks: u32,
     bufs: HashMap<Buf, wgpu::Buffer>,
     vectors: Vec<wgpu::Buffer>,
@@ -166,7 +167,7 @@ impl<'c> GpuBackend<'c> {
             n_corners: nc,
             n_free: nf,
             colors,
-            fast: model.fast != 0,
+            form: Form::of(&model),
             max_backtracks: ls.max_backtracks as u32,
             bufs,
             vectors: Vec::new(),
@@ -177,6 +178,23 @@ impl<'c> GpuBackend<'c> {
             n_blocks: 0,
             problem: p,
         })
+    }
+
+    /// The per-vertex kernels (bcd, reference_position) on the every-corner
+    /// metrics (`cn-paper`, `rj`) come out wrong on lavapipe (Mesa 22.3,
+    /// LLVM 15): the same kernels match the CPU on an NVIDIA H200 (README,
+    /// "Reference-Jacobian rezoning"), so it is the software driver; refuse
+    /// there rather than return a wrong sweep.
+    fn per_vertex_supported(&self) -> Result<()> {
+        if self.ctx.is_software() && self.problem.model.metric.every_corner() {
+            return Err(Error::Gpu(format!(
+                "the per-vertex kernels miscompute the {} metric on software Vulkan ({}); \
+                 use --device cpu or a hardware GPU",
+                self.problem.model.metric,
+                self.ctx.adapter_name()
+            )));
+        }
+        Ok(())
     }
 
     fn buf(&self, b: Buf) -> &wgpu::Buffer {
@@ -249,12 +267,7 @@ impl<'c> GpuBackend<'c> {
             aux3: Op::slot(count),
             ..Op::n(n_partials)
         };
-        self.record(
-            Kernel::Reduce.for_model(true),
-            &[Buf::Ops, Buf::Partials, Buf::Scalars],
-            op,
-            1,
-        )
+        self.record(Kernel::Reduce.plain(), &[Buf::Ops, Buf::Partials, Buf::Scalars], op, 1)
     }
 
     fn read_vec3(&mut self, b: Buf, n: usize) -> Result<Vec<Vec3>> {
@@ -269,7 +282,7 @@ impl<'c> GpuBackend<'c> {
             return Ok(());
         }
         self.record(
-            Kernel::Constrain.for_model(true),
+            Kernel::Constrain.plain(),
             &[Buf::Ops, Buf::SlideReal, Buf::SlideIdx, Buf::Free, Buf::Vector(g.0)],
             Op::n(self.n_free),
             self.n_free,
@@ -408,7 +421,7 @@ impl Backend for GpuBackend<'_> {
         };
         let nc = self.n_corners;
         self.record(
-            Kernel::Objective.for_model(self.fast),
+            Kernel::Objective.with(self.form),
             &[
                 Buf::Model,
                 Buf::Ops,
@@ -428,7 +441,7 @@ impl Backend for GpuBackend<'_> {
                 ..Op::n(self.n_free)
             };
             self.record(
-                Kernel::GradientGather.for_model(true),
+                Kernel::GradientGather.plain(),
                 &[
                     Buf::Ops,
                     Buf::Free,
@@ -451,14 +464,14 @@ impl Backend for GpuBackend<'_> {
             ..Op::n(self.n_free)
         };
         self.record(
-            Kernel::LineSearch.for_model(true),
+            Kernel::LineSearch.plain(),
             &[Buf::Ops, Buf::Scalars, Buf::Free, Buf::X, Buf::Vector(d.0), Buf::Trial],
             op,
             self.n_free,
         )?;
         if self.problem.sliding.is_some() {
             self.record(
-                Kernel::ProjectBoundary.for_model(true),
+                Kernel::ProjectBoundary.plain(),
                 &[Buf::Ops, Buf::SlideReal, Buf::SlideIdx, Buf::Free, Buf::Trial],
                 Op::n(self.n_free),
                 self.n_free,
@@ -473,6 +486,7 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn bcd_color(&mut self, color: usize) -> Result<()> {
+        self.per_vertex_supported()?;
         let (offset, count) = self.colors[color];
         if count == 0 {
             return Ok(());
@@ -483,7 +497,7 @@ impl Backend for GpuBackend<'_> {
             ..Op::n(count as usize)
         };
         self.record(
-            Kernel::Bcd.for_model(self.fast),
+            Kernel::Bcd.with(self.form),
             &[
                 Buf::Model,
                 Buf::LineSearch,
@@ -506,7 +520,7 @@ impl Backend for GpuBackend<'_> {
     fn max_move(&mut self, out: Slot) -> Result<()> {
         let nv = self.n_vertices;
         self.record(
-            Kernel::Dot.for_model(true),
+            Kernel::Dot.plain(),
             &[Buf::Ops, Buf::Moves, Buf::Moves, Buf::Partials],
             Op::n(nv),
             nv,
@@ -519,6 +533,7 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
+        self.per_vertex_supported()?;
         if !self.bufs.contains_key(&Buf::Reference) {
             let buf = self.ctx.zeros_real("reference positions", 3 * self.n_vertices);
             self.bufs.insert(Buf::Reference, buf);
@@ -534,7 +549,7 @@ impl Backend for GpuBackend<'_> {
                 ..Op::n(self.n_free)
             };
             self.record(
-                Kernel::ReferencePosition.for_model(self.fast),
+                Kernel::ReferencePosition.with(self.form),
                 &[
                     Buf::Model,
                     Buf::LineSearch,
@@ -596,13 +611,13 @@ impl Backend for GpuBackend<'_> {
     fn assemble(&mut self, g: Vector) -> Result<()> {
         let (nc, nb, nf) = (self.n_corners, self.n_blocks, self.n_free);
         self.record(
-            Kernel::HessianAssemble.for_model(self.fast),
+            Kernel::HessianAssemble.with(self.form),
             &[Buf::Model, Buf::Ops, Buf::X, Buf::Corners, Buf::Shapes, Buf::Elem],
             Op::n(nc),
             nc,
         )?;
         self.record(
-            Kernel::HessianGather.for_model(true),
+            Kernel::HessianGather.plain(),
             &[Buf::Ops, Buf::ContribOffsets, Buf::ContribItems, Buf::Elem, Buf::Blocks],
             Op::n(nb),
             nb,
@@ -612,7 +627,7 @@ impl Backend for GpuBackend<'_> {
             ..Op::n(nf)
         };
         self.record(
-            Kernel::GradientGather.for_model(true),
+            Kernel::GradientGather.plain(),
             &[
                 Buf::Ops,
                 Buf::Free,
@@ -627,7 +642,7 @@ impl Backend for GpuBackend<'_> {
         if self.problem.sliding.is_some() {
             self.constrain(g)?;
             self.record(
-                Kernel::ConstrainBlocks.for_model(true),
+                Kernel::ConstrainBlocks.plain(),
                 &[
                     Buf::Ops,
                     Buf::SlideReal,
@@ -648,7 +663,7 @@ impl Backend for GpuBackend<'_> {
     fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()> {
         let nf = self.n_free;
         self.record(
-            Kernel::BsrSpmv.for_model(true),
+            Kernel::BsrSpmv.plain(),
             &[
                 Buf::Ops,
                 Buf::RowOffsets,
@@ -665,7 +680,7 @@ impl Backend for GpuBackend<'_> {
     fn factor_precond(&mut self) -> Result<()> {
         let nf = self.n_free;
         self.record(
-            Kernel::BlockJacobiFactor.for_model(true),
+            Kernel::BlockJacobiFactor.plain(),
             &[Buf::Ops, Buf::Blocks, Buf::Diag, Buf::Factors],
             Op::n(nf),
             nf,
@@ -675,7 +690,7 @@ impl Backend for GpuBackend<'_> {
     fn precond(&mut self, x: Vector, y: Vector) -> Result<()> {
         let nf = self.n_free;
         self.record(
-            Kernel::BlockJacobi.for_model(true),
+            Kernel::BlockJacobi.plain(),
             &[Buf::Ops, Buf::Factors, Buf::Vector(x.0), Buf::Vector(y.0)],
             Op::n(nf),
             nf,
@@ -685,7 +700,7 @@ impl Backend for GpuBackend<'_> {
     fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
         let nf = self.n_free;
         self.record(
-            Kernel::Dot.for_model(true),
+            Kernel::Dot.plain(),
             &[Buf::Ops, Buf::Vector(a.0), Buf::Vector(b.0), Buf::Partials],
             Op::n(nf),
             nf,
@@ -703,7 +718,7 @@ impl Backend for GpuBackend<'_> {
             ..Op::n(self.n_free)
         };
         self.record(
-            Kernel::Axpby.for_model(true),
+            Kernel::Axpby.plain(),
             &[Buf::Ops, Buf::Scalars, xb, Buf::Vector(y.0)],
             op,
             self.n_free,
@@ -717,7 +732,7 @@ impl Backend for GpuBackend<'_> {
             a: value,
             ..Op::n(1)
         };
-        self.record(Kernel::SetSlot.for_model(true), &[Buf::Ops, Buf::Scalars], op, 1)
+        self.record(Kernel::SetSlot.plain(), &[Buf::Ops, Buf::Scalars], op, 1)
     }
 
     fn flush(&mut self) -> Result<[f64; N_SLOTS]> {

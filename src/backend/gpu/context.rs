@@ -104,7 +104,9 @@ pub struct GpuContext {
     pub(crate) real: Real,
     pub(crate) limits: wgpu::Limits,
     info: wgpu::AdapterInfo,
-    pipelines: HashMap<Variant, (wgpu::BindGroupLayout, wgpu::ComputePipeline)>,
+    /// Built on first use: a run needs the instances of one metric only, and
+    /// compiling all of them costs seconds on a software adapter.
+    pipelines: Mutex<HashMap<Variant, Arc<(wgpu::BindGroupLayout, wgpu::ComputePipeline)>>>,
     /// Errors reported by wgpu outside any call's reach (validation, OOM, loss).
     errors: Arc<Mutex<Vec<String>>>,
 }
@@ -193,19 +195,15 @@ impl GpuContext {
         device.set_device_lost_callback(move |reason, msg| {
             sink.lock().unwrap().push(format!("device lost ({reason:?}): {msg}"));
         });
-        let mut ctx = GpuContext {
+        let ctx = GpuContext {
             device,
             queue,
             real,
             limits,
             info: adapter.get_info(),
-            pipelines: HashMap::new(),
+            pipelines: Mutex::new(HashMap::new()),
             errors,
         };
-        for v in Variant::all() {
-            let built = ctx.build_pipeline(v);
-            ctx.pipelines.insert(v, built);
-        }
         ctx.check()?;
         Ok(ctx)
     }
@@ -216,6 +214,11 @@ impl GpuContext {
             "{} ({:?}, {:?})",
             self.info.name, self.info.backend, self.info.device_type
         )
+    }
+
+    /// Whether the adapter emulates a GPU on the CPU (Mesa lavapipe).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
     }
 
     /// Whether the device computes in f64.
@@ -272,8 +275,13 @@ impl GpuContext {
         (layout, pipeline)
     }
 
-    pub(crate) fn pipeline(&self, v: Variant) -> &wgpu::ComputePipeline {
-        &self.pipelines[&v].1
+    /// The bind-group layout and pipeline of `v`, built on first use.
+    fn pipeline(&self, v: Variant) -> Arc<(wgpu::BindGroupLayout, wgpu::ComputePipeline)> {
+        let mut built = self.pipelines.lock().unwrap();
+        built
+            .entry(v)
+            .or_insert_with(|| Arc::new(self.build_pipeline(v)))
+            .clone()
     }
 
     /// Bytes between `Op` records in a uniform buffer bound at dynamic offsets.
@@ -311,7 +319,7 @@ impl GpuContext {
             .collect();
         self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(v.kernel.name()),
-            layout: &self.pipelines[&v].0,
+            layout: &self.pipeline(v).0,
             entries: &entries,
         })
     }
@@ -327,7 +335,7 @@ impl GpuContext {
         threads: usize,
     ) -> Result<()> {
         let (x, y) = super::buffers::grid(threads)?;
-        pass.set_pipeline(self.pipeline(v));
+        pass.set_pipeline(&self.pipeline(v).1);
         pass.set_bind_group(0, group, offset.as_slice());
         pass.dispatch_workgroups(x, y, 1);
         Ok(())

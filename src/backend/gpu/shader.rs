@@ -6,6 +6,7 @@
 //! once, with its bindings and variants: pipelines and bind-group layouts are
 //! built from it, and a test checks it against naga's reflection of the WGSL.
 
+use super::layout::{METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_TMP, ModelUniform};
 use std::collections::HashSet;
 
 /// Floating-point precision of the device arithmetic.
@@ -185,11 +186,57 @@ kernels! {
     ];
 }
 
-/// A kernel as compiled: the closed-form (`fast`) or general instance of its source.
+/// Which instance of a kernel with variants is compiled: the closed form
+/// (`#if FAST`, the tetrahedral inverse mean ratio) or the general corner
+/// path for one metric. Each general instance carries only its own metric's
+/// code (`#if IMR`, `#if CN`, ...), not a runtime branch over all of them:
+/// less code per pipeline, and lavapipe (LLVM 15) miscompiled the cn prism
+/// sweep in f64 once the reference-Jacobian metric shared the shader.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Form {
+    Fast,
+    Imr,
+    Cn,
+    Tmp,
+    Rj,
+}
+
+impl Form {
+    pub const ALL: [Form; 5] = [Form::Fast, Form::Imr, Form::Cn, Form::Tmp, Form::Rj];
+
+    /// The instance the model uniform asks for (`ModelUniform::of`).
+    pub fn of(model: &ModelUniform) -> Form {
+        if model.fast != 0 {
+            return Form::Fast;
+        }
+        match model.metric {
+            METRIC_IMR => Form::Imr,
+            METRIC_CN => Form::Cn,
+            METRIC_TMP => Form::Tmp,
+            METRIC_RJ => Form::Rj,
+            m => unreachable!("metric id {m} has no kernel form"),
+        }
+    }
+
+    /// The preprocessor flag that `#if NAME` tests; every general form also
+    /// satisfies `#if !FAST`.
+    fn flag(self) -> &'static str {
+        match self {
+            Form::Fast => "FAST",
+            Form::Imr => "IMR",
+            Form::Cn => "CN",
+            Form::Tmp => "TMP",
+            Form::Rj => "RJ",
+        }
+    }
+}
+
+/// A kernel as compiled: kernels without variants have the one `Form::Fast`
+/// instance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Variant {
     pub kernel: Kernel,
-    pub fast: bool,
+    pub form: Form,
 }
 
 impl Kernel {
@@ -210,29 +257,33 @@ impl Kernel {
         KERNELS.iter().map(|(k, _)| *k)
     }
 
-    /// The instance for a model: kernels without variants have only the fast one.
-    pub fn for_model(self, fast: bool) -> Variant {
+    /// The instance for `form`: kernels without variants have only the fast one.
+    pub fn with(self, form: Form) -> Variant {
         Variant {
             kernel: self,
-            fast: fast || !self.def().variants,
+            form: if self.def().variants { form } else { Form::Fast },
         }
+    }
+
+    /// The one instance of a kernel without variants.
+    pub fn plain(self) -> Variant {
+        self.with(Form::Fast)
     }
 }
 
 impl Variant {
-    /// Every compiled instance: both of a kernel with variants, else one.
+    /// Every compiled instance: each form of a kernel with variants, else one.
     pub fn all() -> impl Iterator<Item = Variant> {
         Kernel::all().flat_map(|k| {
-            let both: &[bool] = if k.def().variants { &[true, false] } else { &[true] };
-            both.iter().map(move |&fast| Variant { kernel: k, fast })
+            let forms: &[Form] = if k.def().variants { &Form::ALL } else { &[Form::Fast] };
+            forms.iter().map(move |&form| Variant { kernel: k, form })
         })
     }
 
     pub fn label(self) -> String {
-        if self.fast {
-            self.kernel.name().to_string()
-        } else {
-            format!("{}_general", self.kernel.name())
+        match self.form {
+            Form::Fast => self.kernel.name().to_string(),
+            f => format!("{}_{}", self.kernel.name(), f.flag().to_lowercase()),
         }
     }
 
@@ -240,24 +291,33 @@ impl Variant {
     pub fn compose(self, real: Real) -> String {
         let mut out = real.prelude();
         let mut seen = HashSet::new();
-        preprocess(self.kernel.def().source, self.fast, &mut seen, &mut out);
+        preprocess(self.kernel.def().source, self.form, &mut seen, &mut out);
         out
     }
 }
 
 /// Appends `src` to `out` with every `#import name` replaced by that shared
-/// file (once per kernel, imports first), keeping `#if FAST` / `#if !FAST`
-/// ... `#else` ... `#endif` blocks according to `fast`.
-fn preprocess(src: &str, fast: bool, seen: &mut HashSet<&'static str>, out: &mut String) {
+/// file (once per kernel, imports first), keeping `#if NAME` / `#if !NAME`
+/// ... `#else` ... `#endif` blocks according to `form` (NAME one of FAST,
+/// IMR, CN, TMP, RJ).
+fn preprocess(src: &str, form: Form, seen: &mut HashSet<&'static str>, out: &mut String) {
     // one entry per open #if: is its current branch kept?
     let mut keep: Vec<bool> = Vec::new();
     for line in src.lines() {
         let t = line.trim();
+        if let Some(cond) = t.strip_prefix("#if ") {
+            let (negated, name) = match cond.trim().strip_prefix('!') {
+                Some(n) => (true, n.trim()),
+                None => (false, cond.trim()),
+            };
+            assert!(
+                Form::ALL.iter().any(|f| f.flag() == name),
+                "unknown WGSL condition '{name}'"
+            );
+            keep.push((name == form.flag()) != negated);
+            continue;
+        }
         match t {
-            "#if FAST" | "#if !FAST" => {
-                keep.push((t == "#if FAST") == fast);
-                continue;
-            }
             "#else" => {
                 let k = keep.last_mut().expect("#else without #if");
                 *k = !*k;
@@ -279,13 +339,14 @@ fn preprocess(src: &str, fast: bool, seen: &mut HashSet<&'static str>, out: &mut
                 .find(|(n, _)| *n == name)
                 .unwrap_or_else(|| panic!("unknown WGSL import '{name}'"));
             if seen.insert(key) {
-                preprocess(text, fast, seen, out);
+                preprocess(text, form, seen, out);
             }
         } else {
             out.push_str(line);
             out.push('\n');
         }
     }
+    assert!(keep.is_empty(), "#if without #endif");
 }
 
 /// Checks a kernel's declared bindings against naga's reflection of its
@@ -442,7 +503,7 @@ mod tests {
 
     #[test]
     fn a_deliberate_binding_mismatch_is_caught() {
-        let m = parse(Kernel::Axpby.for_model(true), Real::F32);
+        let m = parse(Kernel::Axpby.plain(), Real::F32);
         let good = Kernel::Axpby.def().bindings;
         assert!(check_bindings_reflect(good, &m).is_ok());
         let mut wrong_access = good.to_vec();
@@ -459,7 +520,7 @@ mod tests {
 
     #[test]
     fn a_deliberate_constant_mismatch_is_caught() {
-        let m = parse(Kernel::Objective.for_model(false), Real::F64);
+        let m = parse(Kernel::Objective.with(Form::Cn), Real::F64);
         assert!(check_constants(&m, &[("ELEM_STRIDE", 102)]).is_ok());
         assert!(
             check_constants(&m, &[("ELEM_STRIDE", 101)])
@@ -492,7 +553,7 @@ mod tests {
     fn struct_layouts_match_the_rust_mirrors() {
         use crate::backend::gpu::layout::{ModelUniform, Op, Sizes};
         for real in [Real::F32, Real::F64] {
-            let m = parse(Kernel::Objective.for_model(false), real);
+            let m = parse(Kernel::Objective.with(Form::Cn), real);
             let find = |m: &naga::Module, name: &str| -> (Vec<naga::StructMember>, usize) {
                 let (_, ty) = m.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap();
                 match &ty.inner {
@@ -508,14 +569,14 @@ mod tests {
             assert_eq!(span, ModelUniform::size(real), "{real:?}");
             let eps = members.iter().find(|m| m.name.as_deref() == Some("eps")).unwrap();
             assert_eq!(eps.offset as usize, ModelUniform::HEADER_BYTES);
-            let m2 = parse(Kernel::CbrtEval.for_model(true), real);
+            let m2 = parse(Kernel::CbrtEval.plain(), real);
             assert_eq!(find(&m2, "Sizes").1, std::mem::size_of::<Sizes>());
         }
     }
 
     #[test]
     fn imports_are_included_once() {
-        let src = Kernel::Bcd.for_model(true).compose(Real::F32);
+        let src = Kernel::Bcd.with(Form::Fast).compose(Real::F32);
         assert_eq!(src.matches("fn det3(").count(), 1);
         assert!(!src.contains("#import"));
     }
