@@ -29,10 +29,13 @@
 //!   (Hessian pattern, block-Jacobi factors) by [`Backend::prepare_hessian`], whose
 //!   time the solver reports as setup.
 //!
-//! A distributed backend would wrap another backend: its `flush` an allreduce
-//! of the slots, with halo exchanges after each colour and before each product.
+//! The distributed backend (`distributed`, feature `mpi`) wraps the CPU one on
+//! each rank's part: every reduction is an allreduce in rank order, with halo
+//! exchanges after each colour, each trial point and before each product.
 
 pub mod cpu;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod gpu;
 
 use crate::error::Result;

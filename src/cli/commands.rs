@@ -289,16 +289,25 @@ fn run_with_rules(
         .then(|| metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference))
         .transpose()?;
     let mut progress = Progress::new(params.max_iter, !quiet);
+    // under mpirun the smoothing is partitioned over the ranks (untangling stays on one)
+    #[cfg(feature = "mpi")]
+    let device = super::ranks::device().unwrap_or(choice.device());
+    #[cfg(not(feature = "mpi"))]
+    let device = choice.device();
     let opts = solve::Options {
         method,
         params,
-        device: choice.device(),
+        device,
         checkpoint_every: save_partial.then_some(10),
         fail_after: None,
     };
     let result = solve::smooth_mesh(mesh, options, &opts, &mut |r| progress.update(r));
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
     let info = result?;
+    #[cfg(feature = "mpi")]
+    if let Some(report) = super::ranks::report().filter(|_| !quiet) {
+        println!("\n{report}");
+    }
     if !quiet {
         println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
         let displacement = metric_report::displacement_percent(mesh, &start, &mesh.points);

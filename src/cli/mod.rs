@@ -1,6 +1,8 @@
 //! Argument parsing and the subcommands. No numerics live here: every
 //! command calls the library and prints what it returns.
 
+#[cfg(feature = "mpi")]
+pub(crate) mod ranks;
 mod boundary;
 mod commands;
 mod compare;
@@ -418,6 +420,14 @@ pub struct DemoArgs {
 
 /// Parses `args` and runs the command; returns the process exit code.
 pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
+    #[cfg(feature = "mpi")]
+    if meshsmooth::solve::distributed::Cluster::launched() {
+        return ranks::run_under_mpi(|| dispatch(args));
+    }
+    dispatch(args)
+}
+
+fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {

@@ -4,7 +4,7 @@ use super::{ElementKind, Mesh};
 use std::collections::HashMap;
 
 /// Compressed lists: `items[offsets[i]..offsets[i + 1]]` belong to entry `i`.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Csr {
     pub offsets: Vec<u32>,
     pub items: Vec<u32>,

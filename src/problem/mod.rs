@@ -56,7 +56,7 @@ pub struct ProblemOptions<'a> {
     pub boundary: Boundary,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Problem {
     /// Metric dimension: 2 (x and y move) or 3.
     pub dim: usize,
@@ -92,7 +92,9 @@ pub struct Problem {
     /// The plane of a planar mesh outside the planes z = constant: positions
     /// are in its coordinates (`gather` maps into them, `scatter` back).
     pub plane: Option<Plane>,
-    /// The constraints of the boundary vertices that slide (`--boundary slide`).
+    /// The constraints of the boundary vertices that slide (`--boundary slide`);
+    /// not sent to other ranks: a partitioned run refuses sliding.
+    #[serde(skip)]
     pub sliding: Option<Sliding>,
     /// Time spent building this problem.
     pub setup_time: Duration,

@@ -5,6 +5,8 @@
 //! (`iterate`) over it.
 
 pub mod bcd;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 #[cfg(test)]
 mod function_backend;
 pub mod history;
@@ -33,7 +35,7 @@ use nlcg::{Nlcg, NlcgParams};
 use std::time::{Duration, Instant};
 
 /// Which optimiser moves the vertices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 pub enum Method {
     /// Block coordinate descent: per-vertex Newton with Armijo backtracking,
     /// one vertex at a time in locality order (on a GPU: colour by colour).
@@ -76,14 +78,14 @@ impl std::str::FromStr for Method {
 }
 
 /// Block coordinate descent's settings.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BcdParams {
     /// The per-vertex Armijo line search.
     pub line_search: LineSearch,
 }
 
 /// Smart Laplace's settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LaplaceParams {
     /// Stop when no vertex moves farther than this fraction of the mean edge length.
     pub min_move: f64,
@@ -96,7 +98,7 @@ impl Default for LaplaceParams {
 }
 
 /// Termination (shared by every method) and each method's own settings.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Params {
     /// Stop when the 2-norm of the free-vertex gradient of F, with lengths
     /// measured in mean edge lengths of the start (so unit-free, like F), is
@@ -137,6 +139,9 @@ pub enum Device<'a> {
     Cpu,
     /// A wgpu device (`GpuContext::new` picks the adapter and precision).
     Gpu(&'a GpuContext),
+    /// The ranks of an MPI job, each on its part of the problem (CPU, f64).
+    #[cfg(feature = "mpi")]
+    Mpi(&'a distributed::Cluster),
 }
 
 /// How a run is carried out: method, settings, device, and the guard against
@@ -220,6 +225,8 @@ pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnM
             }
             run(&mut GpuBackend::new(ctx, p, x, &ls)?, p, x, opts, progress)
         }
+        #[cfg(feature = "mpi")]
+        Device::Mpi(cluster) => distributed::lead(cluster, p, x, opts, progress),
     }
 }
 
@@ -239,11 +246,37 @@ pub fn run<B: Backend + ?Sized>(
     opts: &Options,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    let params = &opts.params;
-    let method = opts.method;
     // F is unit-free; its gradient scales as 1/length: measured in mean edge
     // lengths it is unit-free too, and so is the stopping test
-    let edge = p.mean_edge_length(x);
+    let scale = Scale {
+        edge: p.mean_edge_length(x),
+        setup: p.setup_time,
+        colors: p.colors.len(),
+    };
+    run_scaled(be, scale, x, opts, progress)
+}
+
+/// What `run` takes from the whole problem; a rank of a partitioned run has
+/// only its part, and gets these from the whole.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Scale {
+    /// Mean edge length of the start.
+    pub edge: f64,
+    pub setup: Duration,
+    pub colors: usize,
+}
+
+/// `run` with the whole problem's scale given.
+pub(crate) fn run_scaled<B: Backend + ?Sized>(
+    be: &mut B,
+    scale: Scale,
+    x: &mut [Vec3],
+    opts: &Options,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let params = &opts.params;
+    let method = opts.method;
+    let edge = scale.edge;
     let mut solver = match method {
         Method::Bcd | Method::BcdColored => Solver::Bcd(bcd::Bcd::new(be, method == Method::Bcd)?),
         Method::Newton => Solver::Newton(Box::new(Newton::new(be, params.newton)?)),
@@ -271,9 +304,9 @@ pub fn run<B: Backend + ?Sized>(
         ))
     })?;
     let setup = Setup {
-        seconds: p.setup_time.as_secs_f64() + solver_setup.as_secs_f64(),
+        seconds: scale.setup.as_secs_f64() + solver_setup.as_secs_f64(),
         memory_bytes: be.bytes(),
-        colors: p.colors.len(),
+        colors: scale.colors,
         device: be.describe(),
     };
     let mut steps = 0;

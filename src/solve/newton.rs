@@ -12,7 +12,7 @@ use crate::error::Result;
 use std::time::{Duration, Instant};
 
 /// Newton's own settings (termination is in `solve::Params`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NewtonParams {
     /// Most CG iterations per Newton step.
     pub cg_max_iter: usize,

@@ -17,7 +17,7 @@ use crate::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
 use crate::error::Result;
 
 /// NLCG's own settings (the gradient tolerance is `Params::tol`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NlcgParams {
     /// Stop after a step that moved no vertex farther than this many mean
     /// edge lengths (the paper's tol_x); also the resolution of the line search.

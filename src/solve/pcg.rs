@@ -28,7 +28,7 @@ impl Default for PcgParams {
 
 /// The answer on negative curvature met after the first iteration (at the
 /// first, both are the preconditioned right-hand side).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 pub enum NegativeCurvature {
     /// The direction p of negative curvature, oriented so that p^T b > 0
     /// (section 3.2 of the Newton paper).

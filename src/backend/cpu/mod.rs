@@ -137,7 +137,32 @@ impl<'p> CpuBackend<'p> {
         }
     }
 
-    fn set(&mut self, s: Slot, v: f64) {
+    /// A position set, for a wrapping backend that overwrites ghost positions.
+    pub(crate) fn points_mut(&mut self, at: Points) -> &mut [Vec3] {
+        match at {
+            Points::Current => &mut self.x,
+            Points::Trial => &mut self.trial,
+        }
+    }
+
+    pub(crate) fn points_ref(&self, at: Points) -> &[Vec3] {
+        self.points(at)
+    }
+
+    /// A vector's storage, for a wrapping backend's halo exchanges and reductions.
+    pub(crate) fn vector_mut(&mut self, v: Vector) -> &mut [Vec3] {
+        &mut self.vectors[v.0 as usize]
+    }
+
+    pub(crate) fn vector_ref(&self, v: Vector) -> &[Vec3] {
+        &self.vectors[v.0 as usize]
+    }
+
+    pub(crate) fn slot(&self, s: Slot) -> f64 {
+        self.slots[s.0 as usize]
+    }
+
+    pub(crate) fn set(&mut self, s: Slot, v: f64) {
         self.slots[s.0 as usize] = v;
     }
 }
