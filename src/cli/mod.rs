@@ -1,14 +1,14 @@
 //! Argument parsing and the subcommands. No numerics live here: every
 //! command calls the library and prints what it returns.
 
-#[cfg(feature = "mpi")]
-pub(crate) mod ranks;
 mod boundary;
 mod commands;
 mod compare;
 mod device;
 mod generate;
 mod progress;
+#[cfg(feature = "mpi")]
+pub(crate) mod ranks;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use meshsmooth::backend::gpu::Precision;

@@ -211,7 +211,9 @@ fn restrict(
         items: Vec::new(),
     };
     for &e in elems {
-        elements.items.extend(p.elements.of(e as usize).iter().map(|&v| local[v as usize]));
+        elements
+            .items
+            .extend(p.elements.of(e as usize).iter().map(|&v| local[v as usize]));
         elements.offsets.push(elements.items.len() as u32);
     }
     let free: Vec<bool> = global.iter().map(|&g| p.free[g as usize]).collect();
@@ -294,5 +296,80 @@ fn push_exchange(part: &mut Part, rank: u32, send: Vec<u32>, recv: Vec<u32>) {
             h.recv.extend(recv);
         }
         None => part.halo.push(Exchange { rank, send, recv }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::{mixed_block, tet_box};
+
+    fn parts_of(mesh: &crate::Mesh, size: usize) -> (Problem, Vec<u32>, Vec<Part>) {
+        let p = Problem::new(mesh).unwrap();
+        let x = p.gather(&mesh.points);
+        let owner = rcb(&x, size);
+        let parts = split(&p, &x, &owner, size);
+        (p, owner, parts)
+    }
+
+    #[test]
+    fn every_corner_and_free_vertex_is_counted_once() {
+        for size in 1..=4 {
+            let (p, _, parts) = parts_of(&mixed_block(4, 2), size);
+            let corners: usize = parts.iter().map(|q| q.owned_corners.len()).sum();
+            assert_eq!(corners, p.num_corners());
+            let free: usize = parts.iter().map(|q| q.owned_free.len()).sum();
+            assert_eq!(free, p.free_vertices.len());
+            let coloured: usize = parts.iter().map(|q| q.problem.colors.items.len()).sum();
+            assert_eq!(coloured, p.free_vertices.len());
+        }
+    }
+
+    #[test]
+    fn owned_vertices_keep_their_corners_in_order() {
+        let (p, _, parts) = parts_of(&tet_box(4, 3, 3, [1.0, 1.0, 1.0]), 3);
+        for q in &parts {
+            for (l, &g) in q.global.iter().enumerate().filter(|(l, _)| q.owned[*l]) {
+                let whole: Vec<u32> = p.incidence.of(g as usize).iter().map(|&k| k & 3).collect();
+                let here: Vec<u32> = q.problem.incidence.of(l).iter().map(|&k| k & 3).collect();
+                assert_eq!(whole, here);
+                for (&a, &b) in p.incidence.of(g as usize).iter().zip(q.problem.incidence.of(l)) {
+                    let (ca, cb) = ((a >> 2) as usize, (b >> 2) as usize);
+                    assert_eq!(p.corner_weight[ca].to_bits(), q.problem.corner_weight[cb].to_bits());
+                    let back = q.problem.corners[cb].map(|v| q.global[v as usize]);
+                    assert_eq!(back, p.corners[ca]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn halos_pair_up() {
+        let (_, owner, parts) = parts_of(&tet_box(5, 4, 3, [1.0, 1.0, 1.0]), 4);
+        for q in &parts {
+            for h in &q.halo {
+                let other = &parts[h.rank as usize];
+                let back = other.halo.iter().find(|o| o.rank == q.rank).unwrap();
+                assert_eq!(h.recv.len(), back.send.len());
+                for (&i, &j) in h.recv.iter().zip(&back.send) {
+                    let gq = q.global[q.problem.free_vertices[i as usize] as usize];
+                    let go = other.global[other.problem.free_vertices[j as usize] as usize];
+                    assert_eq!(gq, go);
+                    assert_eq!(owner[gq as usize], other.rank);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn one_part_is_the_whole() {
+        let (p, _, parts) = parts_of(&mixed_block(3, 2), 1);
+        let q = &parts[0].problem;
+        assert_eq!(q.corners, p.corners);
+        assert_eq!(q.incidence, p.incidence);
+        assert_eq!(q.colors, p.colors);
+        assert!(parts[0].halo.is_empty());
+        let quality = Quality::of(&p, &vec![0; p.num_vertices()], &parts);
+        assert_eq!((quality.edge_cut, quality.ghost_fraction), (0, 0.0));
     }
 }

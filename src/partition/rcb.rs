@@ -29,7 +29,9 @@ fn split(points: &[Vec3], ids: &mut [u32], first: usize, parts: usize, owner: &m
     // ties broken by id, so the partition does not depend on the input's order of equal coordinates
     let key = |v: &u32| (points[*v as usize][axis], *v);
     if left > 0 && left < ids.len() {
-        ids.select_nth_unstable_by(left, |a, b| key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal));
+        ids.select_nth_unstable_by(left, |a, b| {
+            key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal)
+        });
     }
     let (lo, hi) = ids.split_at_mut(left);
     split(points, lo, first, left_parts, owner);
@@ -45,7 +47,9 @@ fn longest_axis(points: &[Vec3], ids: &[u32]) -> usize {
             hi[k] = hi[k].max(points[v as usize][k]);
         }
     }
-    (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0)
+    (0..3)
+        .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+        .unwrap_or(0)
 }
 
 #[cfg(test)]

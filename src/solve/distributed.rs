@@ -72,7 +72,9 @@ impl Cluster {
     pub fn finish(&self) {
         if self.rank() == 0 {
             for r in 1..self.size() {
-                self.world.process_at_rank(r as i32).send_with_tag(&[0u8; 0][..], JOB_TAG);
+                self.world
+                    .process_at_rank(r as i32)
+                    .send_with_tag(&[0u8; 0][..], JOB_TAG);
             }
         }
         drop(self.universe.borrow_mut().take());
@@ -167,10 +169,19 @@ pub fn lead(
         progress(r);
         true
     };
-    let (result, own) = run_part(&cluster.world, &parts[0], opts.method, &opts.params, &mut report_progress);
+    let (result, own) = run_part(
+        &cluster.world,
+        &parts[0],
+        opts.method,
+        &opts.params,
+        &mut report_progress,
+    );
     let mut outcomes = vec![own];
     for r in 1..size {
-        let (bytes, _) = cluster.world.process_at_rank(r as i32).receive_vec_with_tag::<u8>(RESULT_TAG);
+        let (bytes, _) = cluster
+            .world
+            .process_at_rank(r as i32)
+            .receive_vec_with_tag::<u8>(RESULT_TAG);
         outcomes.push(decode(&bytes)?);
     }
     let info = result?;

@@ -262,7 +262,8 @@ pub fn untangle(
             #[cfg(feature = "mpi")]
             Device::Mpi(_) => {
                 return Err(Error::InvalidArgument(
-                    "untangling runs on one process: untangle first (meshsmooth untangle), then smooth under mpirun".into(),
+                    "untangling runs on one process: untangle first (meshsmooth untangle), then smooth under mpirun"
+                        .into(),
                 ));
             }
         };

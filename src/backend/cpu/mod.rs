@@ -137,6 +137,14 @@ impl<'p> CpuBackend<'p> {
         }
     }
 
+    pub(crate) fn set(&mut self, s: Slot, v: f64) {
+        self.slots[s.0 as usize] = v;
+    }
+}
+
+/// What the distributed backend, which wraps this one, reaches inside for.
+#[cfg(feature = "mpi")]
+impl CpuBackend<'_> {
     /// A position set, for a wrapping backend that overwrites ghost positions.
     pub(crate) fn points_mut(&mut self, at: Points) -> &mut [Vec3] {
         match at {
@@ -160,10 +168,6 @@ impl<'p> CpuBackend<'p> {
 
     pub(crate) fn slot(&self, s: Slot) -> f64 {
         self.slots[s.0 as usize]
-    }
-
-    pub(crate) fn set(&mut self, s: Slot, v: f64) {
-        self.slots[s.0 as usize] = v;
     }
 }
 

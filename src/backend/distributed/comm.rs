@@ -59,9 +59,7 @@ impl<'w> Comm<'w> {
         let k = local.len();
         let all = self.gather(local);
         (0..k)
-            .map(|j| {
-                (1..self.size()).fold(all[j], |acc, r| combine[j](acc, all[r * k + j]))
-            })
+            .map(|j| (1..self.size()).fold(all[j], |acc, r| combine[j](acc, all[r * k + j])))
             .collect()
     }
 
@@ -82,11 +80,17 @@ impl<'w> Comm<'w> {
         mpi::request::scope(|scope| {
             let pending: Vec<_> = sends
                 .iter()
-                .map(|(r, buf)| world.process_at_rank(*r).immediate_send_with_tag(scope, &buf[..], HALO_TAG))
+                .map(|(r, buf)| {
+                    world
+                        .process_at_rank(*r)
+                        .immediate_send_with_tag(scope, &buf[..], HALO_TAG)
+                })
                 .collect();
             for (h, buf) in halo.iter().zip(recvs.iter_mut()) {
                 if !h.recv.is_empty() {
-                    world.process_at_rank(h.rank as i32).receive_into_with_tag(&mut buf[..], HALO_TAG);
+                    world
+                        .process_at_rank(h.rank as i32)
+                        .receive_into_with_tag(&mut buf[..], HALO_TAG);
                 }
             }
             for p in pending {

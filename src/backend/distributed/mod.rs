@@ -50,12 +50,14 @@ impl<'p> DistributedBackend<'p> {
 
     fn exchange_points(&mut self, at: Points) {
         let free = &self.part.problem.free_vertices;
-        self.comm
-            .exchange(&self.part.halo, self.inner.points_mut(at), |i| free[i as usize] as usize);
+        self.comm.exchange(&self.part.halo, self.inner.points_mut(at), |i| {
+            free[i as usize] as usize
+        });
     }
 
     fn exchange_vector(&mut self, v: Vector) {
-        self.comm.exchange(&self.part.halo, self.inner.vector_mut(v), |i| i as usize);
+        self.comm
+            .exchange(&self.part.halo, self.inner.vector_mut(v), |i| i as usize);
     }
 }
 
@@ -103,9 +105,7 @@ impl Backend for DistributedBackend<'_> {
         // every corner of the part is a real corner with current ghosts, so
         // the minimum over parts is the minimum over the whole
         let det = out.min_det.map_or(f64::INFINITY, |_| objective::min_det(p, x));
-        let global = self
-            .comm
-            .reduce(&[f, bad, det], &[comm::sum, comm::sum, comm::min]);
+        let global = self.comm.reduce(&[f, bad, det], &[comm::sum, comm::sum, comm::min]);
         let feasible = global[1] == 0.0;
         if let (Some(g), true) = (gradient, feasible) {
             self.inner.evaluate(at, out, Some(g))?;
