@@ -56,6 +56,9 @@ pub struct Part {
     pub owned_corners: Vec<u32>,
     /// Neighbour parts in ascending rank.
     pub halo: Vec<Exchange>,
+    /// Colour (in the whole problem's colouring) of each free vertex, ghosts
+    /// included: after a colour of a sweep only that colour's ghosts change.
+    pub free_colour: Vec<u32>,
     /// Mean edge length of the whole start, the scale of the stopping test.
     pub edge: f64,
     /// Setup time of the whole problem plus the split.
@@ -63,6 +66,25 @@ pub struct Part {
 }
 
 impl Part {
+    /// The halo restricted to the free vertices of colour `c`.
+    pub fn colour_halo(&self, c: u32) -> Vec<Exchange> {
+        let keep = |list: &[u32]| {
+            list.iter()
+                .copied()
+                .filter(|&i| self.free_colour[i as usize] == c)
+                .collect()
+        };
+        self.halo
+            .iter()
+            .map(|h| Exchange {
+                rank: h.rank,
+                send: keep(&h.send),
+                recv: keep(&h.recv),
+            })
+            .filter(|h| !(h.send.is_empty() && h.recv.is_empty()))
+            .collect()
+    }
+
     /// Ghost vertices (present, not owned).
     pub fn ghosts(&self) -> usize {
         self.owned.iter().filter(|&&o| !o).count()
@@ -101,6 +123,12 @@ pub fn split(p: &Problem, x: &[Vec3], owner: &[u32], size: usize) -> Vec<Part> {
     let mut local = vec![u32::MAX; n];
     let mut local_elem = vec![u32::MAX; p.num_elements()];
     let edge = p.mean_edge_length(x);
+    let mut colour = vec![u32::MAX; n];
+    for c in 0..p.colors.len() {
+        for &v in p.colors.of(c) {
+            colour[v as usize] = c as u32;
+        }
+    }
     for (r, elems) in elems.iter().enumerate() {
         let mut global: Vec<u32> = elems
             .iter()
@@ -131,12 +159,17 @@ pub fn split(p: &Problem, x: &[Vec3], owner: &[u32], size: usize) -> Vec<Part> {
             rank: r as u32,
             size: size as u32,
             x: global.iter().map(|&g| x[g as usize]).collect(),
-            problem: q,
             global: global.clone(),
             owned,
             owned_free,
             owned_corners,
             halo: Vec::new(),
+            free_colour: q
+                .free_vertices
+                .iter()
+                .map(|&v| colour[global[v as usize] as usize])
+                .collect(),
+            problem: q,
             edge,
             setup: Duration::ZERO,
         });
@@ -356,6 +389,7 @@ mod tests {
                     let go = other.global[other.problem.free_vertices[j as usize] as usize];
                     assert_eq!(gq, go);
                     assert_eq!(owner[gq as usize], other.rank);
+                    assert_eq!(q.free_colour[i as usize], other.free_colour[j as usize]);
                 }
             }
         }

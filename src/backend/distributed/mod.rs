@@ -6,8 +6,8 @@
 //!   entries are exact; ghost entries may hold anything (partial Hessian
 //!   rows, a preconditioner built from a partial block) until a halo exchange
 //!   overwrites them, which happens before every use that reads them: before
-//!   each product `hess_mul`, and for positions after each colour of a sweep
-//!   and after each trial point.
+//!   each product `hess_mul`, and for positions after each trial point and
+//!   after each colour of a sweep (that colour's ghosts only).
 //! - **Reductions** (`dot`, `evaluate`, `max_move`) sum only what the part
 //!   owns (owned free entries; corners of owned elements, so each corner is
 //!   counted once) and combine the ranks' partial values in rank order
@@ -24,7 +24,7 @@ use super::cpu::{CpuBackend, objective};
 use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::Result;
 use crate::metric::mat3::Vec3;
-use crate::partition::Part;
+use crate::partition::{Exchange, Part};
 use crate::solve::line_search::LineSearch;
 use comm::{Comm, CommStats};
 use mpi::topology::SimpleCommunicator;
@@ -33,6 +33,9 @@ pub struct DistributedBackend<'p> {
     part: &'p Part,
     inner: CpuBackend<'p>,
     comm: Comm<'p>,
+    /// Per colour, the halo of that colour's vertices: a colour of a sweep
+    /// moves only them, so only they are sent.
+    colour_halos: Vec<Vec<Exchange>>,
 }
 
 impl<'p> DistributedBackend<'p> {
@@ -41,6 +44,9 @@ impl<'p> DistributedBackend<'p> {
             part,
             inner: CpuBackend::new(&part.problem, &part.x, ls)?,
             comm: Comm::new(world),
+            colour_halos: (0..part.problem.colors.len() as u32)
+                .map(|c| part.colour_halo(c))
+                .collect(),
         })
     }
 
@@ -130,7 +136,11 @@ impl Backend for DistributedBackend<'_> {
 
     fn bcd_color(&mut self, color: usize) -> Result<()> {
         self.inner.bcd_color(color)?;
-        self.exchange_points(Points::Current);
+        let free = &self.part.problem.free_vertices;
+        self.comm
+            .exchange(&self.colour_halos[color], self.inner.points_mut(Points::Current), |i| {
+                free[i as usize] as usize
+            });
         Ok(())
     }
 
