@@ -228,7 +228,7 @@ fn restrict(
             .of(global[l] as usize)
             .iter()
             .filter(|&&k| local_corner[(k >> 2) as usize] != u32::MAX)
-            .map(|&k| 4 * local_corner[(k >> 2) as usize] | (k & 3))
+            .map(|&k| (4 * local_corner[(k >> 2) as usize]) | (k & 3))
             .collect()
     });
     let neighbours = lists(&|l| {
