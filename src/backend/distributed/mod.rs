@@ -20,6 +20,7 @@
 
 pub mod comm;
 
+use super::cpu::reduce::CHUNK;
 use super::cpu::{CpuBackend, objective};
 use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::Result;
@@ -28,6 +29,7 @@ use crate::partition::{Exchange, Part};
 use crate::solve::line_search::LineSearch;
 use comm::{Comm, CommStats};
 use mpi::topology::SimpleCommunicator;
+use rayon::prelude::*;
 
 pub struct DistributedBackend<'p> {
     part: &'p Part,
@@ -101,13 +103,20 @@ impl Backend for DistributedBackend<'_> {
     fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
         let p = &self.part.problem;
         let x = self.inner.points_ref(at);
-        let (mut f, mut bad) = (0.0, 0.0);
-        for &c in &self.part.owned_corners {
-            match p.corner_term(x, c as usize) {
-                Some(t) => f += t,
-                None => bad += 1.0,
-            }
-        }
+        // fixed chunks added in order: the partial sum does not depend on the thread count
+        let partial: Vec<(f64, f64)> = self
+            .part
+            .owned_corners
+            .par_chunks(CHUNK)
+            .map(|cs| {
+                cs.iter()
+                    .fold((0.0, 0.0), |(f, bad), &c| match p.corner_term(x, c as usize) {
+                        Some(t) => (f + t, bad),
+                        None => (f, bad + 1.0),
+                    })
+            })
+            .collect();
+        let (f, bad) = partial.iter().fold((0.0, 0.0), |(f, b), &(pf, pb)| (f + pf, b + pb));
         // every corner of the part is a real corner with current ghosts, so
         // the minimum over parts is the minimum over the whole
         let det = out.min_det.map_or(f64::INFINITY, |_| objective::min_det(p, x));
