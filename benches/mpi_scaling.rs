@@ -67,7 +67,7 @@ fn run(ranks: usize, input: &str, method: &str) -> Measured {
         comm: number_after(&text, "and communication"),
         exchanges: number_after(&text, "mpi traffic:"),
         bytes: number_after(&text, "halo exchanges ("),
-        reductions: number_after(&text, "bytes per exchange),"),
+        reductions: number_after(&text, "per iteration),"),
         iterations: number_after(summary, "after"),
         ghost_fraction: number_after(&text, "ghost fraction"),
         halo_values: number_after(&text, "(corners),"),

@@ -18,6 +18,7 @@ pub fn run_under_mpi(command: impl FnOnce() -> i32) -> i32 {
     };
     // the solves borrow it for the whole command; MPI ends in `finish`, not in a drop
     let cluster: &'static Cluster = Box::leak(Box::new(cluster));
+    share_cores();
     let code = if cluster.rank() == 0 {
         CLUSTER.with(|c| c.set(Some(cluster)));
         let code = command();
@@ -34,6 +35,23 @@ pub fn run_under_mpi(command: impl FnOnce() -> i32) -> i32 {
     };
     cluster.finish();
     code
+}
+
+/// Ranks on one machine share its cores: each gets its share of threads
+/// (unless RAYON_NUM_THREADS says otherwise), instead of every rank starting
+/// one thread per core.
+fn share_cores() {
+    if std::env::var_os("RAYON_NUM_THREADS").is_some() {
+        return;
+    }
+    let local: usize = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads((cores / local.max(1)).max(1))
+        .build_global();
 }
 
 /// The device of the solves on rank 0 of an MPI job, if this is one.

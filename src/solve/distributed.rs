@@ -120,9 +120,15 @@ impl fmt::Display for Report {
         )?;
         write!(
             f,
-            "mpi traffic: {exchanges} halo exchanges ({bytes} bytes sent, all ranks; {:.0} bytes per exchange), {reductions} reductions",
-            bytes as f64 / exchanges.max(1) as f64
-        )
+            "mpi traffic: {exchanges} halo exchanges ({bytes} bytes sent, all ranks; {:.0} bytes per exchange, {:.0} per iteration), {reductions} reductions",
+            bytes as f64 / exchanges.max(1) as f64,
+            bytes as f64 / self.iterations.max(1) as f64
+        )?;
+        if self.cg_iterations > 0 {
+            // one exchange per product; the rest are the line searches' trial points
+            write!(f, ", {} CG iterations", self.cg_iterations)?;
+        }
+        Ok(())
     }
 }
 
