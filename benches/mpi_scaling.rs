@@ -105,9 +105,9 @@ fn main() {
     let tets = 6 * cells * cells * cells;
     println!("# MPI strong scaling: perturbed tet box, {tets} tetrahedra, {cells}^3 cubes\n");
     println!(
-        "| method | ranks | iterations | wall s | speed-up | comm % | edge cut | ghost fraction | ghosts/exchange | bytes/exchange | exchanges | reductions |"
+        "| method | ranks | iterations | wall s | speed-up | comm % | edge cut | ghost fraction | free ghosts | halo bytes per iteration | halo bytes per exchange | exchanges | reductions |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut ghost_model = Vec::new();
     for method in ["bcd-colored", "newton"] {
         let mut base = None;
