@@ -204,11 +204,24 @@ pub struct ObjectiveArgs {
     /// Reference mesh with the same connectivity: its corners are the targets W.
     #[arg(long, value_name = "MESH")]
     pub reference: Option<PathBuf>,
-    /// Vertex order of the sweeps and of the Hessian rows: rbfs (reverse breadth-first
-    /// from the boundary, the Newton paper's), input (the file's own, the reordering
-    /// paper's N) or cuthill-mckee.
-    #[arg(long, value_enum, default_value_t = Ordering::default())]
+    /// Vertex order. rbfs (default; reverse breadth-first from the boundary), cuthill-mckee
+    /// and red-black (checkerboard) number the problem for every method. The reordering
+    /// paper's schemes order the sequential sweep (--method bcd on the CPU) and leave the
+    /// input numbering: n (alias input), r, wqp, gavm, grvm, lng, d-wqp, d-gavm, d-grvm,
+    /// d-lng, any case, each reversed as reverse-NAME or -NAME (--order=-wqp).
+    #[arg(long, default_value_t = Ordering::default(), allow_hyphen_values = true, value_name = "NAME")]
     pub order: Ordering,
+    /// Seed of the random orders r and reverse-r.
+    #[arg(long, default_value_t = 0, value_name = "SEED")]
+    pub order_seed: u64,
+    /// Dynamic reordering: order the sweep list again after every K sweeps (a paper scheme
+    /// with --method bcd); without it the list is ordered once, before the first sweep.
+    #[arg(long, value_name = "K")]
+    pub reorder_every: Option<usize>,
+    /// Newton steps per vertex visit of the sequential sweep (--method bcd), the paper's
+    /// inner iterations.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub inner_iterations: usize,
 }
 
 #[derive(Args, Debug)]
