@@ -162,6 +162,11 @@ pub trait Backend {
     fn bcd_color(&mut self, color: usize) -> Result<()>;
     /// The largest squared vertex move of the colours swept since the last call.
     fn max_move(&mut self, out: Slot) -> Result<()>;
+    /// Whether `bcd_sequential` runs (the CPU) or declines (the GPU): a sweep
+    /// order is only worth computing where there is a sequential sweep.
+    fn has_sequential_sweep(&self) -> bool {
+        false
+    }
     /// A sweep over the free vertices one at a time, as `visit` says, if the
     /// backend has one (`Ok(false)` otherwise: only the CPU has, the GPU runs
     /// colours). Stops early, in a valid state, at `deadline`; the largest

@@ -28,7 +28,8 @@ pub struct Bcd<'p> {
     /// One vertex at a time where the backend can; colour by colour otherwise.
     pub sequential: bool,
     g: Vector,
-    /// The sequential sweep's list under a paper scheme, with its strategy.
+    /// The sequential sweep's list under a paper scheme, with its strategy
+    /// (`None` without a scheme, or on a backend without a sequential sweep).
     pub reorder: Option<Reorder>,
     /// Per free vertex: its displacement at the last visit (dynamic movement schemes).
     moves: Option<Vector>,
@@ -47,7 +48,7 @@ impl<'p> Bcd<'p> {
     ) -> Result<Bcd<'p>> {
         let reorder = p
             .sweep_order
-            .filter(|_| sequential)
+            .filter(|_| sequential && be.has_sequential_sweep())
             .map(|s| Reorder::new(p, s, Strategy::every(params.reorder_every), p.order_seed));
         let moves = match &reorder {
             Some(r) if r.needs_moves() => Some(be.vector()?),

@@ -89,6 +89,14 @@ impl Reorder {
         }
     }
 
+    /// The current visiting order as mesh vertex ids.
+    pub fn vertices(&self, p: &Problem) -> Vec<u32> {
+        self.order
+            .iter()
+            .map(|&f| p.order[p.free_vertices[f as usize] as usize])
+            .collect()
+    }
+
     /// Whether the sweep must record each vertex's displacement for the next
     /// reordering.
     pub fn needs_moves(&self) -> bool {

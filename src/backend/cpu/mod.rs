@@ -240,6 +240,10 @@ impl Backend for CpuBackend<'_> {
         Ok(())
     }
 
+    fn has_sequential_sweep(&self) -> bool {
+        self.p.is_some()
+    }
+
     fn bcd_sequential(&mut self, visit: &Visit, out: Slot, deadline: Option<Instant>) -> Result<bool> {
         let p = self.problem()?;
         if let Some(order) = visit.order
