@@ -409,3 +409,47 @@ fn the_cli_takes_paper_names_in_any_case_and_refuses_unknown_ones() {
     let (ok, text) = meshsmooth(&["compare", i, "--order=-d-lng", "--methods", "bcd", "--max-iter", "3"]);
     assert!(ok, "{text}");
 }
+
+#[test]
+fn the_order_study_writes_a_ranked_table_and_csv_for_every_scheme_and_strategy() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("study");
+    let o = out.to_str().unwrap();
+    let (ok, text) = meshsmooth(&[
+        "study",
+        "order",
+        "--quick",
+        "--free",
+        "120",
+        "--baseline",
+        "0.05",
+        "--every",
+        "1,5",
+        "-o",
+        o,
+    ]);
+    assert!(ok, "{text}");
+    let csv = std::fs::read_to_string(out.join("order-study.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    // 20 schemes x (static, every 1, every 5)
+    assert_eq!(rows.len(), 60);
+    for strategy in ["static", "every 1", "every 5"] {
+        let of: Vec<&Vec<&str>> = rows.iter().filter(|r| r[1] == strategy).collect();
+        assert_eq!(of.len(), 20, "{strategy}");
+        // the TT ranks of a strategy start at 1 and stay within 1..=20
+        let ranks: Vec<usize> = of.iter().map(|r| r[10].parse().unwrap()).collect();
+        assert!(
+            ranks.contains(&1) && ranks.iter().all(|&k| (1..=20).contains(&k)),
+            "{ranks:?}"
+        );
+    }
+    // N never reorders; a dynamic movement scheme does
+    let rt = |scheme: &str, strategy: &str| -> f64 {
+        rows.iter().find(|r| r[0] == scheme && r[1] == strategy).unwrap()[6]
+            .parse()
+            .unwrap()
+    };
+    assert!(rt("GAVM", "every 1") > 0.0);
+    let md = std::fs::read_to_string(out.join("order-study.md")).unwrap();
+    assert!(md.contains("## every 5") && md.contains("| -D-GRVM"), "{md}");
+}

@@ -7,6 +7,7 @@ mod compare;
 mod device;
 mod generate;
 mod progress;
+mod study;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use meshsmooth::backend::gpu::Precision;
@@ -53,6 +54,46 @@ pub enum Command {
     Generate(GenerateCommand),
     /// Smooth a built-in perturbed mesh and print the reports.
     Demo(DemoArgs),
+    /// Reproduce a paper's study on a generated mesh.
+    #[command(subcommand)]
+    Study(StudyCommand),
+}
+
+#[derive(Subcommand, Debug)]
+pub enum StudyCommand {
+    /// The vertex-reordering study: a baseline (N, static) for a fixed time sets the target
+    /// objective; every scheme under every strategy (static, dynamic every K) then runs the
+    /// sequential BCD sweep to it. Writes a Markdown table and CSV of COT/RT/TT and ranks.
+    Order(OrderStudyArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct OrderStudyArgs {
+    /// Output folder (order-study.md, order-study.csv).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The small study: about 1000 free vertices, a 0.25 s baseline (the options below
+    /// override it where given).
+    #[arg(long)]
+    pub quick: bool,
+    /// The horseshoe mesh (default sqiv).
+    #[arg(long, value_enum)]
+    pub kind: Option<HorseshoeKind>,
+    /// About this many free vertices (default 1000 with --quick, else 20000).
+    #[arg(long)]
+    pub free: Option<usize>,
+    /// Seconds the baseline runs (default 0.25 with --quick, else 10).
+    #[arg(long, value_name = "SECONDS")]
+    pub baseline: Option<f64>,
+    /// Dynamic strategies to run besides the static one.
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2, 5, 10])]
+    pub every: Vec<usize>,
+    /// Newton steps per vertex visit.
+    #[arg(long, default_value_t = 1)]
+    pub inner_iterations: usize,
+    /// Seed of the random orders.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
 }
 
 #[derive(Args, Debug)]
@@ -451,6 +492,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Compare(a)) => compare::compare(&a),
         Some(Command::Devices) => commands::devices(),
         Some(Command::Generate(g)) => generate::generate(&g),
+        Some(Command::Study(StudyCommand::Order(a))) => study::order(&a),
     };
     match result {
         Ok(()) => 0,
