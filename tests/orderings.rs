@@ -152,9 +152,9 @@ fn wqp_puts_the_worst_patch_first_as_computed_by_hand() {
 
 #[test]
 fn lng_and_gavm_put_the_vertex_farthest_from_rest_first() {
-    // only vertex 7 is moved: it alone has a gradient and a move, and by the
-    // tie rule the two unmoved ones follow in input order... except that its
-    // neighbours now feel it too; the moved vertex must come first
+    // only vertex 7 is displaced: its neighbours 6 and 8 feel it too (their
+    // patches share its elements), but it has the largest gradient and the
+    // largest trial move, so it comes first
     let mut m = generate::quad_grid(4, 2, [4.0, 2.0]);
     m.points[7][0] += 0.3;
     for scheme in [Scheme::Lng, Scheme::Gavm] {
