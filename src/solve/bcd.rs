@@ -90,7 +90,8 @@ impl<'p> Bcd<'p> {
             inner_iterations: self.inner_iterations,
             moves: self.moves,
         };
-        if !(self.sequential && be.bcd_sequential(&visit, MOVED, deadline)?) {
+        let sequential = self.sequential && be.bcd_sequential(&visit, MOVED, deadline)?;
+        if !sequential {
             for c in 0..be.num_colors() {
                 if deadline.is_some_and(|d| Instant::now() >= d) {
                     break;
@@ -99,8 +100,9 @@ impl<'p> Bcd<'p> {
             }
             be.max_move(MOVED)?;
         }
-        // the CPU runs each call at once, so the sweep is done here; a GPU
-        // has no sequential sweep and no reordering, and its time is the step's
+        // a sequential sweep (CPU) has run when the call returns; coloured
+        // sweeps may only be recorded (GPU) until the evaluation's flush, so
+        // their optimisation time is left to the caller: the whole step
         let t3 = Instant::now();
         self.sweeps += 1;
         let (mut reorder_seconds, mut reorderings) = (0.0, 0);
@@ -118,7 +120,7 @@ impl<'p> Bcd<'p> {
         }
         let sweep = finish(be, self.g)?;
         Ok(Sweep {
-            optimise_seconds: Some((t3 - t2).as_secs_f64()),
+            optimise_seconds: sequential.then(|| (t3 - t2).as_secs_f64()),
             reorder_seconds,
             reorderings,
             ..sweep

@@ -198,8 +198,10 @@ pub struct Info {
     /// Wall time of the iterations (problem and solver setup excluded): the
     /// reordering paper's total time TT.
     pub seconds: f64,
-    /// Time in the optimisation proper, the sweeps or steps without the
-    /// reorderings and the evaluations between them (the paper's COT).
+    /// Time in the optimisation proper (the paper's COT): for the sequential
+    /// BCD sweep, the sweeps without the reorderings and the evaluations
+    /// between them; for the other methods, whose steps evaluate as they go,
+    /// the whole steps.
     pub optimise_seconds: f64,
     /// Time spent ordering the sweep list (the paper's RT; 0 without a paper scheme).
     pub reorder_seconds: f64,
