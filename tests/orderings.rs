@@ -453,3 +453,46 @@ fn the_order_study_writes_a_ranked_table_and_csv_for_every_scheme_and_strategy()
     let md = std::fs::read_to_string(out.join("order-study.md")).unwrap();
     assert!(md.contains("## every 5") && md.contains("| -D-GRVM"), "{md}");
 }
+
+#[test]
+fn the_cli_stops_at_the_target_objective_with_a_reordered_sweep() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("h.vtk");
+    let (out, hist) = (dir.path().join("o.vtk"), dir.path().join("h.csv"));
+    let (i, o, h) = (input.to_str().unwrap(), out.to_str().unwrap(), hist.to_str().unwrap());
+    let (ok, text) = meshsmooth(&["generate", "horseshoe", "--kind", "sqiv", "--free", "150", "-o", i]);
+    assert!(ok, "{text}");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "smooth",
+            i,
+            "-o",
+            o,
+            "-q",
+            "--method",
+            "bcd",
+            "--device",
+            "cpu",
+            "--history",
+            h,
+        ];
+        args.extend_from_slice(extra);
+        let (ok, text) = meshsmooth(&args);
+        assert!(ok, "{text}");
+        let csv = std::fs::read_to_string(&hist).unwrap();
+        let f: Vec<f64> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+            .collect();
+        std::fs::remove_file(&hist).unwrap();
+        std::fs::remove_file(&out).unwrap();
+        (f, text)
+    };
+    let (free, _) = run(&["--order", "d-gavm", "--max-iter", "40"]);
+    let target = free[free.len() - 1] + 0.3 * (free[0] - free[free.len() - 1]);
+    let t = format!("{target}");
+    let (f, text) = run(&["--order", "d-gavm", "--reorder-every", "1", "--target-objective", &t]);
+    assert!(text.contains("target objective reached"), "{text}");
+    assert!(f[f.len() - 1] <= target && f[f.len() - 2] > target, "{f:?} vs {target}");
+}
