@@ -496,3 +496,25 @@ fn the_cli_stops_at_the_target_objective_with_a_reordered_sweep() {
     assert!(text.contains("target objective reached"), "{text}");
     assert!(f[f.len() - 1] <= target && f[f.len() - 2] > target, "{f:?} vs {target}");
 }
+
+#[test]
+fn red_black_is_the_checkerboard_on_a_structured_grid() {
+    // 7 x 5 vertices, row-major: vertex j * 7 + i is red when i + j is even
+    let m = generate::quad_grid(6, 4, [6.0, 4.0]);
+    let p = Problem::with_options(&m, &with_order(Ordering::RedBlack, 0)).unwrap();
+    let red = |v: u32| ((v % 7) + (v / 7)) % 2 == 0;
+    let reds = (0..35).filter(|&v| red(v)).count();
+    assert_eq!(reds, 18);
+    assert!(p.order[..reds].iter().all(|&v| red(v)), "{:?}", p.order);
+    assert!(p.order[reds..].iter().all(|&v| !red(v)), "{:?}", p.order);
+    // each colour in input order
+    assert!(p.order[..reds].windows(2).all(|w| w[0] < w[1]));
+    assert!(p.order[reds..].windows(2).all(|w| w[0] < w[1]));
+    // and it is a proper 2-colouring: no edge joins two vertices of one colour
+    for e in 0..m.num_elements() {
+        let v = m.element(e);
+        for k in 0..4 {
+            assert_ne!(red(v[k]), red(v[(k + 1) % 4]), "element {e}");
+        }
+    }
+}
