@@ -502,7 +502,7 @@ fn red_black_is_the_checkerboard_on_a_structured_grid() {
     // 7 x 5 vertices, row-major: vertex j * 7 + i is red when i + j is even
     let m = generate::quad_grid(6, 4, [6.0, 4.0]);
     let p = Problem::with_options(&m, &with_order(Ordering::RedBlack, 0)).unwrap();
-    let red = |v: u32| ((v % 7) + (v / 7)) % 2 == 0;
+    let red = |v: u32| ((v % 7) + (v / 7)).is_multiple_of(2);
     let reds = (0..35).filter(|&v| red(v)).count();
     assert_eq!(reds, 18);
     assert!(p.order[..reds].iter().all(|&v| red(v)), "{:?}", p.order);
