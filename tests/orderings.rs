@@ -406,8 +406,24 @@ fn the_cli_takes_paper_names_in_any_case_and_refuses_unknown_ones() {
     assert!(!ok && text.contains("--inner-iterations must be at least 1"), "{text}");
     let (ok, text) = meshsmooth(&["compare", i, "--order", "bogus"]);
     assert!(!ok && text.contains("unknown ordering 'bogus'"), "{text}");
-    let (ok, text) = meshsmooth(&["compare", i, "--order=-d-lng", "--methods", "bcd", "--max-iter", "3"]);
+    let (ok, text) = meshsmooth(&[
+        "compare",
+        i,
+        "--order=-d-lng",
+        "--reorder-every",
+        "1",
+        "--methods",
+        "bcd,newton",
+        "--max-iter",
+        "3",
+    ]);
     assert!(ok, "{text}");
+    // only the sequential sweep reorders: initially and after each of 3 sweeps
+    assert!(text.contains("bcd: order reverse-d-lng: COT"), "{text}");
+    assert!(
+        text.contains("4 reordering(s)") && !text.contains("newton: order"),
+        "{text}"
+    );
 }
 
 #[test]

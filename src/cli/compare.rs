@@ -79,6 +79,12 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
                 r.paper_memory_bytes.map_or("-".into(), mib)
             );
         }
+        for r in cmp.runs.iter().filter(|r| r.reorderings > 0) {
+            println!(
+                "{}: order {}: COT {:.3} s, RT {:.3} s, TT {:.3} s; {} reordering(s)",
+                r.method, options.ordering, r.optimise_seconds, r.reorder_seconds, r.seconds, r.reorderings
+            );
+        }
         for c in &cmp.crossovers {
             println!(
                 "{} passes {} at {:.3} s, {:.1}% of the way to the best objective",
