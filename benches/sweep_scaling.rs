@@ -78,7 +78,7 @@ fn main() {
         let ls = Default::default();
         let mut x = x0.clone();
         let seq = time(reps, || {
-            bcd::sweep(&p, &mut x, &ls, None);
+            bcd::sweep(&p, &mut x, &ls, &Default::default(), None, None);
         });
         let mut x = x0.clone();
         let col = time(reps, || {

@@ -115,6 +115,19 @@ pub struct EvalSlots {
     pub min_det: Option<Slot>,
 }
 
+/// How a sequential sweep visits the free vertices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Visit<'a> {
+    /// Free-vertex indices (into `Problem::free_vertices`) in visiting
+    /// order; `None`: all, ascending.
+    pub order: Option<&'a [u32]>,
+    /// Safeguarded Newton steps per visit (0 counts as 1).
+    pub inner_iterations: usize,
+    /// Where to write each visited vertex's displacement over its visit
+    /// (for the movement-based reorderings); vertices not visited keep theirs.
+    pub moves: Option<Vector>,
+}
+
 /// True when a guard slot lets an update run: NaN-safe, so a NaN guard skips.
 #[inline]
 pub fn guard_passes(slots: &[f64], guard: Option<Slot>) -> bool {
@@ -152,11 +165,16 @@ pub trait Backend {
     fn bcd_color(&mut self, color: usize) -> Result<()>;
     /// The largest squared vertex move of the colours swept since the last call.
     fn max_move(&mut self, out: Slot) -> Result<()>;
-    /// A sweep over the free vertices one at a time in locality order, if the
+    /// Whether `bcd_sequential` runs (the CPU) or declines (the GPU): a sweep
+    /// order is only worth computing where there is a sequential sweep.
+    fn has_sequential_sweep(&self) -> bool {
+        false
+    }
+    /// A sweep over the free vertices one at a time, as `visit` says, if the
     /// backend has one (`Ok(false)` otherwise: only the CPU has, the GPU runs
     /// colours). Stops early, in a valid state, at `deadline`; the largest
     /// squared move goes to `out`.
-    fn bcd_sequential(&mut self, _out: Slot, _deadline: Option<Instant>) -> Result<bool> {
+    fn bcd_sequential(&mut self, _visit: &Visit, _out: Slot, _deadline: Option<Instant>) -> Result<bool> {
         Ok(false)
     }
 

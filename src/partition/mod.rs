@@ -283,6 +283,9 @@ fn restrict(
         colors,
         plane: p.plane,
         sliding: None,
+        // the sequential sweep it orders does not run on a part
+        sweep_order: None,
+        order_seed: p.order_seed,
         setup_time: Duration::ZERO,
     }
 }

@@ -50,8 +50,12 @@ pub struct ProblemOptions<'a> {
     /// (required by `tmp`; optional for the others, which default to the ideal
     /// element of each kind).
     pub reference: Option<&'a Mesh>,
-    /// The vertex order the problem is built (and swept) in.
+    /// The vertex order the problem is built (and swept) in; a paper scheme
+    /// ([`Ordering::Sweep`]) keeps the input numbering and orders the
+    /// sequential sweep's list instead.
     pub ordering: Ordering,
+    /// Seed of the random scheme (R, -R).
+    pub order_seed: u64,
     /// Fixed boundary (the default) or sliding on it.
     pub boundary: Boundary,
 }
@@ -96,6 +100,12 @@ pub struct Problem {
     /// not sent to other ranks: a partitioned run refuses sliding.
     #[serde(skip)]
     pub sliding: Option<Sliding>,
+    /// The paper scheme that orders the sequential sweep's list (`None`:
+    /// the sweep follows the numbering).
+    #[serde(skip)]
+    pub sweep_order: Option<crate::mesh::sweep_order::SweepOrder>,
+    /// Seed of the random schemes.
+    pub order_seed: u64,
     /// Time spent building this problem.
     pub setup_time: Duration,
 }
@@ -149,6 +159,8 @@ impl Problem {
             colors,
             plane,
             sliding,
+            sweep_order: opts.ordering.sweep(),
+            order_seed: opts.order_seed,
             setup_time: start.elapsed(),
         })
     }

@@ -260,7 +260,7 @@ fn run_part(
     let start = Instant::now();
     let (result, comm) = match DistributedBackend::new(part, world, &params.bcd.line_search) {
         Ok(mut be) => {
-            let r = run_scaled(&mut be, scale, &mut x, &opts, progress);
+            let r = run_scaled(&mut be, &part.problem, scale, &mut x, &opts, progress);
             (r, be.comm_stats())
         }
         Err(e) => (Err(e), CommStats::default()),

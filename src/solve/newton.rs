@@ -125,6 +125,7 @@ impl Newton {
             grad_norm: gnorm,
             max_move_sq: 0.0,
             cg_iterations: 0,
+            ..Default::default()
         };
         let g0 = *self.g0.get_or_insert(gnorm);
         let rtol = self.params.forcing_max.min((gnorm / g0).sqrt());
@@ -176,6 +177,7 @@ impl Newton {
                     grad_norm: self.current.1,
                     max_move_sq: alpha * alpha * s[DMAX.0 as usize],
                     cg_iterations: info.iterations,
+                    ..Default::default()
                 });
             }
             alpha *= ls.beta;

@@ -177,6 +177,7 @@ impl Nlcg {
                 grad_norm: gg_new.sqrt(),
                 max_move_sq: (step.alpha * pmax).powi(2),
                 cg_iterations: 0,
+                ..Default::default()
             });
         }
         Ok(Sweep {
@@ -184,6 +185,7 @@ impl Nlcg {
             grad_norm: gg.sqrt(),
             max_move_sq: 0.0,
             cg_iterations: 0,
+            ..Default::default()
         })
     }
 }

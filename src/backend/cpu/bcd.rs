@@ -95,7 +95,14 @@ fn s_with(rest: &Mat3, b: &Vec3, y: &Vec3) -> Mat3 {
 #[inline]
 pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &mut Patch) -> Option<Vec3> {
     patch.load(p, x, v);
-    let (f0, g, h) = patch.gradient_hessian(p, &x[v])?;
+    newton_step_from(p, v, &x[v], ls, patch)
+}
+
+/// The step of [`newton_step`] from `at`, over a patch already loaded around
+/// `v` (it holds no term of `v`'s own position, so it stays valid as `v` moves).
+#[inline]
+pub fn newton_step_from(p: &Problem, v: usize, at: &Vec3, ls: &LineSearch, patch: &Patch) -> Option<Vec3> {
+    let (f0, g, h) = patch.gradient_hessian(p, at)?;
     // a sliding vertex: the step in its tangent space, each trial put back on the boundary
     let slide = p.sliding.as_ref().filter(|s| s.slides(v));
     let (g, h) = match slide {
@@ -116,7 +123,7 @@ pub fn newton_step(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, patch: &m
     }
     let mut alpha = 1.0;
     for _ in 0..=ls.max_backtracks {
-        let mut trial = [x[v][0] + alpha * d[0], x[v][1] + alpha * d[1], x[v][2] + alpha * d[2]];
+        let mut trial = [at[0] + alpha * d[0], at[1] + alpha * d[1], at[2] + alpha * d[2]];
         if let Some(s) = slide {
             trial = project_vertex(s, v, &trial);
         }
@@ -134,20 +141,48 @@ fn dist_sq(a: &Vec3, b: &Vec3) -> f64 {
     (0..3).map(|i| (a[i] - b[i]).powi(2)).sum()
 }
 
-/// One sweep over all free vertices; stops early (leaving a valid state) at
-/// `deadline`. Returns the largest squared displacement.
-pub fn sweep(p: &Problem, x: &mut [Vec3], ls: &LineSearch, deadline: Option<Instant>) -> f64 {
+/// Up to `inner` Newton steps for vertex `v` (fewer when one finds no
+/// decrease): its position after the visit.
+#[inline]
+pub fn visit(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, inner: usize, patch: &mut Patch) -> Vec3 {
+    patch.load(p, x, v);
+    let mut at = x[v];
+    for _ in 0..inner.max(1) {
+        match newton_step_from(p, v, &at, ls, patch) {
+            Some(y) => at = y,
+            None => break,
+        }
+    }
+    at
+}
+
+/// One sweep over the free vertices in `visit`'s order with its inner
+/// iterations, writing each displacement to `moves` (indexed like
+/// `free_vertices`); stops early (leaving a valid state) at `deadline`.
+/// Returns the largest squared displacement.
+pub fn sweep(
+    p: &Problem,
+    x: &mut [Vec3],
+    ls: &LineSearch,
+    visit_as: &crate::backend::Visit,
+    mut moves: Option<&mut Vec<Vec3>>,
+    deadline: Option<Instant>,
+) -> f64 {
     let mut max_sq: f64 = 0.0;
     let mut patch = Patch::default();
-    for (i, &v) in p.free_vertices.iter().enumerate() {
+    let n = visit_as.order.map_or(p.free_vertices.len(), |o| o.len());
+    for i in 0..n {
         if i % 4096 == 4095 && deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        let v = v as usize;
-        if let Some(y) = newton_step(p, x, v, ls, &mut patch) {
-            max_sq = max_sq.max(dist_sq(&x[v], &y));
-            x[v] = y;
+        let f = visit_as.order.map_or(i, |o| o[i] as usize);
+        let v = p.free_vertices[f] as usize;
+        let y = visit(p, x, v, ls, visit_as.inner_iterations, &mut patch);
+        if let Some(m) = moves.as_deref_mut() {
+            m[f] = [y[0] - x[v][0], y[1] - x[v][1], y[2] - x[v][2]];
         }
+        max_sq = max_sq.max(dist_sq(&x[v], &y));
+        x[v] = y;
     }
     max_sq
 }

@@ -22,7 +22,7 @@ pub mod project_boundary;
 pub mod reduce;
 pub mod set_slot;
 
-use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, guard_passes};
+use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, Visit, guard_passes};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
@@ -269,8 +269,21 @@ impl Backend for CpuBackend<'_> {
         Ok(())
     }
 
-    fn bcd_sequential(&mut self, out: Slot, deadline: Option<Instant>) -> Result<bool> {
-        let m = bcd::sweep(self.problem()?, &mut self.x, &self.ls, deadline);
+    fn has_sequential_sweep(&self) -> bool {
+        self.p.is_some()
+    }
+
+    fn bcd_sequential(&mut self, visit: &Visit, out: Slot, deadline: Option<Instant>) -> Result<bool> {
+        let p = self.problem()?;
+        if let Some(order) = visit.order
+            && order.iter().any(|&i| i as usize >= self.n_free)
+        {
+            return Err(Error::InvalidArgument(
+                "a sweep order entry is not a free vertex".into(),
+            ));
+        }
+        let moves = visit.moves.map(|v| &mut self.vectors[v.0 as usize]);
+        let m = bcd::sweep(p, &mut self.x, &self.ls, visit, moves, deadline);
         self.set(out, m);
         Ok(true)
     }
