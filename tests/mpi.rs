@@ -1,6 +1,7 @@
 //! Partitioned smoothing under `mpirun` gives the single-process answer: the
 //! built binary is run on 1 to 4 ranks and compared with a plain run on a
-//! generated tet box, a Gmsh mesh and a mixed tet/prism/hex mesh.
+//! generated tet box, a Gmsh mesh, a mixed tet/prism/hex mesh and a planar
+//! triangle grid.
 //!
 //! Newton matches to 1e-10 (relative) in F and in the iterate with the same
 //! iteration count: per-vertex work gives the same bits on every partition,
@@ -101,6 +102,11 @@ fn meshes(dir: &Path) -> Vec<PathBuf> {
         generate(
             &["mixed", "--cells", "4", "--layers", "2", "--perturb", "random:0.25"],
             "mixed.vtu",
+        ),
+        // planar: the parts carry the plane's frame
+        generate(
+            &["grid", "--cells", "10", "8", "--type", "tri", "--perturb", "random:0.3"],
+            "tri.vtu",
         ),
     ]
 }
