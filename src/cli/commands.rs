@@ -21,6 +21,7 @@ impl SolverArgs {
     fn params(&self) -> Result<Params> {
         let mut p = self.stop.params()?;
         p.newton.negative_curvature = self.negative_curvature;
+        p.newton.preconditioner = self.preconditioner;
         Ok(p)
     }
 }

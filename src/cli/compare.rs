@@ -23,7 +23,8 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     for out in [&a.csv, &a.plot].into_iter().flatten() {
         refuse_overwrite(&a.input, out)?;
     }
-    let params = a.stop.params()?;
+    let mut params = a.stop.params()?;
+    params.newton.preconditioner = a.preconditioner;
     let mesh = io::read(&a.input)?;
     let reference = a.objective.reference()?;
     let options = a.objective.options(reference.as_ref())?;
