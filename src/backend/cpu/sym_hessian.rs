@@ -37,6 +37,9 @@ pub struct SymBlockCsr {
     /// in an earlier product range: the transposed pass adds their B^T x_row.
     cross_offsets: Vec<u32>,
     cross: Vec<[u32; 2]>,
+    /// A planar problem: z couples to nothing (the corner model puts only a
+    /// z-z entry on the diagonal blocks), so products skip the zero entries.
+    pub planar: bool,
 }
 
 impl SymBlockCsr {
@@ -83,6 +86,7 @@ impl SymBlockCsr {
             bounds,
             cross_offsets: count,
             cross,
+            planar: false,
         }
     }
 
@@ -167,23 +171,51 @@ impl SymBlockCsr {
     /// the upper blocks and scatters their transposes into its own later rows;
     /// then a transposed pass adds the transposes that cross into later ranges.
     pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
+        if self.planar {
+            self.mul_dim::<2>(x, y)
+        } else {
+            self.mul_dim::<3>(x, y)
+        }
+    }
+
+    /// `mul` reading the leading D x D part of the off-diagonal blocks: in a
+    /// planar problem their z rows and columns are exactly zero.
+    fn mul_dim<const D: usize>(&self, x: &[Vec3], y: &mut [Vec3]) {
         let parts = split_rows(&self.bounds, y);
         parts.into_par_iter().for_each(|(start, ys)| {
             let end = start + ys.len();
             ys.iter_mut().for_each(|v| *v = [0.0; 3]);
             for i in start..end {
-                let xi = &x[i];
-                let mut acc = mv(&self.diag[i], xi);
-                for s in self.row_offsets[i] as usize..self.row_offsets[i + 1] as usize {
-                    let (b, j) = (&self.blocks[s], self.cols[s] as usize);
-                    let xj = &x[j];
-                    for r in 0..3 {
-                        acc[r] += b[r][0] * xj[0] + b[r][1] * xj[1] + b[r][2] * xj[2];
+                let xi = x[i];
+                let d = &self.diag[i];
+                let mut acc = if D == 2 {
+                    [
+                        d[0][0] * xi[0] + d[0][1] * xi[1],
+                        d[1][0] * xi[0] + d[1][1] * xi[1],
+                        d[2][2] * xi[2],
+                    ]
+                } else {
+                    mv(d, &xi)
+                };
+                let (a, b) = (self.row_offsets[i] as usize, self.row_offsets[i + 1] as usize);
+                for (blk, &j) in self.blocks[a..b].iter().zip(&self.cols[a..b]) {
+                    let j = j as usize;
+                    let xj = x[j];
+                    for r in 0..D {
+                        for c in 0..D {
+                            acc[r] += blk[r][c] * xj[c];
+                        }
                     }
                     if j < end {
+                        let mut t = [0.0; 3];
+                        for c in 0..D {
+                            for r in 0..D {
+                                t[c] += blk[r][c] * xi[r];
+                            }
+                        }
                         let yj = &mut ys[j - start];
-                        for c in 0..3 {
-                            yj[c] += b[0][c] * xi[0] + b[1][c] * xi[1] + b[2][c] * xi[2];
+                        for c in 0..D {
+                            yj[c] += t[c];
                         }
                     }
                 }
@@ -198,9 +230,11 @@ impl SymBlockCsr {
         }
         y.par_iter_mut().with_min_len(512).enumerate().for_each(|(j, yj)| {
             for e in &self.cross[self.cross_offsets[j] as usize..self.cross_offsets[j + 1] as usize] {
-                let (b, xi) = (&self.blocks[e[0] as usize], &x[e[1] as usize]);
-                for c in 0..3 {
-                    yj[c] += b[0][c] * xi[0] + b[1][c] * xi[1] + b[2][c] * xi[2];
+                let (blk, xi) = (&self.blocks[e[0] as usize], &x[e[1] as usize]);
+                for c in 0..D {
+                    for r in 0..D {
+                        yj[c] += blk[r][c] * xi[r];
+                    }
                 }
             }
         });
@@ -396,7 +430,10 @@ impl SymHessian {
         SymHessian {
             free_index,
             ranges,
-            matrix: SymBlockCsr::from_pattern(row_offsets, cols),
+            matrix: SymBlockCsr {
+                planar: p.dim == 2,
+                ..SymBlockCsr::from_pattern(row_offsets, cols)
+            },
         }
     }
 
