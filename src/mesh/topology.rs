@@ -65,9 +65,24 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
             pairs.push((vs[*b], vs[*a]));
         }
     }
-    pairs.sort_unstable();
-    pairs.dedup();
-    Csr::from_pairs(mesh.num_points(), pairs.iter().copied())
+    // bucketed by vertex, then each short list sorted: one global sort of
+    // every pair was most of a problem's setup on mid-size meshes
+    let n = mesh.num_points();
+    let raw = Csr::from_pairs(n, pairs.iter().copied());
+    drop(pairs);
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0u32);
+    let mut items = Vec::with_capacity(raw.items.len() / 2);
+    let mut row = Vec::new();
+    for v in 0..n {
+        row.clear();
+        row.extend_from_slice(raw.of(v));
+        row.sort_unstable();
+        row.dedup();
+        items.extend_from_slice(&row);
+        offsets.push(items.len() as u32);
+    }
+    Csr { offsets, items }
 }
 
 /// Vertices on a facet (face in 3D, edge in 2D) used by exactly one element.
