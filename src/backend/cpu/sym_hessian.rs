@@ -499,9 +499,11 @@ impl SymHessian {
                         if j == u32::MAX || j <= i {
                             continue;
                         }
+                        // rows hold a handful of columns: a scan beats a bisection
                         let s = ra
                             + cols[ra..rb]
-                                .binary_search(&j)
+                                .iter()
+                                .position(|&c| c == j)
                                 .expect("pattern holds every element pair");
                         add(&mut blocks[s - base], &h[a][b], scale);
                     }
