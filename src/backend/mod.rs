@@ -40,6 +40,7 @@ pub mod gpu;
 
 use crate::error::Result;
 use crate::metric::mat3::Vec3;
+use crate::solve::pcg::Preconditioner;
 use std::time::Instant;
 
 /// Scalar slots per backend.
@@ -192,9 +193,20 @@ pub trait Backend {
     fn assemble(&mut self, g: Vector) -> Result<()>;
     /// y = H x
     fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()>;
+    /// Chooses Newton's preconditioner (before `factor_precond`); block
+    /// Jacobi, the paper's, is the default and the only one every backend has.
+    fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
+        match kind {
+            Preconditioner::Jacobi => Ok(()),
+            other => Err(crate::error::Error::InvalidArgument(format!(
+                "preconditioner '{other}' has no version on {} (use jacobi)",
+                self.describe()
+            ))),
+        }
+    }
     /// Factors the diagonal blocks of the assembled Hessian.
     fn factor_precond(&mut self) -> Result<()>;
-    /// y = M^-1 x (block Jacobi).
+    /// y = M^-1 x (block Jacobi, or what `set_preconditioner` chose).
     fn precond(&mut self, x: Vector, y: Vector) -> Result<()>;
 
     /// slots[sum] = a . b; slots[max] = max_i |b_i|^2.

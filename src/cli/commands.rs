@@ -23,6 +23,7 @@ impl SolverArgs {
         let mut p = self.stop.params()?;
         p.newton.negative_curvature = self.negative_curvature;
         self.objective.sweep_params(&mut p)?;
+        p.newton.preconditioner = self.preconditioner;
         Ok(p)
     }
 }

@@ -25,6 +25,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     }
     let mut params = a.stop.params()?;
     a.objective.sweep_params(&mut params)?;
+    params.newton.preconditioner = a.preconditioner;
     let mesh = io::read(&a.input)?;
     let reference = a.objective.reference()?;
     let options = a.objective.options(reference.as_ref())?;

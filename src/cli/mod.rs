@@ -18,7 +18,7 @@ use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::Ordering;
 use meshsmooth::solve::newton::NewtonParams;
-use meshsmooth::solve::pcg::NegativeCurvature;
+use meshsmooth::solve::pcg::{NegativeCurvature, Preconditioner};
 use meshsmooth::solve::{Method, Params};
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -176,6 +176,10 @@ pub struct SolverArgs {
     /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
     #[arg(long, value_enum, default_value_t = NewtonParams::default().negative_curvature)]
     pub negative_curvature: NegativeCurvature,
+    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device) or symmetric block
+    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer).
+    #[arg(long, value_enum, default_value_t = NewtonParams::default().preconditioner)]
+    pub preconditioner: Preconditioner,
 }
 
 /// Cells of a generated box.
@@ -282,6 +286,10 @@ pub struct CompareArgs {
     pub gpu: GpuArgs,
     #[command(flatten)]
     pub stop: StopArgs,
+    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device) or symmetric block
+    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer).
+    #[arg(long, value_enum, default_value_t = NewtonParams::default().preconditioner)]
+    pub preconditioner: Preconditioner,
     /// Write the merged histories as CSV.
     #[arg(long, value_name = "FILE.csv")]
     pub csv: Option<PathBuf>,

@@ -5,7 +5,7 @@
 //! rejected. Written once over `Backend`.
 
 use super::line_search::LineSearch;
-use super::pcg::{FIRST_FREE_SLOT, NegativeCurvature, PcgInfo, PcgParams, PcgWork, pcg};
+use super::pcg::{FIRST_FREE_SLOT, NegativeCurvature, PcgInfo, PcgParams, PcgWork, Preconditioner, pcg};
 use super::{Sweep, accepted_step_inverted};
 use crate::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
 use crate::error::Result;
@@ -24,6 +24,8 @@ pub struct NewtonParams {
     pub negative_curvature: NegativeCurvature,
     /// The global Armijo line search.
     pub line_search: LineSearch,
+    /// CG's preconditioner.
+    pub preconditioner: Preconditioner,
 }
 
 impl Default for NewtonParams {
@@ -33,6 +35,7 @@ impl Default for NewtonParams {
             forcing_max: 0.5,
             negative_curvature: NegativeCurvature::Iterate,
             line_search: LineSearch::default(),
+            preconditioner: Preconditioner::Jacobi,
         }
     }
 }
@@ -75,6 +78,7 @@ impl Newton {
     /// assembles at the current positions. Fails if they are infeasible.
     pub fn new<B: Backend + ?Sized>(be: &mut B, params: NewtonParams) -> Result<Newton> {
         let start = Instant::now();
+        be.set_preconditioner(params.preconditioner)?;
         let hessian_bytes = be.prepare_hessian()?;
         let (g, rhs, d) = (be.vector()?, be.vector()?, be.vector()?);
         let work = PcgWork::new(be)?;

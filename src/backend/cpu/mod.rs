@@ -21,24 +21,26 @@ pub mod objective;
 pub mod project_boundary;
 pub mod reduce;
 pub mod set_slot;
+pub mod sym_hessian;
 
 use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, Visit, guard_passes};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use crate::solve::line_search::LineSearch;
+use crate::solve::pcg::Preconditioner;
 use block_jacobi::BlockJacobi;
 use bsr_spmv::BlockCsr;
-use hessian_assemble::HessianPattern;
 use rayon::prelude::*;
 use std::time::Instant;
+use sym_hessian::{SymBlockCsr, SymHessian};
 
 pub struct CpuBackend<'p> {
     /// `None` for a bare linear system (`CpuBackend::linear`).
     p: Option<&'p Problem>,
     n_free: usize,
     /// The matrix of a bare linear system.
-    system: Option<BlockCsr>,
+    system: Option<SymBlockCsr>,
     ls: LineSearch,
     x: Vec<Vec3>,
     trial: Vec<Vec3>,
@@ -46,8 +48,9 @@ pub struct CpuBackend<'p> {
     slots: [f64; N_SLOTS],
     /// Largest squared move since the last `max_move`.
     moved: f64,
-    hessian: Option<HessianPattern>,
+    hessian: Option<SymHessian>,
     precond: Option<BlockJacobi>,
+    preconditioner: Preconditioner,
 }
 
 impl<'p> CpuBackend<'p> {
@@ -73,6 +76,7 @@ impl<'p> CpuBackend<'p> {
             moved: 0.0,
             hessian: None,
             precond: None,
+            preconditioner: Preconditioner::Jacobi,
         })
     }
 
@@ -83,7 +87,7 @@ impl<'p> CpuBackend<'p> {
         CpuBackend {
             p: None,
             n_free: matrix.rows(),
-            system: Some(matrix),
+            system: Some(SymBlockCsr::from_full(&matrix)),
             ls: LineSearch::default(),
             x: Vec::new(),
             trial: Vec::new(),
@@ -92,6 +96,7 @@ impl<'p> CpuBackend<'p> {
             moved: 0.0,
             hessian: None,
             precond: None,
+            preconditioner: Preconditioner::Jacobi,
         }
     }
 
@@ -100,7 +105,7 @@ impl<'p> CpuBackend<'p> {
             .ok_or_else(|| Error::InvalidArgument("a linear-system backend has no mesh".into()))
     }
 
-    fn matrix(&self) -> Result<&BlockCsr> {
+    fn matrix(&self) -> Result<&SymBlockCsr> {
         match (&self.hessian, &self.system) {
             (Some(h), _) => Ok(&h.matrix),
             (None, Some(m)) => Ok(m),
@@ -114,7 +119,7 @@ impl<'p> CpuBackend<'p> {
     }
 
     /// The assembled Hessian (after `assemble`), for tests.
-    pub fn hessian(&self) -> Option<&HessianPattern> {
+    pub fn hessian(&self) -> Option<&SymHessian> {
         self.hessian.as_ref()
     }
 
@@ -295,8 +300,8 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {
-        let pattern = HessianPattern::new(self.problem()?);
-        let bytes = pattern.bytes() + 48 * pattern.free_vertex.len();
+        let pattern = SymHessian::new(self.problem()?);
+        let bytes = pattern.bytes() + 48 * pattern.matrix.rows();
         self.hessian = Some(pattern);
         Ok(bytes)
     }
@@ -313,7 +318,7 @@ impl Backend for CpuBackend<'_> {
         }
         if let Some(s) = &p.sliding {
             constrain::constrain(&s.projector, &p.free_vertices, grad);
-            constrain_blocks::constrain_blocks(&s.projector, &p.free_vertices, &mut h.matrix);
+            h.matrix.constrain(&s.projector, &p.free_vertices);
         }
         Ok(())
     }
@@ -333,9 +338,14 @@ impl Backend for CpuBackend<'_> {
         result
     }
 
+    fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
+        self.preconditioner = kind;
+        Ok(())
+    }
+
     fn factor_precond(&mut self) -> Result<()> {
         let m = self.matrix()?;
-        self.precond = Some(BlockJacobi::new(m.diag.par_iter().map(|&s| m.blocks[s as usize])));
+        self.precond = Some(BlockJacobi::new(m.diag.par_iter().copied()));
         Ok(())
     }
 
@@ -344,10 +354,23 @@ impl Backend for CpuBackend<'_> {
             .precond
             .take()
             .ok_or_else(|| Error::InvalidArgument("precond before factor_precond".into()))?;
+        let kind = self.preconditioner;
+        let (h, sys) = (self.hessian.take(), self.system.take());
         let (xs, ys) = self.pair(x, y);
-        m.apply(xs, ys);
+        let result = match (kind, h.as_ref().map(|h| &h.matrix).or(sys.as_ref())) {
+            (Preconditioner::Jacobi, _) => {
+                m.apply(xs, ys);
+                Ok(())
+            }
+            (Preconditioner::Sgs, Some(a)) => {
+                a.sgs(&m, xs, ys);
+                Ok(())
+            }
+            (Preconditioner::Sgs, None) => Err(Error::InvalidArgument("precond before assemble".into())),
+        };
+        (self.hessian, self.system) = (h, sys);
         self.precond = Some(m);
-        Ok(())
+        result
     }
 
     fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
