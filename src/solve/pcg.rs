@@ -40,7 +40,7 @@ pub enum NegativeCurvature {
 }
 
 /// Newton's preconditioner for CG.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 pub enum Preconditioner {
     /// Block Jacobi: an LDL^T of each 3x3 diagonal block (section 3.2 of the
     /// Newton paper); every backend has it.
