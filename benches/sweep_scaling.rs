@@ -164,7 +164,7 @@ fn main() {
             row.push_str(&format!(
                 " {} |",
                 rate(time(reps, || {
-                    bcd::sweep(&p, &mut x, &ls, None);
+                    bcd::sweep(&p, &mut x, &ls, &Default::default(), None, None);
                 }))
             ));
         }

@@ -29,19 +29,19 @@ fn sweeps(c: &mut Criterion) {
     group.bench_function("bcd_sweep_first", |b| {
         b.iter_batched(
             || x0.clone(),
-            |mut x| bcd::sweep(&p, &mut x, &Default::default(), None),
+            |mut x| bcd::sweep(&p, &mut x, &Default::default(), &Default::default(), None, None),
             BatchSize::LargeInput,
         )
     });
     // a sweep near the optimum, where most full Newton steps are accepted
     let mut near = x0.clone();
     for _ in 0..10 {
-        bcd::sweep(&p, &mut near, &Default::default(), None);
+        bcd::sweep(&p, &mut near, &Default::default(), &Default::default(), None, None);
     }
     group.bench_function("bcd_sweep_near_optimum", |b| {
         b.iter_batched(
             || near.clone(),
-            |mut x| bcd::sweep(&p, &mut x, &Default::default(), None),
+            |mut x| bcd::sweep(&p, &mut x, &Default::default(), &Default::default(), None, None),
             BatchSize::LargeInput,
         )
     });

@@ -11,6 +11,8 @@ pub mod io;
 pub mod mesh;
 pub mod metric;
 pub mod metric_report;
+pub mod order_study;
+pub mod partition;
 pub use backend::cpu::objective;
 pub mod plot;
 pub mod problem;

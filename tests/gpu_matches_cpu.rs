@@ -161,7 +161,10 @@ fn sweep_matches(precision: Precision, tol_edge: f64, tol_rel: f64) {
     let ls = Default::default();
     let mut gpu = GpuBackend::new(&ctx, &p, &x0, &ls).unwrap();
     let mut cpu = CpuBackend::new(&p, &x0, &ls).unwrap();
-    let (mut gb, mut cb) = (Bcd::new(&mut gpu, false).unwrap(), Bcd::new(&mut cpu, false).unwrap());
+    let (mut gb, mut cb) = (
+        Bcd::new(&mut gpu, &p, false, &Default::default()).unwrap(),
+        Bcd::new(&mut cpu, &p, false, &Default::default()).unwrap(),
+    );
     let (f0, g0) = gb.start(&mut gpu).unwrap().unwrap();
     let (cf0, cg0) = cb.start(&mut cpu).unwrap().unwrap();
     assert!((f0 - cf0).abs() <= tol_rel * cf0, "F {f0} vs {cf0}");

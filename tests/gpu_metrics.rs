@@ -43,7 +43,7 @@ fn every_case(precision: Precision, tol_rel: f64, tol_edge: Option<f64>) {
             let x0 = p.gather(&mesh.points);
             let ls = Default::default();
             let mut gpu = GpuBackend::new(&ctx, &p, &x0, &ls).unwrap();
-            let mut gb = Bcd::new(&mut gpu, false).unwrap();
+            let mut gb = Bcd::new(&mut gpu, &p, false, &Default::default()).unwrap();
             let (cf, cg) = objective::gradient(&p, &x0).unwrap();
             let cg = objective::norm(&cg);
             let (f, g) = gb.start(&mut gpu).unwrap().expect("feasible start");
@@ -58,7 +58,7 @@ fn every_case(precision: Precision, tol_rel: f64, tol_edge: Option<f64>) {
                 continue;
             };
             let mut cpu = CpuBackend::new(&p, &x0, &ls).unwrap();
-            let mut cb = Bcd::new(&mut cpu, false).unwrap();
+            let mut cb = Bcd::new(&mut cpu, &p, false, &Default::default()).unwrap();
             cb.step(&mut cpu, None).unwrap();
             gb.step(&mut gpu, None).unwrap();
             let (gx, cx) = (gpu.download().unwrap(), cpu.download().unwrap());

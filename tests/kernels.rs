@@ -11,6 +11,9 @@ use common::{KINDS, context, meshes, problem, rel_diff};
 
 use meshsmooth::ElementKind;
 use meshsmooth::backend::cpu::CpuBackend;
+use meshsmooth::backend::cpu::bsr_spmv::BlockCsr;
+use meshsmooth::backend::cpu::constrain_blocks::constrain_blocks;
+use meshsmooth::backend::cpu::hessian_assemble::HessianPattern;
 use meshsmooth::backend::cpu::project_boundary::project_vertex;
 use meshsmooth::backend::gpu::{GpuBackend, GpuContext, Precision};
 use meshsmooth::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
@@ -300,10 +303,32 @@ fn check_hessian_assemble(pair: &mut Pair, c: &Case, tol: f64) {
     assert!(e <= tol, "{}: assembled gradient differs by {e:.1e}", c.name);
 }
 
+/// The GPU kernels' CPU twins in full storage (`hessian_assemble`,
+/// `constrain_blocks`): the reference, since the CPU backend's Newton keeps
+/// only the upper triangle. Its upper blocks must equal the twin's.
+fn twin_hessian(pair: &CpuBackend, c: &Case) -> BlockCsr {
+    let mut pat = HessianPattern::new(&c.p);
+    let mut g = vec![[0.0; 3]; c.p.free_vertices.len()];
+    assert!(pat.assemble(&c.p, &c.x, &mut g));
+    if let Some(s) = &c.p.sliding {
+        constrain_blocks(&s.projector, &c.p.free_vertices, &mut pat.matrix);
+    }
+    let sym = &pair.hessian().unwrap().matrix;
+    let full = sym.to_full();
+    assert_eq!(full.cols, pat.matrix.cols, "{}: patterns differ", c.name);
+    let e = rel_diff(
+        &full.blocks.iter().flatten().copied().collect::<Vec<_>>(),
+        &pat.matrix.blocks.iter().flatten().copied().collect::<Vec<_>>(),
+    );
+    assert!(e <= 1e-14, "{}: upper storage differs from the twin by {e:.1e}", c.name);
+    pat.matrix
+}
+
 fn check_hessian_gather(pair: &mut Pair, c: &Case, tol: f64) {
     assembled(pair, c);
     let gb = pair.gpu.hessian_blocks().unwrap();
-    let cb = &pair.cpu.hessian().unwrap().matrix.blocks;
+    let twin = twin_hessian(&pair.cpu, c);
+    let cb = &twin.blocks;
     assert_eq!(gb.len(), cb.len());
     let flat = |b: &[[[f64; 3]; 3]]| -> Vec<Vec3> { b.iter().flatten().copied().collect() };
     let e = rel_diff(&flat(&gb), &flat(cb));
@@ -313,9 +338,18 @@ fn check_hessian_gather(pair: &mut Pair, c: &Case, tol: f64) {
 fn check_bsr_spmv(pair: &mut Pair, c: &Case, tol: f64) {
     assembled(pair, c);
     let n = c.p.free_vertices.len();
-    let v = pair.vectors(&[random_vec(n, 2), vec![[0.0; 3]; n]]);
+    let u = random_vec(n, 2);
+    let v = pair.vectors(&[u.clone(), vec![[0.0; 3]; n]]);
     pair.both(|be| be.hess_mul(v[0], v[1]).unwrap());
-    let (gy, cy) = pair.read(v[1]);
+    let (gy, sy) = pair.read(v[1]);
+    let mut cy = vec![[0.0; 3]; n];
+    twin_hessian(&pair.cpu, c).mul(&u, &mut cy);
+    let e = rel_diff(&sy, &cy);
+    assert!(
+        e <= 1e-13,
+        "{}: symmetric H u differs from the twin's by {e:.1e}",
+        c.name
+    );
     let e = rel_diff(&gy, &cy);
     assert!(e <= tol, "{}: H u differs by {e:.1e}", c.name);
 }

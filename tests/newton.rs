@@ -7,9 +7,10 @@ use meshsmooth::backend::Backend;
 use meshsmooth::backend::cpu::CpuBackend;
 use meshsmooth::backend::cpu::bsr_spmv::BlockCsr;
 use meshsmooth::backend::cpu::hessian_assemble::HessianPattern;
+use meshsmooth::backend::cpu::sym_hessian::{SymBlockCsr, SymHessian};
 use meshsmooth::objective;
 use meshsmooth::problem::Problem;
-use meshsmooth::solve::pcg::{NegativeCurvature, PcgInfo, PcgParams, PcgStop, PcgWork, pcg};
+use meshsmooth::solve::pcg::{NegativeCurvature, PcgInfo, PcgParams, PcgStop, PcgWork, Preconditioner, pcg};
 use meshsmooth::solve::{self, Method, Params, StopReason};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -267,4 +268,233 @@ fn newton_and_bcd_reach_the_same_vertex_positions() {
     for w in na.history.records.windows(2) {
         assert!(w[1].objective <= w[0].objective);
     }
+}
+
+/// A random symmetric block matrix with a random sparse pattern (diagonally
+/// heavy, like a Hessian), in full storage.
+fn random_sparse_symmetric(n: usize, per_row: usize, rng: &mut ChaCha8Rng) -> BlockCsr {
+    let mut rows: Vec<Vec<(u32, [[f64; 3]; 3])>> = vec![Vec::new(); n];
+    for i in 0..n {
+        let mut d = [[0.0; 3]; 3];
+        for r in 0..3 {
+            for c in 0..=r {
+                let v = rng.random_range(-1.0..1.0);
+                d[r][c] = v;
+                d[c][r] = v;
+            }
+            d[r][r] += 4.0 * per_row as f64;
+        }
+        rows[i].push((i as u32, d));
+        for _ in 0..per_row / 2 {
+            // mostly near the diagonal, sometimes far (across product ranges)
+            let j = if rng.random_range(0..4) == 0 {
+                rng.random_range(0..n)
+            } else {
+                (i + rng.random_range(1..40)).min(n - 1)
+            };
+            if j == i || rows[i].iter().any(|e| e.0 as usize == j) {
+                continue;
+            }
+            let b: [[f64; 3]; 3] = [0; 3].map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0)));
+            let bt = [0, 1, 2].map(|r| [0, 1, 2].map(|c| b[c][r]));
+            rows[i].push((j as u32, b));
+            rows[j].push((i as u32, bt));
+        }
+    }
+    let mut m = BlockCsr::default();
+    m.row_offsets.push(0);
+    for (i, mut row) in rows.into_iter().enumerate() {
+        row.sort_by_key(|e| e.0);
+        for (j, b) in row {
+            if j as usize == i {
+                m.diag.push(m.cols.len() as u32);
+            }
+            m.cols.push(j);
+            m.blocks.push(b);
+        }
+        m.row_offsets.push(m.cols.len() as u32);
+    }
+    m
+}
+
+fn rel_err(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let scale = b.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = a
+        .iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    worst / scale
+}
+
+fn with_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+#[test]
+fn symmetric_product_equals_the_full_product_and_ignores_the_thread_count() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    // 9000 rows: several product ranges, so the transposed pass has work
+    for (n, per_row) in [(1, 0), (7, 4), (300, 10), (9000, 14)] {
+        let full = random_sparse_symmetric(n, per_row, &mut rng);
+        let sym = SymBlockCsr::from_full(&full);
+        assert_eq!(sym.to_full().cols, full.cols);
+        let x: Vec<Vec3> = (0..n).map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0))).collect();
+        let mut want = vec![[0.0; 3]; n];
+        full.mul(&x, &mut want);
+        let run = |threads| {
+            with_threads(threads, || {
+                let mut y = vec![[7.0; 3]; n];
+                sym.mul(&x, &mut y);
+                y
+            })
+        };
+        let (one, two) = (run(1), run(2));
+        assert_eq!(one, two, "n = {n}: the product depends on the thread count");
+        let e = rel_err(&one, &want);
+        assert!(e <= 1e-14, "n = {n}: symmetric product off by {e:.1e}");
+    }
+}
+
+#[test]
+fn symmetric_hessian_equals_the_full_twin_on_a_real_problem() {
+    // 18^3 cells: 4913 free rows, two product ranges
+    let mesh = perturbed_box(18, 0.3, 6);
+    let p = Problem::new(&mesh).unwrap();
+    let x = p.gather(&mesh.points);
+    let mut full = HessianPattern::new(&p);
+    let nfree = full.free_vertex.len();
+    let mut g_full = vec![[0.0; 3]; nfree];
+    assert!(full.assemble(&p, &x, &mut g_full));
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let dir: Vec<Vec3> = (0..nfree)
+        .map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0)))
+        .collect();
+    let mut want = vec![[0.0; 3]; nfree];
+    full.matrix.mul(&dir, &mut want);
+    let run = |threads| {
+        with_threads(threads, || {
+            let mut sym = SymHessian::new(&p);
+            let mut g = vec![[0.0; 3]; nfree];
+            assert!(sym.assemble(&p, &x, &mut g));
+            let mut y = vec![[0.0; 3]; nfree];
+            sym.matrix.mul(&dir, &mut y);
+            (sym, g, y)
+        })
+    };
+    let ((sym, g1, y1), (_, g2, y2)) = (run(1), run(2));
+    assert_eq!((&g1, &y1), (&g2, &y2), "results depend on the thread count");
+    assert_eq!(g1, g_full, "gradients differ");
+    // the upper blocks are the twin's, bit for bit
+    let m = &full.matrix;
+    for i in 0..nfree {
+        for s in m.row_offsets[i] as usize..m.row_offsets[i + 1] as usize {
+            let j = m.cols[s];
+            if j as usize > i {
+                assert_eq!(sym.block(i as u32, j), m.blocks[s]);
+            }
+        }
+        assert_eq!(sym.matrix.diag[i], m.blocks[m.diag[i] as usize]);
+    }
+    let e = rel_err(&y1, &want);
+    assert!(e <= 1e-14, "symmetric product off by {e:.1e}");
+}
+
+#[test]
+fn newton_memory_is_within_the_papers_formula() {
+    let mesh = perturbed_box(16, 0.3, 7);
+    let (cmp, _) = meshsmooth::compare::compare(
+        &mesh,
+        &Default::default(),
+        &[Method::Newton],
+        &solve::Options::cpu(
+            Method::Newton,
+            &Params {
+                max_iter: 1,
+                ..Params::default()
+            },
+        ),
+    )
+    .unwrap();
+    let r = &cmp.runs[0];
+    let paper = r.paper_memory_bytes.unwrap();
+    let ratio = r.memory_bytes as f64 / paper as f64;
+    assert!(
+        ratio <= 1.2,
+        "{} bytes, {ratio:.2} x the paper's {paper}",
+        r.memory_bytes
+    );
+}
+
+/// PCG with a chosen preconditioner on a CPU backend holding only `m`.
+fn run_pcg_with(m: &BlockCsr, b: &[Vec3], params: &PcgParams, pc: Preconditioner) -> (PcgInfo, Vec<Vec3>) {
+    let mut be = CpuBackend::linear(m.clone());
+    be.set_preconditioner(pc).unwrap();
+    let work = PcgWork::new(&mut be).unwrap();
+    let (bv, dv) = (be.vector().unwrap(), be.vector().unwrap());
+    be.write_vector(bv, b).unwrap();
+    be.factor_precond().unwrap();
+    let info = pcg(&mut be, &work, bv, dv, params).unwrap();
+    (info, be.read_vector(dv).unwrap())
+}
+
+#[test]
+fn pcg_with_symmetric_gauss_seidel_solves_spd_systems_in_fewer_iterations() {
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    for (n, per_row) in [(12, 6), (5000, 14)] {
+        let m = random_sparse_symmetric(n, per_row, &mut rng);
+        let b: Vec<Vec3> = (0..n).map(|_| [0; 3].map(|_| rng.random_range(-1.0..1.0))).collect();
+        let params = PcgParams {
+            max_iter: 1000,
+            rtol: 1e-10,
+            ..Default::default()
+        };
+        let (ij, dj) = run_pcg_with(&m, &b, &params, Preconditioner::Jacobi);
+        let (is, ds) = run_pcg_with(&m, &b, &params, Preconditioner::Sgs);
+        assert_eq!(is.stop, PcgStop::Converged, "{is:?}");
+        assert!(is.iterations <= ij.iterations, "SGS {is:?} vs Jacobi {ij:?}");
+        let mut r = vec![[0.0; 3]; n];
+        m.mul(&ds, &mut r);
+        let e = rel_err(&r, &b);
+        assert!(e <= 1e-8, "n = {n}: residual {e:.1e}");
+        assert!(rel_err(&ds, &dj) <= 1e-7);
+    }
+}
+
+#[test]
+fn newton_with_symmetric_gauss_seidel_reaches_the_block_jacobi_optimum() {
+    let mesh = perturbed_box(8, 0.3, 4);
+    let run = |pc| {
+        let mut params = Params {
+            tol: 1e-10,
+            ..Params::default()
+        };
+        params.newton.preconditioner = pc;
+        let mut m = mesh.clone();
+        let info = solve::smooth_mesh(
+            &mut m,
+            &Default::default(),
+            &solve::Options::cpu(Method::Newton, &params),
+            &mut |_| true,
+        )
+        .unwrap();
+        assert_eq!(info.stop, StopReason::Converged, "{pc}");
+        (info, m)
+    };
+    let (ij, mj) = run(Preconditioner::Jacobi);
+    let (is, ms) = run(Preconditioner::Sgs);
+    assert!((ij.objective - is.objective).abs() <= 1e-8 * ij.objective);
+    let p = Problem::new(&mesh).unwrap();
+    let edge = p.mean_edge_length(&p.gather(&mesh.points));
+    let worst = mj
+        .points
+        .iter()
+        .zip(&ms.points)
+        .map(|(u, v)| (0..3).map(|i| (u[i] - v[i]).powi(2)).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-8 * edge, "largest difference {worst} vs mean edge {edge}");
 }

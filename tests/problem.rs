@@ -28,7 +28,7 @@ fn with_ordering(ordering: Ordering) -> ProblemOptions<'static> {
 #[test]
 fn input_ordering_keeps_the_file_order_and_reaches_the_same_optimum() {
     let mesh = perturbed(generate::tet_box(6, 6, 6, [6.0; 3]), 0.3, 11);
-    let input = Problem::with_options(&mesh, &with_ordering(Ordering::Input)).unwrap();
+    let input = Problem::with_options(&mesh, &with_ordering(Ordering::INPUT)).unwrap();
     let rbfs = Problem::new(&mesh).unwrap();
     assert_eq!(input.order, (0..mesh.num_points() as u32).collect::<Vec<_>>());
     assert_ne!(
@@ -46,7 +46,7 @@ fn input_ordering_keeps_the_file_order_and_reaches_the_same_optimum() {
         ..Params::default()
     };
     let mut finals = Vec::new();
-    for ordering in [Ordering::ReverseBfs, Ordering::Input, Ordering::CuthillMcKee] {
+    for ordering in [Ordering::ReverseBfs, Ordering::INPUT, Ordering::CuthillMcKee] {
         let mut m = mesh.clone();
         let info = solve::smooth_mesh(
             &mut m,
@@ -81,7 +81,7 @@ fn input_ordering_keeps_the_file_order_and_reaches_the_same_optimum() {
 #[test]
 fn input_ordering_numbers_elements_by_first_touch_from_vertex_zero() {
     let mesh = generate::quad_grid(3, 2, [3.0, 2.0]);
-    let p = Problem::with_options(&mesh, &with_ordering(Ordering::Input)).unwrap();
+    let p = Problem::with_options(&mesh, &with_ordering(Ordering::INPUT)).unwrap();
     // vertex 0 touches only quad 0, vertex 1 quads 0 and 1, vertex 2 quads 1 and 2, ...
     assert_eq!(p.elem_order, vec![0, 1, 2, 3, 4, 5]);
     let p = Problem::new(&mesh).unwrap();

@@ -92,7 +92,9 @@ class Result:
             "grad_norm"; row 0 is the start.
         quality: per-cell inverse mean ratio at the new positions (1 is ideal).
         info: everything else the solver reported (device, seconds,
-            setup_seconds, memory_bytes, colors, cg_iterations, method).
+            setup_seconds, memory_bytes, colors, cg_iterations, method;
+            optimise_seconds, reorder_seconds and reorderings: the
+            reordering paper's COT, RT and the number of sweep orderings).
         untangle: what untangling a tangled input did first (the keys of
             :func:`untangle`'s ``info``), or None for an untangled input.
     """
@@ -265,6 +267,11 @@ def smooth(
     time_limit: Optional[float] = None,
     callback: Optional[Callback] = None,
     untangle: bool = True,
+    order: str = "rbfs",
+    order_seed: int = 0,
+    reorder_every: Optional[int] = None,
+    inner_iterations: int = 1,
+    target_objective: Optional[float] = None,
 ) -> Result:
     """Smooths a mesh: moves its free vertices to minimise the objective F.
     A mesh with inverted elements is untangled first (as the CLI's ``smooth``;
@@ -308,6 +315,17 @@ def smooth(
             raises propagates, with the input unchanged.
         untangle: untangle a tangled input first (``Result.untangle`` says
             what that did); False raises ValueError on inverted elements.
+        order: the vertex order, the CLI's ``--order`` names in any case:
+            "rbfs" (default), "cuthill-mckee", "red-black", or a scheme of the
+            vertex-reordering paper ("n", "r", "wqp", "gavm", "grvm", "lng",
+            "d-wqp", "d-gavm", "d-grvm", "d-lng", each reversed as
+            "reverse-NAME" or "-NAME"), which orders the sequential sweep of
+            ``method="bcd"`` on the CPU.
+        order_seed: seed of the random orders "r" and "-r".
+        reorder_every: with a paper scheme, order the sweep again after every
+            this many sweeps (dynamic); None orders it once (static).
+        inner_iterations: Newton steps per vertex visit of the sequential sweep.
+        target_objective: also stop as soon as F is at or below this.
 
     Returns:
         A :class:`Result`; ``Result.points`` is a new float64 array.
@@ -353,6 +371,11 @@ def smooth(
         callback,
         bool(untangle),
         False,
+        str(order),
+        int(order_seed),
+        None if reorder_every is None else int(reorder_every),
+        int(inner_iterations),
+        None if target_objective is None else float(target_objective),
     )
     return Result(np.ascontiguousarray(out[:, : p.shape[1]]), info)
 

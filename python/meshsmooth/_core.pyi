@@ -28,6 +28,11 @@ def smooth(
     callback: Optional[Callable[[Dict[str, float]], Optional[bool]]],
     untangle: bool = True,
     untangle_only: bool = False,
+    order: str = "rbfs",
+    order_seed: int = 0,
+    reorder_every: Optional[int] = None,
+    inner_iterations: int = 1,
+    target_objective: Optional[float] = None,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def quality(
     points: npt.NDArray[np.float64],

@@ -119,7 +119,7 @@ fn report_dict<'py>(py: Python<'py>, mesh: &Mesh) -> PyResult<Bound<'py, PyAny>>
 
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false))]
+#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false, order="rbfs", order_seed=0, reorder_every=None, inner_iterations=1, target_objective=None))]
 fn smooth<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -141,6 +141,11 @@ fn smooth<'py>(
     callback: Option<Py<PyAny>>,
     untangle: bool,
     untangle_only: bool,
+    order: &str,
+    order_seed: u64,
+    reorder_every: Option<usize>,
+    inner_iterations: usize,
+    target_objective: Option<f64>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
     let mut mesh = build_mesh(&points, &kinds, &offsets, &conn, fixed.as_ref())?;
     let method: Method = parse(method)?;
@@ -156,8 +161,27 @@ fn smooth<'py>(
             mode: parse(boundary)?,
             feature_angle,
         },
+        ordering: parse(order)?,
+        order_seed,
         ..Default::default()
     };
+    if reorder_every == Some(0) || inner_iterations == 0 {
+        return Err(PyValueError::new_err(
+            "reorder_every and inner_iterations must be at least 1",
+        ));
+    }
+    if reorder_every.is_some() && problem.ordering.sweep().is_none() {
+        return Err(PyValueError::new_err(format!(
+            "reorder_every needs one of the reordering paper's schemes (order='n', 'wqp', 'd-grvm', ...), not {order:?}"
+        )));
+    }
+    if let Some(t) = target_objective
+        && !t.is_finite()
+    {
+        return Err(PyValueError::new_err(format!(
+            "target_objective must be a finite number, got {t}"
+        )));
+    }
     let gpu_options = GpuOptions {
         adapter,
         precision: self::precision(precision)?,
@@ -188,6 +212,12 @@ fn smooth<'py>(
         max_iter,
         // a limit beyond what a Duration holds is no limit
         time_limit: time_limit.and_then(|t| Duration::try_from_secs_f64(t).ok()),
+        target_objective,
+        bcd: solve::BcdParams {
+            reorder_every,
+            inner_iterations,
+            ..Default::default()
+        },
         ..Default::default()
     };
     // the first exception raised by the callback or a signal handler (Ctrl-C)
@@ -285,6 +315,9 @@ fn smooth<'py>(
     d.set_item("grad_norm", info.grad_norm)?;
     d.set_item("seconds", info.seconds)?;
     d.set_item("setup_seconds", info.setup_seconds)?;
+    d.set_item("optimise_seconds", info.optimise_seconds)?;
+    d.set_item("reorder_seconds", info.reorder_seconds)?;
+    d.set_item("reorderings", info.reorderings)?;
     d.set_item("memory_bytes", info.memory_bytes)?;
     d.set_item("colors", info.colors)?;
     d.set_item("cg_iterations", info.cg_iterations)?;

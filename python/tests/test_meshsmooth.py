@@ -285,3 +285,29 @@ def test_sliding_boundary_keeps_sides_and_corners(quad_grid):
     corners = on.all(axis=1)
     assert np.array_equal(slid.points[corners], p[corners])
     assert not np.array_equal(slid.points[~interior], p[~interior])
+
+
+def test_vertex_orders_reach_one_optimum_and_report_their_times(hex_box):
+    points, hexes, _ = hex_box
+    base = ms.smooth(points, hexes, method="bcd", order="n", tol=1e-9)
+    for order in ["WQP", "-d-grvm", "reverse-lng", "r", "red-black", "cuthill-mckee"]:
+        r = ms.smooth(points, hexes, method="bcd", order=order, tol=1e-9)
+        assert abs(r.objective - base.objective) <= 1e-8 * base.objective, order
+        np.testing.assert_allclose(r.points, base.points, atol=1e-5)
+    r = ms.smooth(points, hexes, method="bcd", order="gavm", reorder_every=2, inner_iterations=2, max_iter=6)
+    assert r.info["reorderings"] == 4
+    assert r.info["optimise_seconds"] + r.info["reorder_seconds"] <= r.info["seconds"]
+    with pytest.raises(ValueError, match="unknown ordering 'wqpp'"):
+        ms.smooth(points, hexes, order="wqpp")
+    with pytest.raises(ValueError, match="reorder_every"):
+        ms.smooth(points, hexes, order="rbfs", reorder_every=2)
+
+
+def test_target_objective_stops_at_the_first_sweep_below_it(hex_box):
+    points, hexes, _ = hex_box
+    full = ms.smooth(points, hexes, method="bcd", order="d-lng")
+    f0 = full.history["objective"][0]
+    target = full.objective + 0.2 * (f0 - full.objective)
+    r = ms.smooth(points, hexes, method="bcd", order="d-lng", target_objective=target)
+    assert r.stop == "target_reached"
+    assert r.objective <= target < r.history["objective"][-2]

@@ -29,14 +29,18 @@
 //!   (Hessian pattern, block-Jacobi factors) by [`Backend::prepare_hessian`], whose
 //!   time the solver reports as setup.
 //!
-//! A distributed backend would wrap another backend: its `flush` an allreduce
-//! of the slots, with halo exchanges after each colour and before each product.
+//! The distributed backend (`distributed`, feature `mpi`) wraps the CPU one on
+//! each rank's part: every reduction is an allreduce in rank order, with halo
+//! exchanges after each colour, each trial point and before each product.
 
 pub mod cpu;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod gpu;
 
 use crate::error::Result;
 use crate::metric::mat3::Vec3;
+use crate::solve::pcg::Preconditioner;
 use std::time::Instant;
 
 /// Scalar slots per backend.
@@ -112,6 +116,19 @@ pub struct EvalSlots {
     pub min_det: Option<Slot>,
 }
 
+/// How a sequential sweep visits the free vertices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Visit<'a> {
+    /// Free-vertex indices (into `Problem::free_vertices`) in visiting
+    /// order; `None`: all, ascending.
+    pub order: Option<&'a [u32]>,
+    /// Safeguarded Newton steps per visit (0 counts as 1).
+    pub inner_iterations: usize,
+    /// Where to write each visited vertex's displacement over its visit
+    /// (for the movement-based reorderings); vertices not visited keep theirs.
+    pub moves: Option<Vector>,
+}
+
 /// True when a guard slot lets an update run: NaN-safe, so a NaN guard skips.
 #[inline]
 pub fn guard_passes(slots: &[f64], guard: Option<Slot>) -> bool {
@@ -149,11 +166,16 @@ pub trait Backend {
     fn bcd_color(&mut self, color: usize) -> Result<()>;
     /// The largest squared vertex move of the colours swept since the last call.
     fn max_move(&mut self, out: Slot) -> Result<()>;
-    /// A sweep over the free vertices one at a time in locality order, if the
+    /// Whether `bcd_sequential` runs (the CPU) or declines (the GPU): a sweep
+    /// order is only worth computing where there is a sequential sweep.
+    fn has_sequential_sweep(&self) -> bool {
+        false
+    }
+    /// A sweep over the free vertices one at a time, as `visit` says, if the
     /// backend has one (`Ok(false)` otherwise: only the CPU has, the GPU runs
     /// colours). Stops early, in a valid state, at `deadline`; the largest
     /// squared move goes to `out`.
-    fn bcd_sequential(&mut self, _out: Slot, _deadline: Option<Instant>) -> Result<bool> {
+    fn bcd_sequential(&mut self, _visit: &Visit, _out: Slot, _deadline: Option<Instant>) -> Result<bool> {
         Ok(false)
     }
 
@@ -178,9 +200,20 @@ pub trait Backend {
     fn assemble(&mut self, g: Vector) -> Result<()>;
     /// y = H x
     fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()>;
+    /// Chooses Newton's preconditioner (before `factor_precond`); block
+    /// Jacobi, the paper's, is the default and the only one every backend has.
+    fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
+        match kind {
+            Preconditioner::Jacobi => Ok(()),
+            other => Err(crate::error::Error::InvalidArgument(format!(
+                "preconditioner '{other}' has no version on {} (use jacobi)",
+                self.describe()
+            ))),
+        }
+    }
     /// Factors the diagonal blocks of the assembled Hessian.
     fn factor_precond(&mut self) -> Result<()>;
-    /// y = M^-1 x (block Jacobi).
+    /// y = M^-1 x (block Jacobi, or what `set_preconditioner` chose).
     fn precond(&mut self, x: Vector, y: Vector) -> Result<()>;
 
     /// slots[sum] = a . b; slots[max] = max_i |b_i|^2.

@@ -7,6 +7,7 @@ use meshsmooth::backend::gpu::list_adapters;
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, Format};
 use meshsmooth::mesh::fixing::RuleCount;
+use meshsmooth::mesh::sweep_order::SweepOrder;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report;
 use meshsmooth::problem::boundary::{VertexClass, classify};
@@ -21,6 +22,8 @@ impl SolverArgs {
     fn params(&self) -> Result<Params> {
         let mut p = self.stop.params()?;
         p.newton.negative_curvature = self.negative_curvature;
+        self.objective.sweep_params(&mut p)?;
+        p.newton.preconditioner = self.preconditioner;
         Ok(p)
     }
 }
@@ -68,6 +71,27 @@ impl StopArgs {
 }
 
 impl ObjectiveArgs {
+    /// The sequential sweep's strategy and inner iterations into `params`.
+    pub(super) fn sweep_params(&self, params: &mut Params) -> Result<()> {
+        if self.reorder_every == Some(0) {
+            return Err(Error::InvalidArgument("--reorder-every must be at least 1".into()));
+        }
+        if self.inner_iterations == 0 {
+            return Err(Error::InvalidArgument("--inner-iterations must be at least 1".into()));
+        }
+        if self.reorder_every.is_some() && self.order.sweep().is_none() {
+            // a graph numbering is fixed when the problem is built: there is
+            // no list to reorder
+            return Err(Error::InvalidArgument(format!(
+                "--reorder-every needs one of the paper's schemes (--order n, r, wqp, gavm, grvm, lng, d-wqp, d-gavm, d-grvm, d-lng or their reverses), not '{}'",
+                self.order
+            )));
+        }
+        params.bcd.reorder_every = self.reorder_every;
+        params.bcd.inner_iterations = self.inner_iterations;
+        Ok(())
+    }
+
     /// The reference mesh, read when given.
     pub(super) fn reference(&self) -> Result<Option<Mesh>> {
         self.reference.as_deref().map(io::read).transpose()
@@ -79,6 +103,7 @@ impl ObjectiveArgs {
             template: self.template,
             reference,
             ordering: self.order,
+            order_seed: self.order_seed,
             ..Default::default()
         })
     }
@@ -127,6 +152,17 @@ pub(super) fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+fn params_strategy(o: &ObjectiveArgs) -> String {
+    let inner = match o.inner_iterations {
+        1 => String::new(),
+        n => format!(", {n} inner iterations"),
+    };
+    match o.reorder_every {
+        Some(k) => format!("dynamic, every {k} sweep(s){inner}"),
+        None => format!("static{inner}"),
+    }
 }
 
 fn summary(info: &Info, f0: f64) -> String {
@@ -289,16 +325,25 @@ fn run_with_rules(
         .then(|| metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference))
         .transpose()?;
     let mut progress = Progress::new(params.max_iter, !quiet);
+    // under mpirun the smoothing is partitioned over the ranks (untangling stays on one)
+    #[cfg(feature = "mpi")]
+    let device = super::ranks::device().unwrap_or(choice.device());
+    #[cfg(not(feature = "mpi"))]
+    let device = choice.device();
     let opts = solve::Options {
         method,
         params,
-        device: choice.device(),
+        device,
         checkpoint_every: save_partial.then_some(10),
         fail_after: None,
     };
     let result = solve::smooth_mesh(mesh, options, &opts, &mut |r| progress.update(r));
     progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
     let info = result?;
+    #[cfg(feature = "mpi")]
+    if let Some(report) = super::ranks::report().filter(|_| !quiet) {
+        println!("\n{report}");
+    }
     if !quiet {
         println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
         let displacement = metric_report::displacement_percent(mesh, &start, &mesh.points);
@@ -320,6 +365,25 @@ fn run_with_rules(
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
     println!("{}", summary(&info, f0));
+    if let Some(order) = options.ordering.sweep() {
+        if info.reorderings > 0 {
+            println!(
+                "order {} ({}): COT {:.3} s, RT {:.3} s, TT {:.3} s; {} reordering(s)",
+                order.paper_name(),
+                params_strategy(&solver.objective),
+                info.optimise_seconds,
+                info.reorder_seconds,
+                info.seconds,
+                info.reorderings
+            );
+        } else if !quiet && order != SweepOrder::N {
+            println!(
+                "note: --order {} orders the sequential sweep (--method bcd on the CPU); {} ran in the input numbering",
+                order.name(),
+                info.method
+            );
+        }
+    }
     Ok(info)
 }
 

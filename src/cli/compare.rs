@@ -23,7 +23,9 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     for out in [&a.csv, &a.plot].into_iter().flatten() {
         refuse_overwrite(&a.input, out)?;
     }
-    let params = a.stop.params()?;
+    let mut params = a.stop.params()?;
+    a.objective.sweep_params(&mut params)?;
+    params.newton.preconditioner = a.preconditioner;
     let mesh = io::read(&a.input)?;
     let reference = a.objective.reference()?;
     let options = a.objective.options(reference.as_ref())?;
@@ -76,6 +78,12 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
                 r.grad_norm,
                 mib(r.memory_bytes),
                 r.paper_memory_bytes.map_or("-".into(), mib)
+            );
+        }
+        for r in cmp.runs.iter().filter(|r| r.reorderings > 0) {
+            println!(
+                "{}: order {}: COT {:.3} s, RT {:.3} s, TT {:.3} s; {} reordering(s)",
+                r.method, options.ordering, r.optimise_seconds, r.reorder_seconds, r.seconds, r.reorderings
             );
         }
         for c in &cmp.crossovers {

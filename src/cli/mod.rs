@@ -8,6 +8,9 @@ mod device;
 mod generate;
 mod progress;
 mod rezone;
+#[cfg(feature = "mpi")]
+pub(crate) mod ranks;
+mod study;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use meshsmooth::backend::gpu::Precision;
@@ -16,7 +19,7 @@ use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::Ordering;
 use meshsmooth::solve::newton::NewtonParams;
-use meshsmooth::solve::pcg::NegativeCurvature;
+use meshsmooth::solve::pcg::{NegativeCurvature, Preconditioner};
 use meshsmooth::solve::{Method, Params};
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -58,6 +61,46 @@ pub enum Command {
     /// keeping the mesh close to the input; prints section 6's tables in the paper's
     /// shape measure (cn-paper).
     Rezone(RezoneArgs),
+    /// Reproduce a paper's study on a generated mesh.
+    #[command(subcommand)]
+    Study(StudyCommand),
+}
+
+#[derive(Subcommand, Debug)]
+pub enum StudyCommand {
+    /// The vertex-reordering study: a baseline (N, static) for a fixed time sets the target
+    /// objective; every scheme under every strategy (static, dynamic every K) then runs the
+    /// sequential BCD sweep to it. Writes a Markdown table and CSV of COT/RT/TT and ranks.
+    Order(OrderStudyArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct OrderStudyArgs {
+    /// Output folder (order-study.md, order-study.csv).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The small study: about 1000 free vertices, a 0.25 s baseline (the options below
+    /// override it where given).
+    #[arg(long)]
+    pub quick: bool,
+    /// The horseshoe mesh (default sqiv).
+    #[arg(long, value_enum)]
+    pub kind: Option<HorseshoeKind>,
+    /// About this many free vertices (default 1000 with --quick, else 20000).
+    #[arg(long)]
+    pub free: Option<usize>,
+    /// Seconds the baseline runs (default 0.25 with --quick, else 10).
+    #[arg(long, value_name = "SECONDS")]
+    pub baseline: Option<f64>,
+    /// Dynamic strategies to run besides the static one.
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2, 5, 10])]
+    pub every: Vec<usize>,
+    /// Newton steps per vertex visit.
+    #[arg(long, default_value_t = 1)]
+    pub inner_iterations: usize,
+    /// Seed of the random orders.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
 }
 
 #[derive(Args, Debug)]
@@ -170,6 +213,10 @@ pub struct SolverArgs {
     /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
     #[arg(long, value_enum, default_value_t = NewtonParams::default().negative_curvature)]
     pub negative_curvature: NegativeCurvature,
+    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device) or symmetric block
+    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer).
+    #[arg(long, value_enum, default_value_t = NewtonParams::default().preconditioner)]
+    pub preconditioner: Preconditioner,
 }
 
 /// Cells of a generated box.
@@ -241,11 +288,24 @@ pub struct ObjectiveArgs {
     /// Reference mesh with the same connectivity: its corners are the targets W.
     #[arg(long, value_name = "MESH")]
     pub reference: Option<PathBuf>,
-    /// Vertex order of the sweeps and of the Hessian rows: rbfs (reverse breadth-first
-    /// from the boundary, the Newton paper's), input (the file's own, the reordering
-    /// paper's N) or cuthill-mckee.
-    #[arg(long, value_enum, default_value_t = Ordering::default())]
+    /// Vertex order. rbfs (default; reverse breadth-first from the boundary), cuthill-mckee
+    /// and red-black (checkerboard) number the problem for every method. The reordering
+    /// paper's schemes order the sequential sweep (--method bcd on the CPU) and leave the
+    /// input numbering: n (alias input), r, wqp, gavm, grvm, lng, d-wqp, d-gavm, d-grvm,
+    /// d-lng, any case, each reversed as reverse-NAME or -NAME (--order=-wqp).
+    #[arg(long, default_value_t = Ordering::default(), allow_hyphen_values = true, value_name = "NAME")]
     pub order: Ordering,
+    /// Seed of the random orders r and reverse-r.
+    #[arg(long, default_value_t = 0, value_name = "SEED")]
+    pub order_seed: u64,
+    /// Dynamic reordering: order the sweep list again after every K sweeps (a paper scheme
+    /// with --method bcd); without it the list is ordered once, before the first sweep.
+    #[arg(long, value_name = "K")]
+    pub reorder_every: Option<usize>,
+    /// Newton steps per vertex visit of the sequential sweep (--method bcd), the paper's
+    /// inner iterations.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub inner_iterations: usize,
 }
 
 #[derive(Args, Debug)]
@@ -263,6 +323,10 @@ pub struct CompareArgs {
     pub gpu: GpuArgs,
     #[command(flatten)]
     pub stop: StopArgs,
+    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device) or symmetric block
+    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer).
+    #[arg(long, value_enum, default_value_t = NewtonParams::default().preconditioner)]
+    pub preconditioner: Preconditioner,
     /// Write the merged histories as CSV.
     #[arg(long, value_name = "FILE.csv")]
     pub csv: Option<PathBuf>,
@@ -456,6 +520,14 @@ pub struct DemoArgs {
 
 /// Parses `args` and runs the command; returns the process exit code.
 pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
+    #[cfg(feature = "mpi")]
+    if meshsmooth::solve::distributed::Cluster::launched() {
+        return ranks::run_under_mpi(|| dispatch(args));
+    }
+    dispatch(args)
+}
+
+fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {
@@ -477,6 +549,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Compare(a)) => compare::compare(&a),
         Some(Command::Devices) => commands::devices(),
         Some(Command::Generate(g)) => generate::generate(&g),
+        Some(Command::Study(StudyCommand::Order(a))) => study::order(&a),
     };
     match result {
         Ok(()) => 0,

@@ -8,6 +8,7 @@ pub mod frame;
 pub mod order;
 pub mod plane;
 pub mod polyhedron;
+pub mod sweep_order;
 pub mod topology;
 
 pub use data::{DataArray, MeshData, PhysicalName, ValueType, Values};

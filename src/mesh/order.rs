@@ -1,54 +1,132 @@
 //! Vertex orderings for locality of reference, and the element numbering that
 //! follows a vertex order.
 
+use super::sweep_order::SweepOrder;
 use super::topology::Csr;
-use clap::ValueEnum;
 
-/// The vertex order a problem is built in (its sweep order). Parsed and
-/// printed through clap's `ValueEnum` names: `rbfs`, `input` (alias `n`),
-/// `cuthill-mckee`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, ValueEnum)]
+/// The vertex order a problem is built in, and its sweep order. Three are
+/// numberings of the graph (`rbfs`, `cuthill-mckee`, `red-black`): the
+/// problem is built in them and every method sweeps or numbers its rows in
+/// them. The reordering paper's 20 schemes ([`SweepOrder`]: `n`, `wqp`,
+/// `reverse-d-grvm`, ...) leave the problem in the input numbering and
+/// reorder the list the sequential sweep (`--method bcd` on the CPU) visits,
+/// once or every k-th sweep; `n` (alias `input`) is the input numbering
+/// itself for every method.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Ordering {
     /// Reverse breadth-first from the farthest boundary vertex ([`reverse_bfs`]).
     #[default]
-    #[value(name = "rbfs")]
     ReverseBfs,
-    /// The file's own vertex order (the reordering paper's "N").
-    #[value(name = "input", alias = "n")]
-    Input,
     /// Cuthill–McKee: breadth-first from a vertex of least degree, neighbours
     /// visited by increasing degree ([`cuthill_mckee`]).
-    #[value(name = "cuthill-mckee")]
     CuthillMcKee,
+    /// Checkerboard: the vertices of one class of a 2-colouring, then the
+    /// other ([`red_black`]; the paper's section 6.8).
+    RedBlack,
+    /// One of the paper's schemes, applied to the sweep list.
+    Sweep(SweepOrder),
 }
 
 impl Ordering {
+    /// The input numbering (the paper's N).
+    pub const INPUT: Ordering = Ordering::Sweep(SweepOrder::N);
+
+    /// Every ordering: the three graph numberings, then the paper's 20.
+    pub fn all() -> Vec<Ordering> {
+        let mut v = vec![Ordering::ReverseBfs, Ordering::CuthillMcKee, Ordering::RedBlack];
+        v.extend(SweepOrder::all().map(Ordering::Sweep));
+        v
+    }
+
+    /// The paper scheme that reorders the sweep list, if this is one (N included).
+    pub fn sweep(self) -> Option<SweepOrder> {
+        match self {
+            Ordering::Sweep(s) => Some(s),
+            _ => None,
+        }
+    }
+
     /// `order[new] = old` for a mesh with vertex `points`, edge `neighbours`
-    /// and `boundary` (fixed) flags, all in the mesh's numbering.
+    /// and `boundary` (fixed) flags, all in the mesh's numbering. The paper's
+    /// schemes keep the input numbering: they act on the sweep list.
     pub fn order(self, points: &[[f64; 3]], neighbours: &Csr, boundary: &[bool]) -> Vec<u32> {
         match self {
             Ordering::ReverseBfs => reverse_bfs(points, neighbours, boundary),
-            Ordering::Input => (0..points.len() as u32).collect(),
             Ordering::CuthillMcKee => cuthill_mckee(neighbours),
+            Ordering::RedBlack => red_black(neighbours),
+            Ordering::Sweep(_) => (0..points.len() as u32).collect(),
         }
     }
 }
 
 impl std::fmt::Display for Ordering {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let v = self.to_possible_value().expect("no Ordering is skipped");
-        f.write_str(v.get_name())
+        match self {
+            Ordering::ReverseBfs => f.write_str("rbfs"),
+            Ordering::CuthillMcKee => f.write_str("cuthill-mckee"),
+            Ordering::RedBlack => f.write_str("red-black"),
+            Ordering::Sweep(s) => f.write_str(&s.name()),
+        }
     }
 }
 
 impl std::str::FromStr for Ordering {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {
-        <Ordering as ValueEnum>::from_str(s, false).map_err(|_| {
-            let names: Vec<String> = Ordering::value_variants().iter().map(|o| o.to_string()).collect();
-            crate::Error::InvalidArgument(format!("unknown ordering '{s}' (expected {})", names.join(", ")))
+        let lower = s.trim().to_ascii_lowercase();
+        match lower.as_str() {
+            "rbfs" => return Ok(Ordering::ReverseBfs),
+            "cuthill-mckee" => return Ok(Ordering::CuthillMcKee),
+            "red-black" => return Ok(Ordering::RedBlack),
+            _ => {}
+        }
+        SweepOrder::parse(&lower).map(Ordering::Sweep).ok_or_else(|| {
+            let names: Vec<String> = Ordering::all()
+                .iter()
+                .filter(|o| o.sweep().is_none_or(|s| !s.reverse))
+                .map(|o| o.to_string())
+                .collect();
+            crate::Error::InvalidArgument(format!(
+                "unknown ordering '{s}' (expected {}, input, or a paper scheme reversed as reverse-NAME or -NAME)",
+                names.join(", ")
+            ))
         })
     }
+}
+
+/// Red-black (checkerboard) order: each connected part is 2-coloured by the
+/// parity of the breadth-first distance from its lowest-numbered vertex;
+/// the even vertices come first, then the odd, each in input order. On a
+/// structured quadrilateral or hexahedral mesh (a bipartite edge graph) this
+/// is the checkerboard of the paper's section 6.8: no two neighbours share a
+/// colour. On other meshes (triangles, tetrahedra: odd cycles) it is the same
+/// parity split, in which some neighbours share a colour. Returns `order[new] = old`.
+pub fn red_black(neighbours: &Csr) -> Vec<u32> {
+    let n = neighbours.len();
+    let mut parity = vec![u8::MAX; n];
+    let mut queue = Vec::with_capacity(n);
+    for root in 0..n {
+        if parity[root] != u8::MAX {
+            continue;
+        }
+        parity[root] = 0;
+        queue.clear();
+        queue.push(root as u32);
+        let mut head = 0;
+        while head < queue.len() {
+            let v = queue[head] as usize;
+            head += 1;
+            for &w in neighbours.of(v) {
+                if parity[w as usize] == u8::MAX {
+                    parity[w as usize] = 1 - parity[v];
+                    queue.push(w);
+                }
+            }
+        }
+    }
+    let mut order: Vec<u32> = (0..n as u32).filter(|&v| parity[v as usize] == 0).collect();
+    order.extend((0..n as u32).filter(|&v| parity[v as usize] == 1));
+    order
 }
 
 /// Reverse breadth-first order (section 3.3 of the Newton paper): BFS from the
@@ -203,26 +281,30 @@ mod tests {
         let nb = Csr::from_pairs(4, pairs.iter().copied());
         let pts: Vec<[f64; 3]> = (0..4).map(|i| [i as f64, 0.0, 0.0]).collect();
         let boundary = [true, false, false, true];
-        for o in Ordering::value_variants() {
+        for o in Ordering::all() {
             assert!(is_permutation(&o.order(&pts, &nb, &boundary), 4), "{o}");
         }
-        assert_eq!(Ordering::Input.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
+        assert_eq!(Ordering::RedBlack.order(&pts, &nb, &boundary), vec![0, 2, 1, 3]);
+        assert_eq!(Ordering::INPUT.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
         assert_eq!(Ordering::ReverseBfs.order(&pts, &nb, &boundary), vec![3, 2, 1, 0]);
         assert_eq!(Ordering::CuthillMcKee.order(&pts, &nb, &boundary), vec![0, 1, 2, 3]);
     }
 
     #[test]
-    fn ordering_names_round_trip_through_value_enum() {
+    fn ordering_names_round_trip() {
         assert_eq!(Ordering::default(), Ordering::ReverseBfs);
-        for o in Ordering::value_variants() {
-            assert_eq!(o.to_string().parse::<Ordering>().unwrap(), *o);
+        assert_eq!(Ordering::all().len(), 23);
+        for o in Ordering::all() {
+            assert_eq!(o.to_string().parse::<Ordering>().unwrap(), o);
         }
         assert_eq!(Ordering::ReverseBfs.to_string(), "rbfs");
         assert_eq!(Ordering::CuthillMcKee.to_string(), "cuthill-mckee");
-        assert_eq!("n".parse::<Ordering>().unwrap(), Ordering::Input);
-        assert_eq!("input".parse::<Ordering>().unwrap(), Ordering::Input);
+        assert_eq!("N".parse::<Ordering>().unwrap(), Ordering::INPUT);
+        assert_eq!("input".parse::<Ordering>().unwrap(), Ordering::INPUT);
+        assert_eq!("Red-Black".parse::<Ordering>().unwrap(), Ordering::RedBlack);
         let err = "bfs".parse::<Ordering>().unwrap_err().to_string();
-        assert!(err.contains("rbfs, input, cuthill-mckee"), "{err}");
+        assert!(err.contains("rbfs, cuthill-mckee, red-black, n, r, wqp, gavm"), "{err}");
+        assert!(err.contains("d-lng"), "{err}");
     }
 
     #[test]

@@ -17,7 +17,7 @@ use std::borrow::Cow;
 /// ASCII float output has, stay well within it).
 pub const PLANARITY_TOLERANCE: f64 = 1e-5;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Plane {
     /// A point of the plane.
     pub origin: Vec3,

@@ -2,9 +2,55 @@
 
 use super::{ElementKind, Mesh};
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A multiply-rotate hash (rustc's Fx) for the facet keys: small integers from
+/// one mesh, no adversary, and SipHash was a sizeable share of problem setup.
+#[derive(Clone, Copy, Default)]
+struct FxHasher(u64);
+
+impl FxHasher {
+    #[inline]
+    fn add(&mut self, w: u64) {
+        self.0 = (self.0.rotate_left(5) ^ w).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+}
+
+impl Hasher for FxHasher {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..chunk.len()].copy_from_slice(chunk);
+            self.add(u64::from_le_bytes(w));
+        }
+    }
+
+    #[inline]
+    fn write_u32(&mut self, i: u32) {
+        self.add(i as u64);
+    }
+
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.add(i);
+    }
+
+    #[inline]
+    fn write_usize(&mut self, i: usize) {
+        self.add(i as u64);
+    }
+
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// Compressed lists: `items[offsets[i]..offsets[i + 1]]` belong to entry `i`.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Csr {
     pub offsets: Vec<u32>,
     pub items: Vec<u32>,
@@ -65,17 +111,32 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
             pairs.push((vs[*b], vs[*a]));
         }
     }
-    pairs.sort_unstable();
-    pairs.dedup();
-    Csr::from_pairs(mesh.num_points(), pairs.iter().copied())
+    // bucketed by vertex, then each short list sorted: one global sort of
+    // every pair was most of a problem's setup on mid-size meshes
+    let n = mesh.num_points();
+    let raw = Csr::from_pairs(n, pairs.iter().copied());
+    drop(pairs);
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0u32);
+    let mut items = Vec::with_capacity(raw.items.len() / 2);
+    let mut row = Vec::new();
+    for v in 0..n {
+        row.clear();
+        row.extend_from_slice(raw.of(v));
+        row.sort_unstable();
+        row.dedup();
+        items.extend_from_slice(&row);
+        offsets.push(items.len() as u32);
+    }
+    Csr { offsets, items }
 }
 
 /// Vertices on a facet (face in 3D, edge in 2D) used by exactly one element.
 pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
-    let mut count: HashMap<[u32; 4], u32> = HashMap::with_capacity(mesh.num_elements() * 3);
+    let mut count: FxMap<[u32; 4], u32> = FxMap::with_capacity_and_hasher(mesh.num_elements() * 3, Default::default());
     // polyhedron faces with more than four vertices (a face of four or
     // fewer may be shared with a hexahedron or prism, so it keys as theirs)
-    let mut long: HashMap<Vec<u32>, u32> = HashMap::new();
+    let mut long: FxMap<Vec<u32>, u32> = FxMap::default();
     let key = |vs: &[u32], local: &[usize]| {
         let mut k = [u32::MAX; 4];
         for (slot, &l) in k.iter_mut().zip(local) {

@@ -13,7 +13,7 @@ use super::reference_jacobian;
 use super::smetric::{self, Hess9, MetricKind};
 
 /// How corner values are combined into the objective.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 pub enum Template {
     /// F = mean over elements of the mean corner metric (for the inverse mean
     /// ratio: the harmonic mean of the mean ratios, equation 2 of the Newton paper).
@@ -33,7 +33,7 @@ impl std::str::FromStr for Template {
 
 /// A corner's reference: the B rows (vertex 0 = the corner, 1..=n its
 /// neighbours; row n+1.. zero) and the dimension.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CornerShape {
     pub tet: TetShape,
     pub n: usize,
@@ -72,7 +72,7 @@ impl CornerShape {
 
 /// Metric, template and dimension: everything that turns corner positions
 /// into objective terms.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Model {
     pub metric: MetricKind,
     pub template: Template,

@@ -9,7 +9,7 @@
 use super::mat3::{Mat3, Vec3, cofactor, det, frobenius_sq, mul_vec, upper_inverse};
 
 /// Precomputed reference data for one tetrahedron shape.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TetShape {
     b: [Vec3; 4],
     /// b_k . b_l and (b_k x b_l), constants of the Hessian blocks.

@@ -8,7 +8,7 @@
 use super::mat3::{Mat3, cofactor, det};
 
 /// The element metrics meshsmooth optimises (all: lower is better).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 pub enum MetricKind {
     /// Inverse mean ratio |S|^2 / (n det(S)^(2/n)) >= 1, 1 only for S a scaled rotation.
     #[default]

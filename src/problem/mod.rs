@@ -50,13 +50,17 @@ pub struct ProblemOptions<'a> {
     /// (required by `tmp`; optional for the others, which default to the ideal
     /// element of each kind).
     pub reference: Option<&'a Mesh>,
-    /// The vertex order the problem is built (and swept) in.
+    /// The vertex order the problem is built (and swept) in; a paper scheme
+    /// ([`Ordering::Sweep`]) keeps the input numbering and orders the
+    /// sequential sweep's list instead.
     pub ordering: Ordering,
+    /// Seed of the random scheme (R, -R).
+    pub order_seed: u64,
     /// Fixed boundary (the default) or sliding on it.
     pub boundary: Boundary,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Problem {
     /// Metric dimension: 2 (x and y move) or 3.
     pub dim: usize,
@@ -92,8 +96,16 @@ pub struct Problem {
     /// The plane of a planar mesh outside the planes z = constant: positions
     /// are in its coordinates (`gather` maps into them, `scatter` back).
     pub plane: Option<Plane>,
-    /// The constraints of the boundary vertices that slide (`--boundary slide`).
+    /// The constraints of the boundary vertices that slide (`--boundary slide`);
+    /// not sent to other ranks: a partitioned run refuses sliding.
+    #[serde(skip)]
     pub sliding: Option<Sliding>,
+    /// The paper scheme that orders the sequential sweep's list (`None`:
+    /// the sweep follows the numbering).
+    #[serde(skip)]
+    pub sweep_order: Option<crate::mesh::sweep_order::SweepOrder>,
+    /// Seed of the random schemes.
+    pub order_seed: u64,
     /// Time spent building this problem.
     pub setup_time: Duration,
 }
@@ -147,6 +159,8 @@ impl Problem {
             colors,
             plane,
             sliding,
+            sweep_order: opts.ordering.sweep(),
+            order_seed: opts.order_seed,
             setup_time: start.elapsed(),
         })
     }

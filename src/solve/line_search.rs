@@ -3,7 +3,7 @@
 
 /// Armijo backtracking constants, shared by the per-vertex steps of BCD and
 /// the global line search of Newton.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LineSearch {
     /// Step reduction factor.
     pub beta: f64,

@@ -5,6 +5,8 @@
 //! (`iterate`) over it.
 
 pub mod bcd;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 #[cfg(test)]
 mod function_backend;
 pub mod history;
@@ -14,6 +16,7 @@ pub mod newton;
 pub mod nlcg;
 pub mod pcg;
 pub mod rezone;
+pub mod reorder;
 pub mod untangle;
 pub mod wolfe;
 
@@ -34,7 +37,7 @@ use nlcg::{Nlcg, NlcgParams};
 use std::time::{Duration, Instant};
 
 /// Which optimiser moves the vertices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 pub enum Method {
     /// Block coordinate descent: per-vertex Newton with Armijo backtracking,
     /// one vertex at a time in locality order (on a GPU: colour by colour).
@@ -77,14 +80,31 @@ impl std::str::FromStr for Method {
 }
 
 /// Block coordinate descent's settings.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BcdParams {
     /// The per-vertex Armijo line search.
     pub line_search: LineSearch,
+    /// The sequential sweep with a paper scheme ([`Problem::sweep_order`]):
+    /// reorder the list after every this many sweeps (the paper's dynamic
+    /// strategy); `None` or 0: once, before the first sweep (static).
+    pub reorder_every: Option<usize>,
+    /// Safeguarded Newton steps per vertex visit of the sequential sweep
+    /// (the paper's inner iterations; at least 1).
+    pub inner_iterations: usize,
+}
+
+impl Default for BcdParams {
+    fn default() -> Self {
+        BcdParams {
+            line_search: LineSearch::default(),
+            reorder_every: None,
+            inner_iterations: 1,
+        }
+    }
 }
 
 /// Smart Laplace's settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LaplaceParams {
     /// Stop when no vertex moves farther than this fraction of the mean edge length.
     pub min_move: f64,
@@ -97,7 +117,7 @@ impl Default for LaplaceParams {
 }
 
 /// Termination (shared by every method) and each method's own settings.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Params {
     /// Stop when the 2-norm of the free-vertex gradient of F, with lengths
     /// measured in mean edge lengths of the start (so unit-free, like F), is
@@ -138,6 +158,9 @@ pub enum Device<'a> {
     Cpu,
     /// A wgpu device (`GpuContext::new` picks the adapter and precision).
     Gpu(&'a GpuContext),
+    /// The ranks of an MPI job, each on its part of the problem (CPU, f64).
+    #[cfg(feature = "mpi")]
+    Mpi(&'a distributed::Cluster),
 }
 
 /// How a run is carried out: method, settings, device, and the guard against
@@ -178,8 +201,18 @@ pub struct Info {
     pub history: History,
     pub objective: f64,
     pub grad_norm: f64,
-    /// Wall time of the iterations (problem and solver setup excluded).
+    /// Wall time of the iterations (problem and solver setup excluded): the
+    /// reordering paper's total time TT.
     pub seconds: f64,
+    /// Time in the optimisation proper (the paper's COT): for the sequential
+    /// BCD sweep, the sweeps without the reorderings and the evaluations
+    /// between them; for the other methods, whose steps evaluate as they go,
+    /// the whole steps.
+    pub optimise_seconds: f64,
+    /// Time spent ordering the sweep list (the paper's RT; 0 without a paper scheme).
+    pub reorder_seconds: f64,
+    /// Times the sweep list was ordered (0 without a paper scheme).
+    pub reorderings: usize,
     /// Problem setup plus the solver's own (Newton's Hessian pattern).
     pub setup_seconds: f64,
     /// Bytes the backend held: the problem, the positions and the method's data.
@@ -221,12 +254,14 @@ pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnM
             }
             run(&mut GpuBackend::new(ctx, p, x, &ls)?, p, x, opts, progress)
         }
+        #[cfg(feature = "mpi")]
+        Device::Mpi(cluster) => distributed::lead(cluster, p, x, opts, progress),
     }
 }
 
 /// The method's state between iterations.
-enum Solver {
-    Bcd(bcd::Bcd),
+enum Solver<'p> {
+    Bcd(Box<bcd::Bcd<'p>>),
     Newton(Box<Newton>),
     Laplace(laplace::Laplace),
     Nlcg(Box<Nlcg>),
@@ -240,13 +275,42 @@ pub fn run<B: Backend + ?Sized>(
     opts: &Options,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    let params = &opts.params;
-    let method = opts.method;
     // F is unit-free; its gradient scales as 1/length: measured in mean edge
     // lengths it is unit-free too, and so is the stopping test
-    let edge = p.mean_edge_length(x);
+    let scale = Scale {
+        edge: p.mean_edge_length(x),
+        setup: p.setup_time,
+        colors: p.colors.len(),
+    };
+    run_scaled(be, p, scale, x, opts, progress)
+}
+
+/// What `run` takes from the whole problem; a rank of a partitioned run has
+/// only its part (the `p` of `run_scaled`), and gets these from the whole.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Scale {
+    /// Mean edge length of the start.
+    pub edge: f64,
+    pub setup: Duration,
+    pub colors: usize,
+}
+
+/// `run` with the whole problem's scale given.
+pub(crate) fn run_scaled<B: Backend + ?Sized>(
+    be: &mut B,
+    p: &Problem,
+    scale: Scale,
+    x: &mut [Vec3],
+    opts: &Options,
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> Result<Info> {
+    let params = &opts.params;
+    let method = opts.method;
+    let edge = scale.edge;
     let mut solver = match method {
-        Method::Bcd | Method::BcdColored => Solver::Bcd(bcd::Bcd::new(be, method == Method::Bcd)?),
+        Method::Bcd | Method::BcdColored => {
+            Solver::Bcd(Box::new(bcd::Bcd::new(be, p, method == Method::Bcd, &params.bcd)?))
+        }
         Method::Newton => Solver::Newton(Box::new(Newton::new(be, params.newton)?)),
         Method::Laplace => Solver::Laplace(laplace::Laplace::new(be)?),
         Method::Nlcg => Solver::Nlcg(Box::new(Nlcg::new(be, params.nlcg, edge)?)),
@@ -271,10 +335,14 @@ pub fn run<B: Backend + ?Sized>(
             be.describe()
         ))
     })?;
+    let first_reorder = match &solver {
+        Solver::Bcd(b) => b.reorder.as_ref().map_or((0.0, 0), |r| (r.seconds, r.count)),
+        _ => (0.0, 0),
+    };
     let setup = Setup {
-        seconds: p.setup_time.as_secs_f64() + solver_setup.as_secs_f64(),
+        seconds: scale.setup.as_secs_f64() + solver_setup.as_secs_f64(),
         memory_bytes: be.bytes(),
-        colors: p.colors.len(),
+        colors: scale.colors,
         device: be.describe(),
     };
     let mut steps = 0;
@@ -284,6 +352,7 @@ pub fn run<B: Backend + ?Sized>(
             if opts.fail_after.is_some_and(|n| steps >= n) {
                 return Err(Error::Gpu("device lost (simulated for testing)".into()));
             }
+            let t = Instant::now();
             let mut sweep = match &mut solver {
                 Solver::Bcd(b) => b.step(be, deadline)?,
                 Solver::Newton(n) => n.step(be)?,
@@ -291,13 +360,21 @@ pub fn run<B: Backend + ?Sized>(
                 Solver::Nlcg(n) => n.step(be)?,
             };
             sweep.grad_norm *= edge;
+            if sweep.optimise_seconds.is_none() {
+                sweep.optimise_seconds = Some(t.elapsed().as_secs_f64());
+            }
             steps += 1;
             if opts.checkpoint_every.is_some_and(|k| steps % k.max(1) == 0) {
                 checkpoint = Some(be.download()?);
             }
             Ok(sweep)
         };
-        let begin = Start { at: start, edge, first };
+        let begin = Start {
+            at: start,
+            edge,
+            first,
+            first_reorder,
+        };
         iterate(method, params, begin, setup, &mut || step(be), progress)
     };
     match result {
@@ -344,6 +421,7 @@ fn no_progress(h: &History, window: usize) -> bool {
 }
 
 /// What one sweep of any backend reports to the shared loop.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Sweep {
     pub objective: f64,
     pub grad_norm: f64,
@@ -351,6 +429,14 @@ pub struct Sweep {
     pub max_move_sq: f64,
     /// CG iterations of the step (Newton).
     pub cg_iterations: usize,
+    /// Time of the optimisation proper within the step, where the method
+    /// separates it (BCD: the sweep); otherwise the whole step counts.
+    pub optimise_seconds: Option<f64>,
+    /// Time spent reordering the sweep list in this step (cumulative RT when
+    /// the start's static ordering is included: see `Bcd::step`).
+    pub reorder_seconds: f64,
+    /// Reorderings done in this step.
+    pub reorderings: usize,
 }
 
 /// What the loop reports besides the iterations, known before they start.
@@ -368,6 +454,8 @@ struct Start {
     edge: f64,
     /// (F, |grad F|) at the start.
     first: (f64, f64),
+    /// Seconds and count of the sweep-list ordering done at the start.
+    first_reorder: (f64, usize),
 }
 
 /// The iteration loop shared by every method and backend: history, progress
@@ -398,6 +486,8 @@ fn iterate(
     };
     let mut iterations = 0;
     let mut cg_iterations = 0;
+    let mut optimise_seconds = 0.0;
+    let (mut reorder_seconds, mut reorderings) = begin.first_reorder;
     while stop.is_none() {
         if params.target_objective.is_some_and(|t| f <= t) {
             stop = Some(StopReason::TargetReached);
@@ -418,6 +508,9 @@ fn iterate(
         let sweep = step()?;
         iterations += 1;
         cg_iterations += sweep.cg_iterations;
+        optimise_seconds += sweep.optimise_seconds.unwrap_or(0.0);
+        reorder_seconds += sweep.reorder_seconds;
+        reorderings += sweep.reorderings;
         (f, gnorm) = (sweep.objective, sweep.grad_norm);
         record = Record {
             iteration: iterations,
@@ -450,6 +543,9 @@ fn iterate(
         objective: f,
         grad_norm: gnorm,
         seconds: start.elapsed().as_secs_f64(),
+        optimise_seconds,
+        reorder_seconds,
+        reorderings,
         setup_seconds: setup.seconds,
         memory_bytes: setup.memory_bytes,
         colors: setup.colors,

@@ -5,14 +5,14 @@
 //! rejected. Written once over `Backend`.
 
 use super::line_search::LineSearch;
-use super::pcg::{FIRST_FREE_SLOT, NegativeCurvature, PcgInfo, PcgParams, PcgWork, pcg};
+use super::pcg::{FIRST_FREE_SLOT, NegativeCurvature, PcgInfo, PcgParams, PcgWork, Preconditioner, pcg};
 use super::{Sweep, accepted_step_inverted};
 use crate::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
 use crate::error::Result;
 use std::time::{Duration, Instant};
 
 /// Newton's own settings (termination is in `solve::Params`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NewtonParams {
     /// Most CG iterations per Newton step.
     pub cg_max_iter: usize,
@@ -24,6 +24,8 @@ pub struct NewtonParams {
     pub negative_curvature: NegativeCurvature,
     /// The global Armijo line search.
     pub line_search: LineSearch,
+    /// CG's preconditioner.
+    pub preconditioner: Preconditioner,
 }
 
 impl Default for NewtonParams {
@@ -33,6 +35,7 @@ impl Default for NewtonParams {
             forcing_max: 0.5,
             negative_curvature: NegativeCurvature::Iterate,
             line_search: LineSearch::default(),
+            preconditioner: Preconditioner::Jacobi,
         }
     }
 }
@@ -75,6 +78,7 @@ impl Newton {
     /// assembles at the current positions. Fails if they are infeasible.
     pub fn new<B: Backend + ?Sized>(be: &mut B, params: NewtonParams) -> Result<Newton> {
         let start = Instant::now();
+        be.set_preconditioner(params.preconditioner)?;
         let hessian_bytes = be.prepare_hessian()?;
         let (g, rhs, d) = (be.vector()?, be.vector()?, be.vector()?);
         let work = PcgWork::new(be)?;
@@ -125,6 +129,7 @@ impl Newton {
             grad_norm: gnorm,
             max_move_sq: 0.0,
             cg_iterations: 0,
+            ..Default::default()
         };
         let g0 = *self.g0.get_or_insert(gnorm);
         let rtol = self.params.forcing_max.min((gnorm / g0).sqrt());
@@ -176,6 +181,7 @@ impl Newton {
                     grad_norm: self.current.1,
                     max_move_sq: alpha * alpha * s[DMAX.0 as usize],
                     cg_iterations: info.iterations,
+                    ..Default::default()
                 });
             }
             alpha *= ls.beta;

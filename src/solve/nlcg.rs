@@ -17,7 +17,7 @@ use crate::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
 use crate::error::Result;
 
 /// NLCG's own settings (the gradient tolerance is `Params::tol`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NlcgParams {
     /// Stop after a step that moved no vertex farther than this many mean
     /// edge lengths (the paper's tol_x); also the resolution of the line search.
@@ -177,6 +177,7 @@ impl Nlcg {
                 grad_norm: gg_new.sqrt(),
                 max_move_sq: (step.alpha * pmax).powi(2),
                 cg_iterations: 0,
+                ..Default::default()
             });
         }
         Ok(Sweep {
@@ -184,6 +185,7 @@ impl Nlcg {
             grad_norm: gg.sqrt(),
             max_move_sq: 0.0,
             cg_iterations: 0,
+            ..Default::default()
         })
     }
 }

@@ -82,6 +82,10 @@ pub fn reference_positions(p: &Problem, x: &[Vec3], device: Device, iters: usize
         // step 1 is cheap next to step 2, so it runs on the CPU there
         Device::Gpu(ctx) if ctx.is_software() => CpuBackend::new(p, x, &ls)?.reference_positions(iters),
         Device::Gpu(ctx) => GpuBackend::new(ctx, p, x, &ls)?.reference_positions(iters),
+        // rank 0 holds the whole problem, and step 1 moves no vertex: no
+        // exchange would help it (step 2 runs on the ranks)
+        #[cfg(feature = "mpi")]
+        Device::Mpi(_) => CpuBackend::new(p, x, &ls)?.reference_positions(iters),
     }
 }
 

@@ -259,6 +259,13 @@ pub fn untangle(
         let solved = match opts.device {
             Device::Cpu => run(&mut CpuBackend::new(&q, x, &ls)?, &q, x, &inner, progress)?,
             Device::Gpu(ctx) => run(&mut GpuBackend::new(ctx, &q, x, &ls)?, &q, x, &inner, progress)?,
+            #[cfg(feature = "mpi")]
+            Device::Mpi(_) => {
+                return Err(Error::InvalidArgument(
+                    "untangling runs on one process: untangle first (meshsmooth untangle), then smooth under mpirun"
+                        .into(),
+                ));
+            }
         };
         info.rounds += 1;
         info.iterations += solved.iterations;

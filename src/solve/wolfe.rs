@@ -28,7 +28,7 @@
 //! which is what is used here (checked on cubics in the tests).
 
 /// The constants of the search (the paper's values by default).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Wolfe {
     /// Sufficient decrease: phi(a) <= phi(0) + c1 a phi'(0).
     pub c1: f64,

@@ -142,20 +142,48 @@ fn dist_sq(a: &Vec3, b: &Vec3) -> f64 {
     (0..3).map(|i| (a[i] - b[i]).powi(2)).sum()
 }
 
-/// One sweep over all free vertices; stops early (leaving a valid state) at
-/// `deadline`. Returns the largest squared displacement.
-pub fn sweep(p: &Problem, x: &mut [Vec3], ls: &LineSearch, deadline: Option<Instant>) -> f64 {
+/// Up to `inner` Newton steps for vertex `v` (fewer when one finds no
+/// decrease): its position after the visit.
+#[inline]
+pub fn visit(p: &Problem, x: &[Vec3], v: usize, ls: &LineSearch, inner: usize, patch: &mut Patch) -> Vec3 {
+    patch.load(p, x, v);
+    let mut at = x[v];
+    for _ in 0..inner.max(1) {
+        match patch_step(p, patch, v, &at, ls, 0.0) {
+            Some(y) => at = y,
+            None => break,
+        }
+    }
+    at
+}
+
+/// One sweep over the free vertices in `visit`'s order with its inner
+/// iterations, writing each displacement to `moves` (indexed like
+/// `free_vertices`); stops early (leaving a valid state) at `deadline`.
+/// Returns the largest squared displacement.
+pub fn sweep(
+    p: &Problem,
+    x: &mut [Vec3],
+    ls: &LineSearch,
+    visit_as: &crate::backend::Visit,
+    mut moves: Option<&mut Vec<Vec3>>,
+    deadline: Option<Instant>,
+) -> f64 {
     let mut max_sq: f64 = 0.0;
     let mut patch = Patch::default();
-    for (i, &v) in p.free_vertices.iter().enumerate() {
+    let n = visit_as.order.map_or(p.free_vertices.len(), |o| o.len());
+    for i in 0..n {
         if i % 4096 == 4095 && deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        let v = v as usize;
-        if let Some(y) = newton_step(p, x, v, ls, &mut patch) {
-            max_sq = max_sq.max(dist_sq(&x[v], &y));
-            x[v] = y;
+        let f = visit_as.order.map_or(i, |o| o[i] as usize);
+        let v = p.free_vertices[f] as usize;
+        let y = visit(p, x, v, ls, visit_as.inner_iterations, &mut patch);
+        if let Some(m) = moves.as_deref_mut() {
+            m[f] = [y[0] - x[v][0], y[1] - x[v][1], y[2] - x[v][2]];
         }
+        max_sq = max_sq.max(dist_sq(&x[v], &y));
+        x[v] = y;
     }
     max_sq
 }

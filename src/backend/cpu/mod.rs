@@ -22,24 +22,26 @@ pub mod project_boundary;
 pub mod reduce;
 pub mod reference_position;
 pub mod set_slot;
+pub mod sym_hessian;
 
-use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, guard_passes};
+use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, Visit, guard_passes};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use crate::solve::line_search::LineSearch;
+use crate::solve::pcg::Preconditioner;
 use block_jacobi::BlockJacobi;
 use bsr_spmv::BlockCsr;
-use hessian_assemble::HessianPattern;
 use rayon::prelude::*;
 use std::time::Instant;
+use sym_hessian::{SymBlockCsr, SymHessian};
 
 pub struct CpuBackend<'p> {
     /// `None` for a bare linear system (`CpuBackend::linear`).
     p: Option<&'p Problem>,
     n_free: usize,
     /// The matrix of a bare linear system.
-    system: Option<BlockCsr>,
+    system: Option<SymBlockCsr>,
     ls: LineSearch,
     x: Vec<Vec3>,
     trial: Vec<Vec3>,
@@ -47,8 +49,9 @@ pub struct CpuBackend<'p> {
     slots: [f64; N_SLOTS],
     /// Largest squared move since the last `max_move`.
     moved: f64,
-    hessian: Option<HessianPattern>,
+    hessian: Option<SymHessian>,
     precond: Option<BlockJacobi>,
+    preconditioner: Preconditioner,
 }
 
 impl<'p> CpuBackend<'p> {
@@ -74,6 +77,7 @@ impl<'p> CpuBackend<'p> {
             moved: 0.0,
             hessian: None,
             precond: None,
+            preconditioner: Preconditioner::Jacobi,
         })
     }
 
@@ -84,7 +88,7 @@ impl<'p> CpuBackend<'p> {
         CpuBackend {
             p: None,
             n_free: matrix.rows(),
-            system: Some(matrix),
+            system: Some(SymBlockCsr::from_full(&matrix)),
             ls: LineSearch::default(),
             x: Vec::new(),
             trial: Vec::new(),
@@ -93,6 +97,7 @@ impl<'p> CpuBackend<'p> {
             moved: 0.0,
             hessian: None,
             precond: None,
+            preconditioner: Preconditioner::Jacobi,
         }
     }
 
@@ -101,7 +106,7 @@ impl<'p> CpuBackend<'p> {
             .ok_or_else(|| Error::InvalidArgument("a linear-system backend has no mesh".into()))
     }
 
-    fn matrix(&self) -> Result<&BlockCsr> {
+    fn matrix(&self) -> Result<&SymBlockCsr> {
         match (&self.hessian, &self.system) {
             (Some(h), _) => Ok(&h.matrix),
             (None, Some(m)) => Ok(m),
@@ -115,7 +120,7 @@ impl<'p> CpuBackend<'p> {
     }
 
     /// The assembled Hessian (after `assemble`), for tests.
-    pub fn hessian(&self) -> Option<&HessianPattern> {
+    pub fn hessian(&self) -> Option<&SymHessian> {
         self.hessian.as_ref()
     }
 
@@ -138,8 +143,37 @@ impl<'p> CpuBackend<'p> {
         }
     }
 
-    fn set(&mut self, s: Slot, v: f64) {
+    pub(crate) fn set(&mut self, s: Slot, v: f64) {
         self.slots[s.0 as usize] = v;
+    }
+}
+
+/// What the distributed backend, which wraps this one, reaches inside for.
+#[cfg(feature = "mpi")]
+impl CpuBackend<'_> {
+    /// A position set, for a wrapping backend that overwrites ghost positions.
+    pub(crate) fn points_mut(&mut self, at: Points) -> &mut [Vec3] {
+        match at {
+            Points::Current => &mut self.x,
+            Points::Trial => &mut self.trial,
+        }
+    }
+
+    pub(crate) fn points_ref(&self, at: Points) -> &[Vec3] {
+        self.points(at)
+    }
+
+    /// A vector's storage, for a wrapping backend's halo exchanges and reductions.
+    pub(crate) fn vector_mut(&mut self, v: Vector) -> &mut [Vec3] {
+        &mut self.vectors[v.0 as usize]
+    }
+
+    pub(crate) fn vector_ref(&self, v: Vector) -> &[Vec3] {
+        &self.vectors[v.0 as usize]
+    }
+
+    pub(crate) fn slot(&self, s: Slot) -> f64 {
+        self.slots[s.0 as usize]
     }
 }
 
@@ -241,8 +275,21 @@ impl Backend for CpuBackend<'_> {
         Ok(())
     }
 
-    fn bcd_sequential(&mut self, out: Slot, deadline: Option<Instant>) -> Result<bool> {
-        let m = bcd::sweep(self.problem()?, &mut self.x, &self.ls, deadline);
+    fn has_sequential_sweep(&self) -> bool {
+        self.p.is_some()
+    }
+
+    fn bcd_sequential(&mut self, visit: &Visit, out: Slot, deadline: Option<Instant>) -> Result<bool> {
+        let p = self.problem()?;
+        if let Some(order) = visit.order
+            && order.iter().any(|&i| i as usize >= self.n_free)
+        {
+            return Err(Error::InvalidArgument(
+                "a sweep order entry is not a free vertex".into(),
+            ));
+        }
+        let moves = visit.moves.map(|v| &mut self.vectors[v.0 as usize]);
+        let m = bcd::sweep(p, &mut self.x, &self.ls, visit, moves, deadline);
         self.set(out, m);
         Ok(true)
     }
@@ -263,8 +310,8 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {
-        let pattern = HessianPattern::new(self.problem()?);
-        let bytes = pattern.bytes() + 48 * pattern.free_vertex.len();
+        let pattern = SymHessian::new(self.problem()?);
+        let bytes = pattern.bytes() + 48 * pattern.matrix.rows();
         self.hessian = Some(pattern);
         Ok(bytes)
     }
@@ -281,7 +328,7 @@ impl Backend for CpuBackend<'_> {
         }
         if let Some(s) = &p.sliding {
             constrain::constrain(&s.projector, &p.free_vertices, grad);
-            constrain_blocks::constrain_blocks(&s.projector, &p.free_vertices, &mut h.matrix);
+            h.matrix.constrain(&s.projector, &p.free_vertices);
         }
         Ok(())
     }
@@ -301,9 +348,14 @@ impl Backend for CpuBackend<'_> {
         result
     }
 
+    fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
+        self.preconditioner = kind;
+        Ok(())
+    }
+
     fn factor_precond(&mut self) -> Result<()> {
         let m = self.matrix()?;
-        self.precond = Some(BlockJacobi::new(m.diag.par_iter().map(|&s| m.blocks[s as usize])));
+        self.precond = Some(BlockJacobi::new(m.diag.par_iter().copied()));
         Ok(())
     }
 
@@ -312,10 +364,23 @@ impl Backend for CpuBackend<'_> {
             .precond
             .take()
             .ok_or_else(|| Error::InvalidArgument("precond before factor_precond".into()))?;
+        let kind = self.preconditioner;
+        let (h, sys) = (self.hessian.take(), self.system.take());
         let (xs, ys) = self.pair(x, y);
-        m.apply(xs, ys);
+        let result = match (kind, h.as_ref().map(|h| &h.matrix).or(sys.as_ref())) {
+            (Preconditioner::Jacobi, _) => {
+                m.apply(xs, ys);
+                Ok(())
+            }
+            (Preconditioner::Sgs, Some(a)) => {
+                a.sgs(&m, xs, ys);
+                Ok(())
+            }
+            (Preconditioner::Sgs, None) => Err(Error::InvalidArgument("precond before assemble".into())),
+        };
+        (self.hessian, self.system) = (h, sys);
         self.precond = Some(m);
-        Ok(())
+        result
     }
 
     fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {

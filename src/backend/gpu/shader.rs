@@ -205,7 +205,7 @@ impl Form {
     pub const ALL: [Form; 5] = [Form::Fast, Form::Imr, Form::Cn, Form::Tmp, Form::Rj];
 
     /// The instance the model uniform asks for (`ModelUniform::of`).
-    pub fn of(model: &ModelUniform) -> Form {
+    pub(crate) fn of(model: &ModelUniform) -> Form {
         if model.fast != 0 {
             return Form::Fast;
         }

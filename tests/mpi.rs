@@ -1,0 +1,185 @@
+//! Partitioned smoothing under `mpirun` gives the single-process answer: the
+//! built binary is run on 1 to 4 ranks and compared with a plain run on a
+//! generated tet box, a Gmsh mesh, a mixed tet/prism/hex mesh and a planar
+//! triangle grid.
+//!
+//! Newton matches to 1e-10 (relative) in F and in the iterate with the same
+//! iteration count: per-vertex work gives the same bits on every partition,
+//! and only the ranks' partial sums are added in another order. Coloured BCD
+//! follows the same iterates exactly (its per-vertex steps see the same data,
+//! its only reduction that steers it is a maximum). Needs `mpirun` (Open MPI).
+#![cfg(feature = "mpi")]
+
+use meshsmooth::Mesh;
+use meshsmooth::metric::inverted_elements;
+use meshsmooth::problem::Problem;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_meshsmooth");
+
+struct Run {
+    /// F per iteration (the history CSV), the last the answer.
+    objective: Vec<f64>,
+    points: Vec<[f64; 3]>,
+    stdout: String,
+}
+
+fn smooth(ranks: Option<usize>, input: &Path, dir: &Path, method: &str) -> Run {
+    let tag = ranks.map_or("plain".to_string(), |n| format!("np{n}"));
+    let out = dir.join(format!("{tag}-{method}.vtu"));
+    let history = dir.join(format!("{tag}-{method}.csv"));
+    let mut cmd = match ranks {
+        Some(n) => {
+            let mut c = Command::new("mpirun");
+            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &n.to_string(), BIN]);
+            c
+        }
+        None => Command::new(BIN),
+    };
+    cmd.arg("smooth")
+        .arg(input)
+        .arg("-o")
+        .arg(&out)
+        .args(["--method", method, "--device", "cpu", "--history"])
+        .arg(&history)
+        .env_remove("OMPI_COMM_WORLD_SIZE");
+    let o = cmd.output().expect("mpirun runs (apt-get install openmpi-bin)");
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{tag} {method} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let csv = std::fs::read_to_string(&history).unwrap();
+    let objective = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    Run {
+        objective,
+        points: meshsmooth::io::read(&out).unwrap().points,
+        stdout,
+    }
+}
+
+fn max_rel(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let scale = a.iter().flatten().fold(0.0f64, |m, c| m.max(c.abs())).max(1e-300);
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+        / scale
+}
+
+fn meshes(dir: &Path) -> Vec<PathBuf> {
+    let generate = |args: &[&str], name: &str| {
+        let path = dir.join(name);
+        let o = Command::new(BIN)
+            .arg("generate")
+            .args(args)
+            .arg("-o")
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        path
+    };
+    let gmsh = dir.join("gmsh_box.msh");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop/gmsh_box_phys_msh41a.msh"),
+        &gmsh,
+    )
+    .unwrap();
+    vec![
+        generate(
+            &["box", "--cells", "5", "4", "4", "--perturb", "random:0.3"],
+            "tet_box.vtu",
+        ),
+        gmsh,
+        generate(
+            &["mixed", "--cells", "4", "--layers", "2", "--perturb", "random:0.25"],
+            "mixed.vtu",
+        ),
+        // planar: the parts carry the plane's frame
+        generate(
+            &["grid", "--cells", "10", "8", "--type", "tri", "--perturb", "random:0.3"],
+            "tri.vtu",
+        ),
+    ]
+}
+
+/// Vertices the problem fixes (the boundary and user-fixed ones) keep their bits.
+fn assert_fixed_unmoved(input: &Mesh, out: &[[f64; 3]], what: &str) {
+    let p = Problem::new(input).unwrap();
+    for (new, &old) in p.order.iter().enumerate() {
+        if !p.free[new] {
+            assert_eq!(
+                input.points[old as usize], out[old as usize],
+                "{what}: fixed vertex {old} moved"
+            );
+        }
+    }
+}
+
+fn compare(method: &str, f_tol: f64, x_tol: f64) {
+    let dir = tempfile::tempdir().unwrap();
+    for input in meshes(dir.path()) {
+        let mesh = meshsmooth::io::read(&input).unwrap();
+        let one = smooth(None, &input, dir.path(), method);
+        assert!(
+            one.objective.len() > 2,
+            "{}: the plain run did nothing",
+            input.display()
+        );
+        for ranks in 1..=4 {
+            let what = format!("{} {method} on {ranks} ranks", input.display());
+            let many = smooth(Some(ranks), &input, dir.path(), method);
+            assert!(
+                many.stdout.contains(&format!("mpi ({ranks} ranks)")),
+                "{what}: not partitioned:\n{}",
+                many.stdout
+            );
+            assert!(many.stdout.contains("edge cut"), "{what}: no partition report");
+            assert_eq!(many.objective.len(), one.objective.len(), "{what}: iteration count");
+            for (k, (a, b)) in one.objective.iter().zip(&many.objective).enumerate() {
+                assert!(
+                    (a - b).abs() <= f_tol * a.abs(),
+                    "{what}: F at iteration {k}: {a} vs {b}"
+                );
+            }
+            let dx = max_rel(&one.points, &many.points);
+            assert!(dx <= x_tol, "{what}: iterates differ by {dx:e}");
+            assert!(inverted_elements(&mesh, &many.points).is_empty(), "{what}: infeasible");
+            assert_fixed_unmoved(&mesh, &many.points, &what);
+        }
+    }
+}
+
+#[test]
+fn newton_on_ranks_matches_one_process() {
+    compare("newton", 1e-10, 1e-10);
+}
+
+#[test]
+fn colored_bcd_on_ranks_matches_one_process() {
+    compare("bcd-colored", 1e-8, 1e-8);
+}
+
+#[test]
+fn refusals_are_clean() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = &meshes(dir.path())[0];
+    let o = Command::new("mpirun")
+        .args(["--allow-run-as-root", "--oversubscribe", "-np", "2", BIN, "smooth"])
+        .arg(input)
+        .arg("-o")
+        .arg(dir.path().join("out.vtu"))
+        .args(["--method", "laplace"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("under MPI"));
+}
