@@ -3,7 +3,8 @@
 //! coloured BCD sweep, on a perturbed n^3 box of 6 n^3 tetrahedra.
 //!
 //! Run: cargo bench --bench setup_scale [-- --n 120] [--reps 3] [--io-only | --setup-only]
-//! (default n = 40; n = 120 is the 10.4M-tet box, about 0.7 GB per file)
+//! (default n = 40; n = 120 is the 10.4M-tet box, about 0.7 GB per file);
+//! `--keep DIR` keeps the files, `--read FILE` only reads one (for profiling).
 
 use meshsmooth::backend::cpu::bcd;
 use meshsmooth::backend::cpu::hessian_assemble::HessianPattern;
@@ -15,7 +16,9 @@ use std::time::Instant;
 
 fn arg(name: &str) -> Option<String> {
     let args: Vec<String> = std::env::args().collect();
-    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1).cloned())
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1).cloned())
 }
 
 /// Fastest of `reps` runs: on a shared machine the minimum is the least noisy.
@@ -32,6 +35,18 @@ fn best<T>(reps: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 }
 
 fn main() {
+    // profiling aid: read one file `reps` times and nothing else
+    if let Some(f) = arg("--read") {
+        let reps: usize = arg("--reps").and_then(|s| s.parse().ok()).unwrap_or(1);
+        let mb = std::fs::metadata(&f).unwrap().len() as f64 / 1e6;
+        let (r, m) = best(reps, || io::read(std::path::Path::new(&f)).unwrap());
+        println!(
+            "{f}: {} tets, {mb:.0} MB read in {r:.2} s, {:.0} MB/s",
+            m.num_elements(),
+            mb / r
+        );
+        return;
+    }
     let n: usize = arg("--n").and_then(|s| s.parse().ok()).unwrap_or(40);
     let reps: usize = arg("--reps").and_then(|s| s.parse().ok()).unwrap_or(3);
     let io_only = std::env::args().any(|a| a == "--io-only");
@@ -53,6 +68,7 @@ fn main() {
     );
     if !setup_only {
         let dir = tempfile::tempdir_in(std::env::var("SETUP_SCALE_DIR").unwrap_or_else(|_| ".".into())).unwrap();
+        let keep = arg("--keep");
         println!("| format | MB | write s | write MB/s | read s | read MB/s |");
         println!("|---|---|---|---|---|---|");
         for (fmt, ext) in [(Format::VtuBinary, "vtu"), (Format::Msh41Binary, "msh")] {
@@ -61,11 +77,10 @@ fn main() {
             let mb = std::fs::metadata(&path).unwrap().len() as f64 / 1e6;
             let (r, back) = best(reps, || io::read(&path).unwrap());
             assert_eq!(back.num_elements(), mesh.num_elements());
-            println!(
-                "| {fmt} | {mb:.0} | {w:.2} | {:.0} | {r:.2} | {:.0} |",
-                mb / w,
-                mb / r
-            );
+            if let Some(k) = &keep {
+                std::fs::copy(&path, std::path::Path::new(k).join(format!("box{n}.{ext}"))).unwrap();
+            }
+            println!("| {fmt} | {mb:.0} | {w:.2} | {:.0} | {r:.2} | {:.0} |", mb / w, mb / r);
         }
     }
     if io_only {

@@ -95,6 +95,9 @@ pub(crate) trait Source {
     fn left(&self) -> usize;
 }
 
+use base64::Engine;
+use base64::engine::general_purpose::STANDARD as B64;
+
 /// Raw bytes (appended `encoding="raw"`).
 pub(crate) struct RawSource<'a> {
     pub data: &'a [u8],
@@ -203,6 +206,55 @@ impl<'a> B64Source<'a> {
     }
 }
 
+impl B64Source<'_> {
+    /// Decodes a long run of whole quanta (no whitespace, no padding) with
+    /// the base64 crate, in parallel chunks, stopping at `quanta` quanta.
+    /// Returns false when there is no such run here (or it holds an invalid
+    /// character): [`quantum`](Self::quantum) then decodes, and reports
+    /// errors, exactly as before.
+    fn bulk(&mut self, quanta: usize) -> bool {
+        const MIN: usize = 1 << 12;
+        let rest = &self.text[self.pos..];
+        let mut run = rest.len().min(quanta.saturating_mul(4)) / 4 * 4;
+        // a padded last quantum is left to `quantum`
+        if run >= 4 && rest[run - 4..run].contains(&b'=') {
+            run -= 4;
+        }
+        // optimistic: the crate rejects whitespace and padding inside a run,
+        // and only then is the clean prefix looked for
+        if run >= MIN && self.decode_run(run) {
+            return true;
+        }
+        let clean = rest[..run]
+            .iter()
+            .position(|&c| c == b'=' || c.is_ascii_whitespace())
+            .unwrap_or(run)
+            / 4
+            * 4;
+        clean >= MIN && clean < run && self.decode_run(clean)
+    }
+
+    /// Decodes the next `run` characters (a multiple of 4) if they are all
+    /// base64 digits.
+    fn decode_run(&mut self, run: usize) -> bool {
+        use rayon::prelude::*;
+        const CHUNK: usize = 1 << 20;
+        let text = &self.text[self.pos..self.pos + run];
+        let old = self.pending.len();
+        self.pending.resize(old + run / 4 * 3, 0);
+        let ok = self.pending[old..]
+            .par_chunks_mut(CHUNK / 4 * 3)
+            .zip(text.par_chunks(CHUNK))
+            .all(|(out, inp)| matches!(B64.decode_slice_unchecked(inp, out), Ok(k) if k == out.len()));
+        if !ok {
+            self.pending.truncate(old);
+            return false;
+        }
+        self.pos += run;
+        true
+    }
+}
+
 impl Source for B64Source<'_> {
     fn take(&mut self, n: usize) -> PResult<Vec<u8>> {
         if n > self.left() {
@@ -215,6 +267,10 @@ impl Source for B64Source<'_> {
             ));
         }
         while self.pending.len() < n {
+            let need = n - self.pending.len();
+            if self.bulk(need.div_ceil(3)) {
+                continue;
+            }
             if !self.quantum()? {
                 return Err((
                     self.at(),

@@ -34,6 +34,8 @@ pub use smoothed::{eta_field, write_mesh};
 use std::fmt;
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use crate::error::{Error, Result};
 use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
 
@@ -437,6 +439,41 @@ impl RawMesh {
         }
     }
 
+    /// Whether every cell is an element (not a polyhedron): then the cell
+    /// arrays are the mesh's as they are.
+    fn lower_free(&self, has3d: bool) -> bool {
+        self.shapes
+            .par_iter()
+            .all(|s| matches!(s, Shape::Elem(k) if *k != ElementKind::Polyhedron && (k.dim() == 3 || !has3d)))
+    }
+
+    /// [`into_mesh`](Self::into_mesh) when [`lower_free`](Self::lower_free):
+    /// moves the arrays instead of copying cell by cell.
+    fn into_elements(self) -> Result<Mesh> {
+        let n = self.points.len();
+        let mut mesh = Mesh::new(self.points);
+        mesh.kinds = self
+            .shapes
+            .par_iter()
+            .map(|s| match s {
+                Shape::Elem(k) => *k,
+                _ => unreachable!("checked by lower_free"),
+            })
+            .collect();
+        mesh.offsets = if self.offsets.is_empty() { vec![0] } else { self.offsets };
+        mesh.conn = self.conn;
+        mesh.data.point = self.point_data;
+        mesh.data.cell = self.cell_data;
+        mesh.data.field = self.field_data;
+        mesh.data.physical_names = self.physical_names;
+        let mut fixed = self.fixed;
+        if fixed.iter().any(|&f| f) {
+            fixed.resize(n, false);
+            mesh.fixed = fixed;
+        }
+        Ok(mesh)
+    }
+
     pub fn into_mesh(self, path: &Path) -> Result<Mesh> {
         if self.points.is_empty() {
             return Err(Error::parse(path, None, "the file has no points"));
@@ -469,6 +506,13 @@ impl RawMesh {
                     ),
                 ));
             }
+        }
+        if !self.shapes.is_empty()
+            && self.faces.elem.is_empty()
+            && self.lower_free(has3d)
+            && self.conn.par_iter().all(|&v| (v as usize) < np)
+        {
+            return self.into_elements();
         }
         let mut elem_ids = Vec::with_capacity(ncells);
         let mut lower_ids = Vec::new();

@@ -273,7 +273,10 @@ impl Mesh {
             )));
         }
         let mut sorted: Vec<usize> = (0..n).collect();
-        sorted.sort_unstable_by(|&a, &b| self.points[a].partial_cmp(&self.points[b]).unwrap());
+        {
+            use rayon::prelude::*;
+            sorted.par_sort_unstable_by(|&a, &b| self.points[a].partial_cmp(&self.points[b]).unwrap());
+        }
         if let Some(w) = sorted
             .windows(2)
             // Coincident fixed vertices never move (real meshes have them on
@@ -291,15 +294,65 @@ impl Mesh {
 
     /// The first pair of elements (in file order) with the same vertex set.
     pub fn duplicate_elements(&self) -> Option<(usize, usize)> {
-        let mut seen = std::collections::HashMap::with_capacity(self.num_elements());
-        for e in 0..self.num_elements() {
-            let mut key = self.element(e).to_vec();
-            key.sort_unstable();
-            if let Some(&first) = seen.get(&key) {
-                return Some((first, e));
-            }
-            seen.insert(key, e);
-        }
-        None
+        use rayon::prelude::*;
+        // Elements with the same vertex set share their smallest vertex:
+        // bucketing by it (a counting sort) leaves small independent groups,
+        // so the check is linear and parallel instead of hashing every
+        // element's sorted vertex list.
+        let ne = self.num_elements();
+        let lowest: Vec<u32> = (0..ne)
+            .into_par_iter()
+            .map(|e| self.element(e).iter().copied().min().unwrap_or(u32::MAX))
+            .collect();
+        let nb = lowest
+            .iter()
+            .copied()
+            .filter(|&v| v != u32::MAX)
+            .max()
+            .map_or(0, |m| m as usize + 1);
+        let buckets = topology::Csr::from_pairs(
+            nb,
+            lowest
+                .iter()
+                .enumerate()
+                .filter(|&(_, &v)| v != u32::MAX)
+                .map(|(e, &v)| (v, e as u32)),
+        );
+        // what the sequential scan in file order finds first: the smallest
+        // second occurrence of a vertex set, paired with the set's first
+        (0..nb)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map_init(
+                || (Vec::<u32>::new(), Vec::<usize>::new(), Vec::<usize>::new()),
+                |(keys, starts, idx), v| {
+                    let group = buckets.of(v);
+                    if group.len() < 2 {
+                        return None;
+                    }
+                    keys.clear();
+                    starts.clear();
+                    for &e in group {
+                        starts.push(keys.len());
+                        let from = keys.len();
+                        keys.extend_from_slice(self.element(e as usize));
+                        keys[from..].sort_unstable();
+                    }
+                    starts.push(keys.len());
+                    let key = |i: usize| &keys[starts[i]..starts[i + 1]];
+                    idx.clear();
+                    idx.extend(0..group.len());
+                    // group is ascending, so ties keep file order
+                    idx.sort_by(|&a, &b| key(a).cmp(key(b)).then(a.cmp(&b)));
+                    idx.windows(2)
+                        .filter(|w| key(w[0]) == key(w[1]))
+                        .map(|w| (group[w[0]] as usize, group[w[1]] as usize))
+                        // within a run of equal sets the smallest second
+                        // element is the run's second, paired with its first
+                        .min_by_key(|&(_, b)| b)
+                },
+            )
+            .flatten()
+            .min_by_key(|&(_, b)| b)
     }
 }
