@@ -414,6 +414,24 @@ impl RawMesh {
         self.push_cell(shape, vertices);
     }
 
+    /// `ids.len() / nv` cells of one shape with `nv` vertices each.
+    pub fn push_block(&mut self, shape: Shape, nv: usize, ids: &[u32]) {
+        let k = if nv == 0 { 0 } else { ids.len() / nv };
+        if !self.faces.elem.is_empty() {
+            for vs in ids.chunks_exact(nv) {
+                self.push(shape, vs);
+            }
+            return;
+        }
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        let base = self.conn.len();
+        self.shapes.resize(self.shapes.len() + k, shape);
+        self.conn.extend_from_slice(ids);
+        self.offsets.extend((1..=k).map(|i| base + i * nv));
+    }
+
     /// A polyhedral cell with its vertex list and faces (vertex ids).
     pub fn push_polyhedron(&mut self, vertices: &[u32], faces: &[Vec<u32>]) {
         self.faces.push(self.shapes.len(), faces.iter().map(|f| &f[..]));

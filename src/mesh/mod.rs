@@ -272,11 +272,25 @@ impl Mesh {
                 &unused[..unused.len().min(5)]
             )));
         }
-        let mut sorted: Vec<usize> = (0..n).collect();
-        {
+        let sorted: Vec<usize> = {
             use rayon::prelude::*;
-            sorted.par_sort_unstable_by(|&a, &b| self.points[a].partial_cmp(&self.points[b]).unwrap());
-        }
+            // Sorting the coordinates themselves, as integers ordered like
+            // the (finite) floats, streams through memory; comparing through
+            // indices missed the cache on every comparison. -0.0 becomes 0.0
+            // so that points equal as floats stay neighbours.
+            let key = |x: f64| {
+                let b = (x + 0.0).to_bits();
+                if b >> 63 == 1 { !b } else { b | 1 << 63 }
+            };
+            let mut keys: Vec<([u64; 3], u32)> = self
+                .points
+                .par_iter()
+                .enumerate()
+                .map(|(i, p)| ([key(p[0]), key(p[1]), key(p[2])], i as u32))
+                .collect();
+            keys.par_sort_unstable();
+            keys.into_par_iter().map(|(_, i)| i as usize).collect()
+        };
         if let Some(w) = sorted
             .windows(2)
             // Coincident fixed vertices never move (real meshes have them on
