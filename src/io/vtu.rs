@@ -19,7 +19,7 @@ use quick_xml::events::{BytesStart, Event};
 use quick_xml::reader::Reader;
 use rayon::prelude::*;
 
-use super::codec::{B64Source, Codec, Layout, RawSource, Source, zlib_blocks};
+use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, zlib_blocks};
 use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
 use super::vtk::{vtk_shape, vtk_type_name};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
@@ -1165,11 +1165,11 @@ impl Out<'_> {
             Encoding::Base64 => {
                 let data = array_bytes(a);
                 let header = (data.len() as u64).to_le_bytes();
-                writeln!(self.w, "{}{}", B64.encode(header), B64.encode(&data))?;
+                writeln!(self.w, "{}{}", B64.encode(header), b64_encode(&data))?;
             }
             Encoding::Zlib => {
                 let (header, body) = zlib_blocks(&array_bytes(a));
-                writeln!(self.w, "{}{}", B64.encode(header), B64.encode(body))?;
+                writeln!(self.w, "{}{}", B64.encode(header), b64_encode(&body))?;
             }
         }
         writeln!(self.w, "{indent}</{tag}>")?;
