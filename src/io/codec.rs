@@ -228,12 +228,14 @@ impl B64Source<'_> {
         // stops there, so each character is looked at a bounded number of
         // times however often the text is wrapped
         use rayon::prelude::*;
-        let clean = rest[..run]
-            .par_iter()
-            .with_min_len(1 << 16)
-            .position_first(|&c| b64_value(c).is_none())
-            .unwrap_or(run)
-            / 4
+        const SCAN: usize = 1 << 16;
+        let bad = |c: &u8| b64_value(*c).is_none();
+        // whole chunks in parallel (rayon's per-item search is slow), then
+        // the first bad chunk byte by byte
+        let clean = match rest[..run].par_chunks(SCAN).position_first(|ch| ch.iter().any(bad)) {
+            Some(k) => k * SCAN + rest[k * SCAN..run].iter().position(bad).unwrap_or(0),
+            None => run,
+        } / 4
             * 4;
         clean >= MIN && self.decode_run(clean)
     }
