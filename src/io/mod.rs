@@ -416,7 +416,7 @@ impl RawMesh {
 
     /// `ids.len() / nv` cells of one shape with `nv` vertices each.
     pub fn push_block(&mut self, shape: Shape, nv: usize, ids: &[u32]) {
-        let k = if nv == 0 { 0 } else { ids.len() / nv };
+        let k = ids.len().checked_div(nv).unwrap_or(0);
         if !self.faces.elem.is_empty() {
             for vs in ids.chunks_exact(nv) {
                 self.push(shape, vs);
