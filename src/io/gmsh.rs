@@ -968,3 +968,31 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     writeln!(w, "$EndElements")?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::TagMap;
+
+    #[test]
+    fn tag_map_finds_dense_and_sparse_tags_and_refuses_repeats() {
+        let mut m = TagMap::default();
+        let tags = [1u64, 2, 3, 1 << 40, 7, 500_000, 4];
+        for (i, &t) in tags.iter().enumerate() {
+            assert!(m.insert(t, i as u32), "tag {t}");
+        }
+        for (i, &t) in tags.iter().enumerate() {
+            assert_eq!(m.get(t), Some(i as u32), "tag {t}");
+        }
+        assert_eq!(m.get(5), None);
+        assert_eq!(m.get(u64::MAX), None);
+        assert!(!m.insert(1 << 40, 9));
+        assert!(!m.insert(3, 9));
+        // a tag first stored sparsely is still found once the table has grown past it
+        for t in 8..200_000u64 {
+            assert!(m.insert(t, t as u32));
+        }
+        assert!(!m.insert(500_000, 1));
+        assert_eq!(m.get(500_000), Some(5));
+        assert_eq!(m.len(), tags.len() + 200_000 - 8);
+    }
+}
