@@ -7,9 +7,9 @@ mod compare;
 mod device;
 mod generate;
 mod progress;
-mod rezone;
 #[cfg(feature = "mpi")]
 pub(crate) mod ranks;
+mod rezone;
 mod study;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};

@@ -13,6 +13,8 @@ use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use super::lex::{Cursor, clip};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
 use crate::error::{Error, Result};
@@ -67,6 +69,58 @@ fn shape_of(tag: u64, t: i64) -> std::result::Result<Shape, String> {
     }
 }
 
+/// Node tag to point id. Gmsh numbers nodes 1..n almost always, so tags up
+/// to about twice the node count index a table; only tags far beyond it (a
+/// sparse numbering) go to a hash map, which keeps memory linear in the
+/// nodes and the hash out of the element loop.
+#[derive(Default)]
+struct TagMap {
+    dense: Vec<u32>,
+    sparse: HashMap<u64, u32>,
+    len: usize,
+}
+
+impl TagMap {
+    const NONE: u32 = u32::MAX;
+
+    /// False if `tag` is already there.
+    fn insert(&mut self, tag: u64, id: u32) -> bool {
+        if !self.sparse.is_empty() && self.sparse.contains_key(&tag) {
+            return false;
+        }
+        let bound = 2 * (self.len as u64 + 1) + (1 << 16);
+        if tag >= self.dense.len() as u64 && tag < bound {
+            let want = (tag as usize + 1).max((2 * self.dense.len()).min(bound as usize));
+            self.dense.resize(want, Self::NONE);
+        }
+        match usize::try_from(tag).ok().and_then(|t| self.dense.get_mut(t)) {
+            Some(slot) => {
+                if *slot != Self::NONE {
+                    return false;
+                }
+                *slot = id;
+            }
+            _ => {
+                self.sparse.insert(tag, id);
+            }
+        }
+        self.len += 1;
+        true
+    }
+
+    fn get(&self, tag: u64) -> Option<u32> {
+        match usize::try_from(tag).ok().and_then(|t| self.dense.get(t)) {
+            Some(&id) if id != Self::NONE => Some(id),
+            _ if self.sparse.is_empty() => None,
+            _ => self.sparse.get(&tag).copied(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.len
+    }
+}
+
 struct Reader<'a> {
     c: Cursor<'a>,
     binary: bool,
@@ -74,7 +128,7 @@ struct Reader<'a> {
     dsize: usize,
     v4: bool,
     raw: RawMesh,
-    tags: HashMap<u64, u32>,
+    tags: TagMap,
     has_nodes: bool,
     has_elements: bool,
     /// Physical and elementary tag of every cell read.
@@ -137,7 +191,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         dsize,
         v4,
         raw: RawMesh::default(),
-        tags: HashMap::new(),
+        tags: TagMap::default(),
         has_nodes: false,
         has_elements: false,
         physical: Vec::new(),
@@ -269,7 +323,7 @@ impl Reader<'_> {
             return Err(self.err(format!("point {i} (node {tag}) has a non-finite coordinate {p:?}")));
         }
         let id = self.raw.points.len() as u32;
-        if self.tags.insert(tag, id).is_some() {
+        if !self.tags.insert(tag, id) {
             return Err(self.err(format!("node tag {tag} appears twice")));
         }
         self.raw.points.push(p);
@@ -318,6 +372,10 @@ impl Reader<'_> {
                     }
                     tags.push(self.uint(true, "a node tag")?);
                 }
+                if self.binary && extra == 0 && self.bulk_nodes(&tags)? {
+                    read += k;
+                    continue;
+                }
                 for (j, &tag) in tags.iter().enumerate() {
                     if self.eof_text() {
                         return Err(self.truncated("$Nodes coordinates", n, read + j));
@@ -346,7 +404,7 @@ impl Reader<'_> {
         let k = shape.num_vertices();
         for v in vs.iter_mut().take(k) {
             let nt = self.uint(wide, "element nodes")?;
-            *v = *self.tags.get(&nt).ok_or_else(|| {
+            *v = self.tags.get(nt).ok_or_else(|| {
                 self.err(format!(
                     "element {tag} refers to node {nt}, which is not in $Nodes ({} nodes)",
                     self.tags.len()
@@ -355,6 +413,87 @@ impl Reader<'_> {
         }
         self.raw.push(shape, &vs[..k]);
         Ok(())
+    }
+
+    /// The coordinates of a binary 4.1 node block read at once and decoded
+    /// in parallel; false (nothing consumed) when the block is short or has
+    /// a non-finite coordinate, which the node-by-node loop then reports.
+    fn bulk_nodes(&mut self, tags: &[u64]) -> Result<bool> {
+        let k = tags.len();
+        if k == 0 || k.saturating_mul(24) > self.c.remaining() {
+            return Ok(false);
+        }
+        let save = self.c.clone();
+        let bytes = self.c.bytes(k * 24, "node coordinates")?;
+        let f = |b: &[u8]| f64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
+        let points: Vec<[f64; 3]> = bytes
+            .par_chunks_exact(24)
+            .map(|b| [f(&b[..8]), f(&b[8..16]), f(&b[16..])])
+            .collect();
+        if !points.par_iter().all(|p| p.iter().all(|x| x.is_finite())) {
+            self.c = save;
+            return Ok(false);
+        }
+        let base = self.raw.points.len() as u32;
+        for (j, &tag) in tags.iter().enumerate() {
+            if !self.tags.insert(tag, base + j as u32) {
+                // where the node-by-node loop stops: after this node's coordinates
+                self.c = save;
+                self.c.bytes((j + 1) * 24, "node coordinates")?;
+                return Err(self.err(format!("node tag {tag} appears twice")));
+            }
+        }
+        self.raw.points.extend_from_slice(&points);
+        Ok(true)
+    }
+
+    /// A binary 4.1 block of `k` elements of type `t` read at once, the node
+    /// tags looked up in parallel. False (nothing consumed) when the block
+    /// is short or names an unknown node or type: the element-by-element
+    /// loop then reads it and names the culprit.
+    fn bulk_elements(&mut self, k: usize, t: i64, physical: i64, elementary: i64) -> bool {
+        let Ok(shape) = shape_of(0, t) else {
+            return false;
+        };
+        let (nv, d) = (shape.num_vertices(), self.dsize);
+        let rec = (1 + nv) * d;
+        let Some(len) = k.checked_mul(rec).filter(|&l| l <= self.c.remaining() && k > 0) else {
+            return false;
+        };
+        let save = self.c.clone();
+        let Ok(bytes) = self.c.bytes(len, "elements") else {
+            self.c = save;
+            return false;
+        };
+        let word = |b: &[u8]| match d {
+            8 => u64::from_le_bytes(b.try_into().unwrap_or([0; 8])),
+            _ => i32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as u32 as u64,
+        };
+        let mut ids = vec![0u32; k * nv];
+        let tags = &self.tags;
+        let found = ids
+            .par_chunks_mut(nv.max(1))
+            .zip(bytes.par_chunks_exact(rec))
+            .with_min_len(1 << 12)
+            .all(|(out, r)| {
+                out.iter_mut()
+                    .zip(r[d..].chunks_exact(d))
+                    .all(|(o, b)| match tags.get(word(b)) {
+                        Some(id) => {
+                            *o = id;
+                            true
+                        }
+                        None => false,
+                    })
+            });
+        if !found {
+            self.c = save;
+            return false;
+        }
+        self.raw.push_block(shape, nv, &ids);
+        self.physical.resize(self.physical.len() + k, physical);
+        self.elementary.resize(self.elementary.len() + k, elementary);
+        true
     }
 
     /// A signed int (text, or 4 binary bytes): entity tags can be negative.
@@ -490,6 +629,10 @@ impl Reader<'_> {
                 let physical = self.entity_physical.get(&(dim, entity)).copied().unwrap_or(0);
                 let t = self.uint(false, "elementType")? as i64;
                 let k = self.count(true, "numElementsInBlock")?;
+                if self.binary && self.bulk_elements(k, t, physical, entity as i64) {
+                    read += k;
+                    continue;
+                }
                 for j in 0..k {
                     if self.eof_text() {
                         return Err(self.truncated("$Elements", m, read + j));
@@ -824,4 +967,32 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     check_cell_data(mesh, cell_data)?;
     writeln!(w, "$EndElements")?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TagMap;
+
+    #[test]
+    fn tag_map_finds_dense_and_sparse_tags_and_refuses_repeats() {
+        let mut m = TagMap::default();
+        let tags = [1u64, 2, 3, 1 << 40, 7, 500_000, 4];
+        for (i, &t) in tags.iter().enumerate() {
+            assert!(m.insert(t, i as u32), "tag {t}");
+        }
+        for (i, &t) in tags.iter().enumerate() {
+            assert_eq!(m.get(t), Some(i as u32), "tag {t}");
+        }
+        assert_eq!(m.get(5), None);
+        assert_eq!(m.get(u64::MAX), None);
+        assert!(!m.insert(1 << 40, 9));
+        assert!(!m.insert(3, 9));
+        // a tag first stored sparsely is still found once the table has grown past it
+        for t in 8..200_000u64 {
+            assert!(m.insert(t, t as u32));
+        }
+        assert!(!m.insert(500_000, 1));
+        assert_eq!(m.get(500_000), Some(5));
+        assert_eq!(m.len(), tags.len() + 200_000 - 8);
+    }
 }

@@ -391,11 +391,26 @@ impl Scalar {
 
     /// Values of `bytes` (a whole number of values) as typed values.
     pub fn decode_all(self, e: Endian, bytes: &[u8]) -> crate::mesh::Values {
+        use rayon::prelude::*;
         let s = self.size();
+        // a 10M-tet connectivity is 330 MB: worth both cores
+        let min = (1 << 16) / s;
         if self.is_float() {
-            crate::mesh::Values::Float(bytes.chunks_exact(s).map(|c| self.get(e, c)).collect())
+            crate::mesh::Values::Float(
+                bytes
+                    .par_chunks_exact(s)
+                    .with_min_len(min)
+                    .map(|c| self.get(e, c))
+                    .collect(),
+            )
         } else {
-            crate::mesh::Values::Int(bytes.chunks_exact(s).map(|c| self.get_i64(e, c)).collect())
+            crate::mesh::Values::Int(
+                bytes
+                    .par_chunks_exact(s)
+                    .with_min_len(min)
+                    .map(|c| self.get_i64(e, c))
+                    .collect(),
+            )
         }
     }
 

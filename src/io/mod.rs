@@ -34,6 +34,8 @@ pub use smoothed::{eta_field, write_mesh};
 use std::fmt;
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use crate::error::{Error, Result};
 use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
 
@@ -412,6 +414,24 @@ impl RawMesh {
         self.push_cell(shape, vertices);
     }
 
+    /// `ids.len() / nv` cells of one shape with `nv` vertices each.
+    pub fn push_block(&mut self, shape: Shape, nv: usize, ids: &[u32]) {
+        let k = ids.len().checked_div(nv).unwrap_or(0);
+        if !self.faces.elem.is_empty() {
+            for vs in ids.chunks_exact(nv) {
+                self.push(shape, vs);
+            }
+            return;
+        }
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        let base = self.conn.len();
+        self.shapes.resize(self.shapes.len() + k, shape);
+        self.conn.extend_from_slice(ids);
+        self.offsets.extend((1..=k).map(|i| base + i * nv));
+    }
+
     /// A polyhedral cell with its vertex list and faces (vertex ids).
     pub fn push_polyhedron(&mut self, vertices: &[u32], faces: &[Vec<u32>]) {
         self.faces.push(self.shapes.len(), faces.iter().map(|f| &f[..]));
@@ -435,6 +455,41 @@ impl RawMesh {
         if let Some(f) = self.fixed.get_mut(v) {
             *f = true;
         }
+    }
+
+    /// Whether every cell is an element (not a polyhedron): then the cell
+    /// arrays are the mesh's as they are.
+    fn lower_free(&self, has3d: bool) -> bool {
+        self.shapes
+            .par_iter()
+            .all(|s| matches!(s, Shape::Elem(k) if *k != ElementKind::Polyhedron && (k.dim() == 3 || !has3d)))
+    }
+
+    /// [`into_mesh`](Self::into_mesh) when [`lower_free`](Self::lower_free):
+    /// moves the arrays instead of copying cell by cell.
+    fn into_elements(self) -> Result<Mesh> {
+        let n = self.points.len();
+        let mut mesh = Mesh::new(self.points);
+        mesh.kinds = self
+            .shapes
+            .par_iter()
+            .map(|s| match s {
+                Shape::Elem(k) => *k,
+                _ => unreachable!("checked by lower_free"),
+            })
+            .collect();
+        mesh.offsets = if self.offsets.is_empty() { vec![0] } else { self.offsets };
+        mesh.conn = self.conn;
+        mesh.data.point = self.point_data;
+        mesh.data.cell = self.cell_data;
+        mesh.data.field = self.field_data;
+        mesh.data.physical_names = self.physical_names;
+        let mut fixed = self.fixed;
+        if fixed.iter().any(|&f| f) {
+            fixed.resize(n, false);
+            mesh.fixed = fixed;
+        }
+        Ok(mesh)
     }
 
     pub fn into_mesh(self, path: &Path) -> Result<Mesh> {
@@ -469,6 +524,13 @@ impl RawMesh {
                     ),
                 ));
             }
+        }
+        if !self.shapes.is_empty()
+            && self.faces.elem.is_empty()
+            && self.lower_free(has3d)
+            && self.conn.par_iter().all(|&v| (v as usize) < np)
+        {
+            return self.into_elements();
         }
         let mut elem_ids = Vec::with_capacity(ncells);
         let mut lower_ids = Vec::new();

@@ -17,11 +17,12 @@ use base64::Engine;
 use base64::engine::general_purpose::STANDARD as B64;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::reader::Reader;
+use rayon::prelude::*;
 
-use super::codec::{B64Source, Codec, Layout, RawSource, Source, zlib_blocks};
+use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, zlib_blocks};
 use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
 use super::vtk::{vtk_shape, vtk_type_name};
-use super::{CellData, RawMesh, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
+use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
 use crate::error::{Error, Location, Result};
 use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
 
@@ -315,7 +316,18 @@ fn attr(e: &BytesStart, key: &str) -> Option<String> {
 }
 
 fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    hay.windows(needle.len()).position(|w| w == needle)
+    // scanning for the first byte alone vectorises; comparing a window at
+    // every offset of a gigabyte file took longer than decoding it
+    let (&first, _) = needle.split_first()?;
+    let mut from = 0;
+    while let Some(i) = hay[from..].iter().position(|&b| b == first) {
+        let at = from + i;
+        if hay[at..].starts_with(needle) {
+            return Some(at);
+        }
+        from = at + 1;
+    }
+    None
 }
 
 fn rfind(hay: &[u8], needle: &[u8]) -> Option<usize> {
@@ -652,10 +664,23 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
         match s.section {
             Section::Points => pts = Some((numbers(ctx, s, d)?, s.at)),
             Section::Cells => {
+                let main = match s.name.as_str() {
+                    "connectivity" => Some(&mut conn),
+                    "offsets" => Some(&mut offs),
+                    "types" => Some(&mut types),
+                    _ => None,
+                };
+                if let Some(slot) = main {
+                    *slot = Some((
+                        match d {
+                            Decoded::Num(_, Values::Int(v)) => Ints::I(v),
+                            d => Ints::F(numbers(ctx, s, d)?),
+                        },
+                        s.at,
+                    ));
+                    continue;
+                }
                 let slot = match s.name.as_str() {
-                    "connectivity" => &mut conn,
-                    "offsets" => &mut offs,
-                    "types" => &mut types,
                     "faces" => &mut poly.faces,
                     "faceoffsets" => &mut poly.faceoffsets,
                     "face_connectivity" => &mut poly.face_connectivity,
@@ -711,12 +736,119 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
             ));
         }
     }
-    for (i, p) in pts.chunks_exact(3).enumerate() {
-        if p.iter().any(|c| !c.is_finite()) {
-            return Err(ctx.err(pat, format!("point {i} has a non-finite coordinate {p:?}")));
+    if pts.par_iter().all(|c| c.is_finite()) {
+        raw.points = pts.par_chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+    } else {
+        for (i, p) in pts.chunks_exact(3).enumerate() {
+            if p.iter().any(|c| !c.is_finite()) {
+                return Err(ctx.err(pat, format!("point {i} has a non-finite coordinate {p:?}")));
+            }
         }
-        raw.points.push([p[0], p[1], p[2]]);
     }
+    let fast = match (&conn, &offs, &types) {
+        (Ints::I(c), Ints::I(o), Ints::I(t)) => fast_cells(c, o, t, np),
+        _ => None,
+    };
+    if let Some((shapes, offsets, ids)) = fast {
+        raw.shapes = shapes;
+        raw.offsets = offsets;
+        raw.conn = ids;
+    } else {
+        slow_cells(
+            ctx,
+            &mut raw,
+            poly,
+            conn.into_f64(),
+            (offs.into_f64(), oat),
+            (types.into_f64(), tat),
+            (cat, np),
+        )?;
+    }
+    if let Some((f, fat)) = fixed {
+        if f.len() != np {
+            return Err(ctx.err(fat, format!("PointData 'fixed' has {} values for {np} points", f.len())));
+        }
+        for (v, _) in f.iter().enumerate().filter(|(_, x)| **x != 0.0) {
+            raw.fix(v);
+        }
+    }
+    Ok(raw)
+}
+
+/// Connectivity, offsets or types as read: integers stay integers (a
+/// 10M-tet file has 40M connectivity values, and a round trip through f64
+/// cost a pass and a copy).
+enum Ints {
+    I(Vec<i64>),
+    F(Vec<f64>),
+}
+
+impl Ints {
+    fn len(&self) -> usize {
+        match self {
+            Ints::I(v) => v.len(),
+            Ints::F(v) => v.len(),
+        }
+    }
+
+    fn into_f64(self) -> Vec<f64> {
+        match self {
+            Ints::I(v) => v.into_par_iter().map(|x| x as f64).collect(),
+            Ints::F(v) => v,
+        }
+    }
+}
+
+/// Cells without polyhedra whose arrays are all valid, checked and
+/// converted in parallel: shapes, offsets (with the leading 0) and vertex
+/// ids. `None` for anything else; [`slow_cells`] then builds the cells, or
+/// names the first bad one, exactly as it always has.
+fn fast_cells(conn: &[i64], offs: &[i64], types: &[i64], np: usize) -> Option<(Vec<Shape>, Vec<usize>, Vec<u32>)> {
+    let mut table: [Option<(Shape, usize)>; 256] = [None; 256];
+    for (t, slot) in table.iter_mut().enumerate() {
+        *slot = vtk_shape(0, t as i64)
+            .ok()
+            .filter(|s| *s != Shape::Elem(ElementKind::Polyhedron))
+            .map(|s| (s, s.num_vertices()));
+    }
+    let len = conn.len() as i64;
+    let ok = (0..offs.len()).into_par_iter().with_min_len(1 << 14).all(|e| {
+        let start = if e == 0 { 0 } else { offs[e - 1] };
+        let end = offs[e];
+        let fits = usize::try_from(types[e])
+            .ok()
+            .and_then(|t| table.get(t).copied().flatten())
+            .is_some_and(|(_, nv)| end - start == nv as i64);
+        start >= 0 && end >= start && end <= len && fits
+    });
+    if !ok {
+        return None;
+    }
+    let used = offs.last().map_or(0, |&o| o as usize);
+    let conn = &conn[..used];
+    if !conn.par_iter().all(|&v| v >= 0 && (v as u64) < np as u64) {
+        return None;
+    }
+    let shapes = types
+        .par_iter()
+        .map(|&t| table[t as usize].map(|(s, _)| s).unwrap_or(Shape::Vertex))
+        .collect();
+    let offsets = std::iter::once(0).chain(offs.iter().map(|&o| o as usize)).collect();
+    let ids = conn.par_iter().map(|&v| v as u32).collect();
+    Some((shapes, offsets, ids))
+}
+
+/// Cells one by one, polyhedra included, stopping at the first bad one.
+fn slow_cells(
+    ctx: &Ctx,
+    raw: &mut RawMesh,
+    poly: PolyArrays,
+    conn: Vec<f64>,
+    (offs, oat): (Vec<f64>, usize),
+    (types, tat): (Vec<f64>, usize),
+    (cat, np): (usize, usize),
+) -> Result<()> {
+    let nc = types.len();
     let mut cell_faces = poly.cells(ctx, &types, np)?;
     let mut start = 0;
     let mut ids = Vec::new();
@@ -763,15 +895,7 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
         raw.push(shape, &ids);
         start = end;
     }
-    if let Some((f, fat)) = fixed {
-        if f.len() != np {
-            return Err(ctx.err(fat, format!("PointData 'fixed' has {} values for {np} points", f.len())));
-        }
-        for (v, _) in f.iter().enumerate().filter(|(_, x)| **x != 0.0) {
-            raw.fix(v);
-        }
-    }
-    Ok(raw)
+    Ok(())
 }
 
 /// The Cells arrays of polyhedra: VTK's first layout (`faces`, one face
@@ -1041,11 +1165,11 @@ impl Out<'_> {
             Encoding::Base64 => {
                 let data = array_bytes(a);
                 let header = (data.len() as u64).to_le_bytes();
-                writeln!(self.w, "{}{}", B64.encode(header), B64.encode(&data))?;
+                writeln!(self.w, "{}{}", B64.encode(header), b64_encode(&data))?;
             }
             Encoding::Zlib => {
                 let (header, body) = zlib_blocks(&array_bytes(a));
-                writeln!(self.w, "{}{}", B64.encode(header), B64.encode(body))?;
+                writeln!(self.w, "{}{}", B64.encode(header), b64_encode(&body))?;
             }
         }
         writeln!(self.w, "{indent}</{tag}>")?;

@@ -273,8 +273,25 @@ impl Mesh {
                 &unused[..unused.len().min(5)]
             )));
         }
-        let mut sorted: Vec<usize> = (0..n).collect();
-        sorted.sort_unstable_by(|&a, &b| self.points[a].partial_cmp(&self.points[b]).unwrap());
+        let sorted: Vec<usize> = {
+            use rayon::prelude::*;
+            // Sorting the coordinates themselves, as integers ordered like
+            // the (finite) floats, streams through memory; comparing through
+            // indices missed the cache on every comparison. -0.0 becomes 0.0
+            // so that points equal as floats stay neighbours.
+            let key = |x: f64| {
+                let b = (x + 0.0).to_bits();
+                if b >> 63 == 1 { !b } else { b | 1 << 63 }
+            };
+            let mut keys: Vec<([u64; 3], u32)> = self
+                .points
+                .par_iter()
+                .enumerate()
+                .map(|(i, p)| ([key(p[0]), key(p[1]), key(p[2])], i as u32))
+                .collect();
+            keys.par_sort_unstable();
+            keys.into_par_iter().map(|(_, i)| i as usize).collect()
+        };
         if let Some(w) = sorted
             .windows(2)
             // Coincident fixed vertices never move (real meshes have them on
@@ -292,15 +309,65 @@ impl Mesh {
 
     /// The first pair of elements (in file order) with the same vertex set.
     pub fn duplicate_elements(&self) -> Option<(usize, usize)> {
-        let mut seen = std::collections::HashMap::with_capacity(self.num_elements());
-        for e in 0..self.num_elements() {
-            let mut key = self.element(e).to_vec();
-            key.sort_unstable();
-            if let Some(&first) = seen.get(&key) {
-                return Some((first, e));
-            }
-            seen.insert(key, e);
-        }
-        None
+        use rayon::prelude::*;
+        // Elements with the same vertex set share their smallest vertex:
+        // bucketing by it (a counting sort) leaves small independent groups,
+        // so the check is linear and parallel instead of hashing every
+        // element's sorted vertex list.
+        let ne = self.num_elements();
+        let lowest: Vec<u32> = (0..ne)
+            .into_par_iter()
+            .map(|e| self.element(e).iter().copied().min().unwrap_or(u32::MAX))
+            .collect();
+        let nb = lowest
+            .iter()
+            .copied()
+            .filter(|&v| v != u32::MAX)
+            .max()
+            .map_or(0, |m| m as usize + 1);
+        let buckets = topology::Csr::from_pairs(
+            nb,
+            lowest
+                .iter()
+                .enumerate()
+                .filter(|&(_, &v)| v != u32::MAX)
+                .map(|(e, &v)| (v, e as u32)),
+        );
+        // what the sequential scan in file order finds first: the smallest
+        // second occurrence of a vertex set, paired with the set's first
+        (0..nb)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map_init(
+                || (Vec::<u32>::new(), Vec::<usize>::new(), Vec::<usize>::new()),
+                |(keys, starts, idx), v| {
+                    let group = buckets.of(v);
+                    if group.len() < 2 {
+                        return None;
+                    }
+                    keys.clear();
+                    starts.clear();
+                    for &e in group {
+                        starts.push(keys.len());
+                        let from = keys.len();
+                        keys.extend_from_slice(self.element(e as usize));
+                        keys[from..].sort_unstable();
+                    }
+                    starts.push(keys.len());
+                    let key = |i: usize| &keys[starts[i]..starts[i + 1]];
+                    idx.clear();
+                    idx.extend(0..group.len());
+                    // group is ascending, so ties keep file order
+                    idx.sort_by(|&a, &b| key(a).cmp(key(b)).then(a.cmp(&b)));
+                    idx.windows(2)
+                        .filter(|w| key(w[0]) == key(w[1]))
+                        .map(|w| (group[w[0]] as usize, group[w[1]] as usize))
+                        // within a run of equal sets the smallest second
+                        // element is the run's second, paired with its first
+                        .min_by_key(|&(_, b)| b)
+                },
+            )
+            .flatten()
+            .min_by_key(|&(_, b)| b)
     }
 }

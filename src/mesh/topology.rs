@@ -1,6 +1,7 @@
 //! Vertex-to-element adjacency, vertex neighbours and the boundary skin.
 
 use super::{ElementKind, Mesh};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -95,8 +96,80 @@ pub fn vertex_elements(mesh: &Mesh) -> Csr {
     Csr::from_pairs(mesh.num_points(), pairs)
 }
 
+/// Lists built in parallel, one entry at a time: `fill(i, out)` appends
+/// entry `i`'s items to `out`. Chunks of entries are built independently and
+/// concatenated, so no global sort of (entry, item) pairs is needed.
+pub fn build_par(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Csr {
+    const CHUNK: usize = 1 << 14;
+    let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let (mut ends, mut items) = (Vec::new(), Vec::new());
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                fill(i, &mut items);
+                ends.push(items.len() as u32);
+            }
+            (ends, items)
+        })
+        .collect();
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0u32);
+    let mut items = Vec::with_capacity(parts.iter().map(|p| p.1.len()).sum());
+    for (ends, part) in parts {
+        let base = items.len() as u32;
+        offsets.extend(ends.iter().map(|&e| base + e));
+        items.extend_from_slice(&part);
+    }
+    Csr { offsets, items }
+}
+
 /// Vertices sharing an element edge with each vertex, sorted.
 pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
+    if mesh.conn.iter().any(|&v| v as usize >= mesh.num_points()) {
+        return vertex_neighbours_by_pairs(mesh);
+    }
+    // each vertex gathers its own edges from its elements: linear, and no
+    // sort of all (vertex, neighbour) pairs (1 GB for 10M tetrahedra)
+    let ve = vertex_elements(mesh);
+    build_par(mesh.num_points(), |v, out| {
+        let from = out.len();
+        let v32 = v as u32;
+        for &e in ve.of(v) {
+            let e = e as usize;
+            let vs = mesh.element(e);
+            if mesh.kinds[e] == ElementKind::Polyhedron {
+                for [a, b] in mesh.element_edges(e) {
+                    if a == v32 {
+                        out.push(b);
+                    }
+                    if b == v32 {
+                        out.push(a);
+                    }
+                }
+            }
+            for [a, b] in mesh.kinds[e].edges() {
+                if vs[*a] == v32 {
+                    out.push(vs[*b]);
+                }
+                if vs[*b] == v32 {
+                    out.push(vs[*a]);
+                }
+            }
+        }
+        out[from..].sort_unstable();
+        let mut keep = from;
+        for i in from..out.len() {
+            if i == from || out[i] != out[keep - 1] {
+                out[keep] = out[i];
+                keep += 1;
+            }
+        }
+        out.truncate(keep);
+    })
+}
+
+/// The pair-sorting construction, for meshes whose ids are out of range.
+fn vertex_neighbours_by_pairs(mesh: &Mesh) -> Csr {
     let mut pairs = Vec::new();
     for e in 0..mesh.num_elements() {
         let vs = mesh.element(e);
@@ -133,6 +206,63 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
 
 /// Vertices on a facet (face in 3D, edge in 2D) used by exactly one element.
 pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
+    let n = mesh.num_points();
+    if !mesh.faces.is_empty() || mesh.conn.iter().any(|&v| v as usize >= n) {
+        return skin_vertices_hashed(mesh);
+    }
+    // Copies of a facet share their lowest vertex: each vertex counts the
+    // facets it is lowest on, among its own elements' facets. Linear,
+    // parallel, and no hash map of every facet of the mesh.
+    let ve = vertex_elements(mesh);
+    let key = |vs: &[u32], local: &[usize]| {
+        let mut k = [u32::MAX; 4];
+        for (slot, &l) in k.iter_mut().zip(local) {
+            *slot = vs[l];
+        }
+        k.sort_unstable();
+        k
+    };
+    let on_skin: Vec<u32> = (0..n)
+        .into_par_iter()
+        .with_min_len(1 << 12)
+        .fold(
+            || (Vec::<[u32; 4]>::new(), Vec::<u32>::new()),
+            |(mut keys, mut skin), v| {
+                keys.clear();
+                for &e in ve.of(v) {
+                    let vs = mesh.element(e as usize);
+                    for f in mesh.kinds[e as usize].facets() {
+                        let k = key(vs, f);
+                        if k[0] == v as u32 {
+                            keys.push(k);
+                        }
+                    }
+                }
+                keys.sort_unstable();
+                let mut i = 0;
+                while i < keys.len() {
+                    let j = (i..keys.len()).find(|&j| keys[j] != keys[i]).unwrap_or(keys.len());
+                    if j - i == 1 {
+                        skin.extend(keys[i].iter().filter(|&&w| w != u32::MAX));
+                    }
+                    i = j;
+                }
+                (keys, skin)
+            },
+        )
+        .map(|(_, skin)| skin)
+        .flatten()
+        .collect();
+    let mut skin = vec![false; n];
+    for v in on_skin {
+        skin[v as usize] = true;
+    }
+    skin
+}
+
+/// The hash-map construction: polyhedra (whose faces of more than four
+/// vertices need keys of any length) and meshes with out-of-range ids.
+fn skin_vertices_hashed(mesh: &Mesh) -> Vec<bool> {
     let mut count: FxMap<[u32; 4], u32> = FxMap::with_capacity_and_hasher(mesh.num_elements() * 3, Default::default());
     // polyhedron faces with more than four vertices (a face of four or
     // fewer may be shared with a hexahedron or prism, so it keys as theirs)
@@ -216,6 +346,25 @@ mod tests {
         let nb = vertex_neighbours(&m);
         assert_eq!(nb.of(0), &[1, 2, 3]);
         assert_eq!(nb.of(1), &[0, 2, 3, 4]);
+    }
+
+    #[test]
+    fn parallel_skin_and_neighbours_match_the_hashed_and_sorted_ones() {
+        let meshes = [
+            crate::generate::tet_box(7, 5, 6, [7.0, 5.0, 6.0]),
+            crate::generate::mixed_block(3, 2),
+            crate::generate::hex_box(4, 3, 5, [1.0, 1.0, 1.0]),
+            crate::generate::tri_grid(9, 7, [1.0, 1.0]),
+            two_tets(),
+        ];
+        for m in &meshes {
+            assert_eq!(skin_vertices(m), skin_vertices_hashed(m));
+            assert_eq!(vertex_neighbours(m), vertex_neighbours_by_pairs(m));
+            // the same on one thread as on several
+            let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+            assert_eq!(one.install(|| skin_vertices(m)), skin_vertices(m));
+            assert_eq!(one.install(|| vertex_neighbours(m)), vertex_neighbours(m));
+        }
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use super::corners::{Corners, element_vertices};
 use super::numbering::{MeshGraph, Numbering};
-use crate::mesh::topology::Csr;
+use crate::mesh::topology::{self, Csr};
 use crate::mesh::{Mesh, color};
 
 /// What a solver needs to find its way around the problem, all in the
@@ -26,17 +26,14 @@ pub fn adjacency(mesh: &Mesh, graph: &MeshGraph, numbering: &Numbering, corners:
     let (order, inv) = (&numbering.order, &numbering.inv);
     let n = order.len();
     let dim = corners.dim;
-    let elem_pairs: Vec<(u32, u32)> = numbering
-        .elem_order
-        .iter()
-        .enumerate()
-        .flat_map(|(new_e, &old_e)| {
-            element_vertices(mesh, old_e as usize, corners.flip)
+    let elements = topology::build_par(numbering.elem_order.len(), |new_e, out| {
+        let old_e = numbering.elem_order[new_e] as usize;
+        out.extend(
+            element_vertices(mesh, old_e, corners.flip)
                 .into_iter()
-                .map(move |v| (new_e as u32, inv[v as usize]))
-        })
-        .collect();
-    let elements = Csr::from_pairs(numbering.elem_order.len(), elem_pairs.into_iter());
+                .map(|v| inv[v as usize]),
+        );
+    });
     let incidence = Csr::from_pairs(
         n,
         corners
@@ -45,17 +42,19 @@ pub fn adjacency(mesh: &Mesh, graph: &MeshGraph, numbering: &Numbering, corners:
             .enumerate()
             .flat_map(|(c, t)| (0..=dim).map(move |k| (t[k], 4 * c as u32 + k as u32))),
     );
-    let mut nb_pairs: Vec<(u32, u32)> = (0..n)
-        .flat_map(|new| {
+    // each vertex's list renumbered and sorted on its own, in parallel, not
+    // one sort of every (vertex, neighbour) pair
+    let neighbours = topology::build_par(n, |new, out| {
+        let from = out.len();
+        out.extend(
             graph
                 .neighbours
                 .of(order[new] as usize)
                 .iter()
-                .map(move |&w| (new as u32, inv[w as usize]))
-        })
-        .collect();
-    nb_pairs.sort_unstable();
-    let neighbours = Csr::from_pairs(n, nb_pairs.into_iter());
+                .map(|&w| inv[w as usize]),
+        );
+        out[from..].sort_unstable();
+    });
     let free: Vec<bool> = order.iter().map(|&o| !graph.fixed[o as usize]).collect();
     let free_vertices: Vec<u32> = (0..n as u32).filter(|&v| free[v as usize]).collect();
     Adjacency {
@@ -145,6 +144,24 @@ mod tests {
         }
         assert!(adj.free_vertices.windows(2).all(|w| w[0] < w[1]));
         assert_eq!(adj.free_vertices.len(), adj.free.iter().filter(|&&f| f).count());
+    }
+
+    #[test]
+    fn setup_is_the_same_on_one_thread_and_on_two() {
+        let m = generate::tet_box(9, 8, 7, [9.0, 8.0, 7.0]);
+        let build = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| crate::problem::Problem::new(&m).unwrap())
+        };
+        let (a, b) = (build(1), build(2));
+        assert_eq!(a.order, b.order);
+        assert_eq!(a.elem_order, b.elem_order);
+        assert_eq!(a.elements, b.elements);
+        assert_eq!(a.corners, b.corners);
+        assert_eq!(a.incidence, b.incidence);
+        assert_eq!(a.neighbours, b.neighbours);
+        assert_eq!(a.free, b.free);
+        assert_eq!(a.colors, b.colors);
     }
 
     #[test]

@@ -15,8 +15,8 @@ pub mod line_search;
 pub mod newton;
 pub mod nlcg;
 pub mod pcg;
-pub mod rezone;
 pub mod reorder;
+pub mod rezone;
 pub mod untangle;
 pub mod wolfe;
 
