@@ -2,26 +2,9 @@
 //! leaves nothing behind.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn meshsmooth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::cli::{meshsmooth, s, text};
 
 /// `meshsmooth generate box` with a random perturbation, asserting success.
 fn generate_box(out: &Path, cells: [usize; 3], perturb: &str, seed: u64) {

@@ -4,26 +4,9 @@ use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, Format};
 use meshsmooth::metric::inverted_elements;
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn meshsmooth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::cli::{meshsmooth, s, text};
 
 /// A tangled tet box written (unchecked: it is inverted) to `path`.
 fn tangled_box(path: &Path) -> usize {

@@ -2,6 +2,8 @@
 //! and uses what it needs).
 #![allow(dead_code)]
 
+pub mod cli;
+
 use meshsmooth::backend::gpu::{GpuContext, GpuOptions, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::metric::corner_model::Template;
