@@ -181,10 +181,14 @@ impl<'c> GpuBackend<'c> {
     }
 
     /// The per-vertex kernels (bcd, reference_position) on the every-corner
-    /// metrics (`cn-paper`, `rj`) come out wrong on lavapipe (Mesa 22.3,
-    /// LLVM 15): the same kernels match the CPU on an NVIDIA H200 (README,
-    /// "Reference-Jacobian rezoning"), so it is the software driver; refuse
-    /// there rather than return a wrong sweep.
+    /// metrics (`cn-paper`, `rj`) come out wrong on lavapipe and right on an
+    /// NVIDIA H200 (README, "Reference-Jacobian rezoning"). The cause is
+    /// llvmpipe's loop limiter: every loop of one invocation shares a budget
+    /// of 65535 iterations (gallivm's `LP_MAX_TGSI_LOOP_ITERATIONS`), after
+    /// which each loop exits at once. A vertex with ~100 incident corners,
+    /// each through the general path's 9x9 S-Hessian loops, spends it, and
+    /// later loops (`s_rest`) return zeros. Refuse there rather than return a
+    /// wrong sweep; closed-form corner blocks without those loops (#14) lift it.
     fn per_vertex_supported(&self) -> Result<()> {
         if self.ctx.is_software() && self.problem.model.metric.every_corner() {
             return Err(Error::Gpu(format!(
