@@ -190,8 +190,9 @@ kernels! {
 /// (`#if FAST`, the tetrahedral inverse mean ratio) or the general corner
 /// path for one metric. Each general instance carries only its own metric's
 /// code (`#if IMR`, `#if CN`, ...), not a runtime branch over all of them:
-/// less code per pipeline, and lavapipe (LLVM 15) miscompiled the cn prism
-/// sweep in f64 once the reference-Jacobian metric shared the shader.
+/// less code per pipeline, and on lavapipe the cn prism
+/// sweep in f64 went wrong once the reference-Jacobian metric shared the
+/// shader (likely the same shared loop budget as `GpuBackend::per_vertex_supported`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Form {
     Fast,
