@@ -4,7 +4,7 @@
 //! pass — except under `CI`, where they fail.
 
 mod common;
-use common::{KINDS, context, meshes, models, problem, solve_on};
+use common::{KINDS, context, max_abs_diff, meshes, models, problem, solve_on};
 
 use meshsmooth::backend::Backend;
 use meshsmooth::backend::cpu::CpuBackend;
@@ -16,18 +16,9 @@ use meshsmooth::solve::bcd::Bcd;
 use meshsmooth::solve::{Device, Method, Params};
 use meshsmooth::{ElementKind, objective};
 
-type Vec3 = [f64; 3];
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
-}
-
-fn worst_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
-    a.iter()
-        .flatten()
-        .zip(b.iter().flatten())
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
 }
 
 /// Objective, gradient norm and (in f64) one coloured sweep of every case.
@@ -63,10 +54,10 @@ fn every_case(precision: Precision, tol_rel: f64, tol_edge: Option<f64>) {
             gb.step(&mut gpu, None).unwrap();
             let (gx, cx) = (gpu.download().unwrap(), cpu.download().unwrap());
             let edge = p.mean_edge_length(&x0);
-            let worst = worst_diff(&gx, &cx) / edge;
+            let worst = max_abs_diff(&gx, &cx) / edge;
             eprintln!("{case}: sweep differs by {worst:.1e} mean edges");
             assert!(worst <= tol_edge, "{case}: sweep differs by {worst:.1e} mean edges");
-            assert!(worst_diff(&cx, &x0) > 1e-3 * edge, "{case}: the sweep moved nothing");
+            assert!(max_abs_diff(&cx, &x0) > 1e-3 * edge, "{case}: the sweep moved nothing");
             if p.dim == 2 {
                 assert!(
                     gx.iter().zip(&x0).all(|(a, b)| a[2].to_bits() == b[2].to_bits()),
@@ -155,7 +146,7 @@ fn newton_first_iterates(kind: ElementKind, metric: MetricKind, template: Templa
         assert!(rel(g.objective, c.objective) <= 1e-9);
         assert!(rel(g.grad_norm, c.grad_norm) <= 1e-9);
     }
-    let worst = worst_diff(&gx, &cx) / p.mean_edge_length(&x0);
+    let worst = max_abs_diff(&gx, &cx) / p.mean_edge_length(&x0);
     eprintln!("{kind} {metric} {template:?}: iterates differ by {worst:.1e} mean edges");
     assert!(worst <= 1e-9);
     if p.dim == 2 {

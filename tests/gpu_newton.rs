@@ -4,7 +4,7 @@
 //! these tests print why and pass — except under `CI`, where they fail.
 
 mod common;
-use common::{context, options, perturbed_box, rel_diff, solve_on};
+use common::{assert_histories_agree, context, max_abs_diff, options, perturbed_box, rel_diff, solve_on};
 
 use meshsmooth::Error;
 use meshsmooth::backend::cpu::CpuBackend;
@@ -87,21 +87,9 @@ fn newton_first_iterates_match_cpu_f64() {
     assert_eq!(info.method, Method::Newton);
     assert_eq!(info.iterations, 3);
     assert_eq!(info.cg_iterations, cpu.cg_iterations);
-    for (c, g) in cpu.history.records.iter().zip(&info.history.records) {
-        eprintln!(
-            "iteration {}: F CPU {:.15} GPU {:.15}, |g| CPU {:.6e} GPU {:.6e}",
-            c.iteration, c.objective, g.objective, c.grad_norm, g.grad_norm
-        );
-        assert!((c.objective - g.objective).abs() <= 1e-9 * c.objective);
-        assert!((c.grad_norm - g.grad_norm).abs() <= 1e-9 * c.grad_norm);
-    }
+    assert_histories_agree(&cpu, &info, 1e-9, 1e-9);
     let edge = p.mean_edge_length(&x0);
-    let worst = cx
-        .iter()
-        .flatten()
-        .zip(gx.iter().flatten())
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let worst = max_abs_diff(&cx, &gx);
     eprintln!(
         "after 3 iterations: worst coordinate difference {:.1e} mean edges",
         worst / edge

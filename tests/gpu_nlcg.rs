@@ -4,7 +4,7 @@
 //! where they fail.
 
 mod common;
-use common::{context, perturbed_box, solve_on};
+use common::{assert_histories_agree, context, max_abs_diff, perturbed_box, solve_on};
 
 use meshsmooth::backend::gpu::Precision;
 use meshsmooth::metric;
@@ -33,21 +33,9 @@ fn nlcg_iterates_match_cpu_f64() {
         (Method::Nlcg, 12, StopReason::MaxIterations)
     );
     assert_eq!(cpu.iterations, 12);
-    for (c, g) in cpu.history.records.iter().zip(&gpu.history.records) {
-        eprintln!(
-            "iteration {}: F CPU {:.15} GPU {:.15}, |g| CPU {:.6e} GPU {:.6e}",
-            c.iteration, c.objective, g.objective, c.grad_norm, g.grad_norm
-        );
-        assert!((c.objective - g.objective).abs() <= 1e-12 * c.objective);
-        assert!((c.grad_norm - g.grad_norm).abs() <= 1e-10 * c.grad_norm);
-    }
+    assert_histories_agree(&cpu, &gpu, 1e-12, 1e-10);
     let edge = p.mean_edge_length(&x0);
-    let worst = cx
-        .iter()
-        .flatten()
-        .zip(gx.iter().flatten())
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let worst = max_abs_diff(&cx, &gx);
     eprintln!(
         "after 12 iterations: worst coordinate difference {:.1e} mean edges",
         worst / edge
@@ -137,12 +125,7 @@ fn nlcg_matches_cpu_for_every_metric_and_element_kind_f64() {
                 "{case}"
             );
             let edge = p.mean_edge_length(&x0);
-            let worst = cx
-                .iter()
-                .flatten()
-                .zip(gx.iter().flatten())
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
+            let worst = max_abs_diff(&cx, &gx);
             assert!(
                 worst <= 1e-10 * edge,
                 "{case}: vertices differ by {:.1e} edges",

@@ -7,7 +7,7 @@
 //! where they fail.
 
 mod common;
-use common::{KINDS, context, meshes, problem, rel_diff};
+use common::{KINDS, context, max_abs_diff, meshes, problem, rel_diff};
 
 use meshsmooth::ElementKind;
 use meshsmooth::backend::cpu::CpuBackend;
@@ -238,11 +238,7 @@ fn check_bcd(pair: &mut Pair, c: &Case, tol: f64) {
         );
     }
     let (gx, cx) = pair.both(|be| be.download().unwrap());
-    let worst = gx
-        .iter()
-        .flatten()
-        .zip(cx.iter().flatten())
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let worst = max_abs_diff(&gx, &cx);
     assert!(
         worst <= tol * edge,
         "{}: a sweep differs by {:.1e} edges",
@@ -264,11 +260,7 @@ fn check_reference_position(pair: &mut Pair, c: &Case, tol: f64) {
     // one safeguarded Newton step per vertex, as the bcd check sweeps once:
     // later steps near the minimiser are decided by rounding
     let (g, cp) = pair.both(|be| be.reference_positions(1).unwrap());
-    let worst = g
-        .iter()
-        .flatten()
-        .zip(cp.iter().flatten())
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let worst = max_abs_diff(&g, &cp);
     assert!(
         worst <= tol * edge,
         "{}: reference positions differ by {:.1e} edges",

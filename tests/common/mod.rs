@@ -100,15 +100,31 @@ pub fn smooth(mesh: &mut Mesh, method: Method, params: &Params) -> Info {
     .unwrap()
 }
 
+/// Largest coordinate difference |a - b|.
+pub fn max_abs_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+}
+
 /// Largest |a - b| over the largest |b|: errors measured against the vector's scale.
 pub fn rel_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
     let scale = b.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let worst = a
-        .iter()
-        .flatten()
-        .zip(b.iter().flatten())
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-    worst / scale.max(f64::MIN_POSITIVE)
+    max_abs_diff(a, b) / scale.max(f64::MIN_POSITIVE)
+}
+
+/// The CPU's and the device's histories iteration by iteration: F within
+/// `f_rel` and |grad F| within `g_rel` relative.
+pub fn assert_histories_agree(cpu: &Info, gpu: &Info, f_rel: f64, g_rel: f64) {
+    for (c, g) in cpu.history.records.iter().zip(&gpu.history.records) {
+        eprintln!(
+            "iteration {}: F CPU {:.15} GPU {:.15}, |g| CPU {:.6e} GPU {:.6e}",
+            c.iteration, c.objective, g.objective, c.grad_norm, g.grad_norm
+        );
+        assert!((c.objective - g.objective).abs() <= f_rel * c.objective);
+        assert!((c.grad_norm - g.grad_norm).abs() <= g_rel * c.grad_norm);
+    }
 }
 
 /// Every element kind the optimisers take.
