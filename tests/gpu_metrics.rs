@@ -16,7 +16,6 @@ use meshsmooth::solve::bcd::Bcd;
 use meshsmooth::solve::{Device, Method, Params};
 use meshsmooth::{ElementKind, objective};
 
-
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
 }
