@@ -5,12 +5,13 @@
 //!
 //! The inverse mean ratio of tetrahedra under the harmonic template (the
 //! papers' main case) takes the closed forms of `TetShape`; everything else
-//! goes through the dense S-Hessian of `smetric`.
+//! contracts the structured S-Hessian of `smetric` (`shess`) with the rows.
 
-use super::mat3::{Mat3, Vec3, inverse};
+use super::mat3::{Mat3, Vec3, inverse, mul_vec};
 use super::mean_ratio::TetShape;
 use super::reference_jacobian;
-use super::smetric::{self, Hess9, MetricKind};
+use super::shess::{SHess, TEMPLATE_SLOT};
+use super::smetric::{self, MetricKind};
 
 /// How corner values are combined into the objective.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
@@ -90,21 +91,16 @@ impl Model {
     }
 
     /// The template applied to a metric value, gradient and Hessian in S.
-    fn templated(&self, (m, g, h): (f64, Mat3, Hess9), hess: bool) -> (f64, Mat3, Hess9) {
+    fn templated(&self, (m, g, mut h): (f64, Mat3, SHess), hess: bool) -> (f64, Mat3, SHess) {
         match self.template {
             Template::Harmonic => (m, g, h),
             Template::Average => {
                 let (d1, d2) = (1.0 / (m * m), -2.0 / (m * m * m));
-                let gf: Vec<f64> = g.iter().flatten().copied().collect();
-                let mut h2 = [[0.0; 9]; 9];
                 if hess {
-                    for a in 0..9 {
-                        for b in 0..9 {
-                            h2[a][b] = d1 * h[a][b] + d2 * gf[a] * gf[b];
-                        }
-                    }
+                    h.scale(d1);
+                    h.set_sq(TEMPLATE_SLOT, d2, &g);
                 }
-                (1.0 - 1.0 / m, g.map(|r| r.map(|v| v * d1)), h2)
+                (1.0 - 1.0 / m, g.map(|r| r.map(|v| v * d1)), h)
             }
         }
     }
@@ -112,7 +108,7 @@ impl Model {
     /// The metric of S for a corner of `shape` (the reference-Jacobian metric
     /// reads the corner's M from it; the others only its dimension).
     #[inline]
-    fn eval(&self, shape: &CornerShape, s: &Mat3, hess: bool) -> Option<(f64, Mat3, Hess9)> {
+    fn eval(&self, shape: &CornerShape, s: &Mat3, hess: bool) -> Option<(f64, Mat3, SHess)> {
         if self.metric == MetricKind::ReferenceJacobian {
             let m = reference_jacobian::weight(&shape.winv())?;
             return smetric::eval_with(self.metric, shape.n, s, Some(&m), hess);
@@ -148,24 +144,11 @@ impl Model {
             return TetShape::vertex_gradient_hessian_at(s, b);
         }
         let (v, g, h) = self.templated(self.eval(shape, &s, true)?, true);
-        let mut gv = [0.0; 3];
-        let mut hv = [[0.0; 3]; 3];
-        for i in 0..n {
-            gv[i] = (0..n).map(|j| g[i][j] * b[j]).sum();
-            for q in 0..n {
-                let mut acc = 0.0;
-                for j in 0..n {
-                    for m in 0..n {
-                        acc += h[3 * i + j][3 * q + m] * b[j] * b[m];
-                    }
-                }
-                hv[i][q] = acc;
-            }
-        }
+        let mut hv = h.block(&h.row(b), &h.row(b));
         if n == 2 {
             hv[2][2] = 1.0;
         }
-        Some((v, gv, hv))
+        Some((v, mul_vec(&g, b), hv))
     }
 
     /// Term and gradient with respect to the corner's vertices.
@@ -178,10 +161,7 @@ impl Model {
         let (v, g, _) = self.templated(self.eval(shape, &s, false)?, false);
         let mut out = [[0.0; 3]; 4];
         for (k, o) in out.iter_mut().enumerate().take(n + 1) {
-            let b = shape.tet.b(k);
-            for i in 0..n {
-                o[i] = (0..n).map(|j| g[i][j] * b[j]).sum();
-            }
+            *o = mul_vec(&g, shape.tet.b(k));
         }
         Some((v, out))
     }
@@ -196,37 +176,20 @@ impl Model {
         let (v, g, h) = self.templated(self.eval(shape, &s, true)?, true);
         let nv = n + 1;
         let mut grad = [[0.0; 3]; 4];
-        // t[l][(i,j)][q] = sum_m H[(i,j),(q,m)] b_l[m]
-        let mut t = [[[0.0; 3]; 9]; 4];
+        let mut rows = [h.row(&[0.0; 3]); 4];
         for l in 0..nv {
-            let bl = shape.tet.b(l);
-            for i in 0..n {
-                for j in 0..n {
-                    for q in 0..n {
-                        t[l][3 * i + j][q] = (0..n).map(|m| h[3 * i + j][3 * q + m] * bl[m]).sum();
-                    }
-                }
-            }
-            for i in 0..n {
-                grad[l][i] = (0..n).map(|j| g[i][j] * bl[j]).sum();
-            }
+            rows[l] = h.row(shape.tet.b(l));
+            grad[l] = mul_vec(&g, shape.tet.b(l));
         }
         for k in 0..4 {
             for l in 0..4 {
-                out[k][l] = [[0.0; 3]; 3];
+                out[k][l] = if k < nv && l < nv {
+                    h.block(&rows[k], &rows[l])
+                } else {
+                    [[0.0; 3]; 3]
+                };
             }
-        }
-        for k in 0..nv {
-            let bk = shape.tet.b(k);
-            for l in 0..nv {
-                let blk = &mut out[k][l];
-                for i in 0..n {
-                    for q in 0..n {
-                        blk[i][q] = (0..n).map(|j| bk[j] * t[l][3 * i + j][q]).sum();
-                    }
-                }
-            }
-            if n == 2 {
+            if n == 2 && k < nv {
                 out[k][k][2][2] = 1.0;
             }
         }

@@ -6,6 +6,7 @@ pub mod corner_model;
 pub mod mat3;
 pub mod mean_ratio;
 pub mod reference_jacobian;
+pub mod shess;
 pub mod smetric;
 
 pub use mean_ratio::{TetShape, tet_det};

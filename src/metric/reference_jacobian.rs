@@ -11,7 +11,7 @@
 //! `shaders/metric/reference_jacobian.wgsl`.
 
 use super::mat3::{Mat3, cofactor, inverse};
-use super::smetric::{Hess9, d2det};
+use super::shess::SHess;
 
 /// M = Jr Jr^T / |Jr|^2 from Jr^-1 (rows b_1, b_2, b_3); `None` when singular.
 pub fn weight(winv: &Mat3) -> Option<Mat3> {
@@ -29,8 +29,9 @@ pub fn weight(winv: &Mat3) -> Option<Mat3> {
 /// Value, gradient and (if `hess`) Hessian in S at det(S) = `d` > 0:
 /// with q = tr(A M A^T), dq = 2 A M, d2q = 2 delta_ik M_jl, and u = 1/d,
 /// du = -C / d^2, d2u = 2 C C^T / d^3 - D2 / d^2 (C = cofactor = d det / dS,
-/// D2 its derivative), f = q u and the product rule.
-pub fn rj(s: &Mat3, d: f64, m: &Mat3, hess: bool) -> (f64, Mat3, Hess9) {
+/// D2 its derivative), f = q u and the product rule: the Hessian is
+/// I x (2M/d) - (2/d^2) (AM C^T + C (AM)^T) + (2q/d^3) C C^T - (q/d^2) D2.
+pub fn rj(s: &Mat3, d: f64, m: &Mat3, hess: bool) -> (f64, Mat3, SHess) {
     let mut a = *s;
     for (i, row) in a.iter_mut().enumerate() {
         row[i] -= 1.0;
@@ -55,18 +56,13 @@ pub fn rj(s: &Mat3, d: f64, m: &Mat3, hess: bool) -> (f64, Mat3, Hess9) {
             g[i][j] = 2.0 * am[i][j] / d - q * c[i][j] / (d * d);
         }
     }
-    let mut h = [[0.0; 9]; 9];
+    let mut h = SHess::default();
     if hess {
-        let d2 = d2det(s, 3);
-        for x in 0..9 {
-            let (i, j) = (x / 3, x % 3);
-            for y in 0..9 {
-                let (k, l) = (y / 3, y % 3);
-                let d2q = if i == k { 2.0 * m[j][l] } else { 0.0 };
-                h[x][y] = d2q / d - 2.0 * (am[i][j] * c[k][l] + c[i][j] * am[k][l]) / (d * d)
-                    + q * (2.0 * c[i][j] * c[k][l] / (d * d * d) - d2[x][y] / (d * d));
-            }
-        }
+        h.r = m.map(|r| r.map(|v| 2.0 * v / d));
+        h.pair_c = -2.0 / (d * d);
+        h.pair = [am, c];
+        h.set_sq(0, 2.0 * q / (d * d * d), &c);
+        h.p = s.map(|r| r.map(|v| -q / (d * d) * v));
     }
     (v, g, h)
 }
@@ -113,6 +109,7 @@ mod tests {
         let s = [[1.1, 0.3, -0.2], [0.1, 0.9, 0.4], [-0.3, 0.2, 1.3]];
         let f = |s: &Mat3| rj(s, det(s), &m, false);
         let (_, g, h) = rj(&s, det(&s), &m, true);
+        let h = h.dense();
         let step = 1e-5;
         for x in 0..9 {
             let at = |t: f64| {

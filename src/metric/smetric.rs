@@ -6,6 +6,7 @@
 //! 3*i + j (in 2D only the entries with i, j < 2 are used).
 
 use super::mat3::{Mat3, cofactor, det};
+use super::shess::SHess;
 
 /// The element metrics meshsmooth optimises (all: lower is better).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
@@ -66,8 +67,6 @@ impl std::fmt::Display for MetricKind {
     }
 }
 
-pub type Hess9 = [[f64; 9]; 9];
-
 /// det of the leading n x n block.
 pub fn det_n(s: &Mat3, n: usize) -> f64 {
     if n == 2 {
@@ -97,7 +96,9 @@ fn frob_n(s: &Mat3, n: usize) -> f64 {
 }
 
 /// Second derivative of det: 3D sum_{m,l} eps_ikm eps_jln S[m][l]; 2D eps_ik eps_jl.
-pub(crate) fn d2det(s: &Mat3, n: usize) -> Hess9 {
+/// Only the dense reference of the tests builds it.
+#[cfg(test)]
+pub(crate) fn d2det(s: &Mat3, n: usize) -> [[f64; 9]; 9] {
     let mut h = [[0.0; 9]; 9];
     for i in 0..n {
         for j in 0..n {
@@ -118,6 +119,7 @@ pub(crate) fn d2det(s: &Mat3, n: usize) -> Hess9 {
     h
 }
 
+#[cfg(test)]
 fn eps2(i: usize, j: usize) -> f64 {
     if i == j {
         0.0
@@ -128,6 +130,7 @@ fn eps2(i: usize, j: usize) -> f64 {
     }
 }
 
+#[cfg(test)]
 fn eps3(i: usize, j: usize, k: usize) -> f64 {
     match (i, j, k) {
         (0, 1, 2) | (1, 2, 0) | (2, 0, 1) => 1.0,
@@ -136,10 +139,14 @@ fn eps3(i: usize, j: usize, k: usize) -> f64 {
     }
 }
 
-fn flat(m: &Mat3) -> [f64; 9] {
-    [
-        m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2],
-    ]
+/// The argument of the det-Hessian term for c D2(S): c S in 3D, c e3 e3^T in
+/// 2D (where D2 is constant); see `shess`.
+fn d2det_term(s: &Mat3, n: usize, c: f64) -> Mat3 {
+    if n == 2 {
+        [[0.0; 3], [0.0; 3], [0.0, 0.0, c]]
+    } else {
+        s.map(|r| r.map(|v| v * c))
+    }
 }
 
 /// Value, gradient and (if `hess`) Hessian of `metric` at S; `None` when the
@@ -148,7 +155,7 @@ fn flat(m: &Mat3) -> [f64; 9] {
 ///
 /// # Panics
 /// For the reference-Jacobian metric, which needs the corner's M: use [`eval_with`].
-pub fn eval(metric: MetricKind, n: usize, s: &Mat3, hess: bool) -> Option<(f64, Mat3, Hess9)> {
+pub fn eval(metric: MetricKind, n: usize, s: &Mat3, hess: bool) -> Option<(f64, Mat3, SHess)> {
     eval_full(metric, n, s, None, hess, 0.0)
 }
 
@@ -175,19 +182,20 @@ pub fn chi(d: f64, eps: f64) -> (f64, f64, f64) {
 /// eps > 0 an inverted corner has a finite value and a gradient that points
 /// towards untangling it. The target metric has no determinant and is the
 /// same for every eps. eps = 0 is `eval`.
-pub fn eval_regularised(metric: MetricKind, n: usize, s: &Mat3, hess: bool, eps: f64) -> Option<(f64, Mat3, Hess9)> {
+pub fn eval_regularised(metric: MetricKind, n: usize, s: &Mat3, hess: bool, eps: f64) -> Option<(f64, Mat3, SHess)> {
     eval_full(metric, n, s, None, hess, eps)
 }
 
 /// [`eval`] with the reference-Jacobian metric's per-corner weight M
 /// (`reference_jacobian::weight`), which the other metrics ignore.
-pub fn eval_with(metric: MetricKind, n: usize, s: &Mat3, rj: Option<&Mat3>, hess: bool) -> Option<(f64, Mat3, Hess9)> {
+pub fn eval_with(metric: MetricKind, n: usize, s: &Mat3, rj: Option<&Mat3>, hess: bool) -> Option<(f64, Mat3, SHess)> {
     eval_full(metric, n, s, rj, hess, 0.0)
 }
 
 /// [`eval_with`] and [`eval_regularised`] in one: the reference-Jacobian
 /// weight and untangling's eps (the reference-Jacobian term is never
-/// regularised: rezoning starts from a valid mesh).
+/// regularised: rezoning starts from a valid mesh). In 2D only the leading
+/// 2x2 block of S is read, and every matrix returned is zero outside it.
 pub fn eval_full(
     metric: MetricKind,
     n: usize,
@@ -195,7 +203,8 @@ pub fn eval_full(
     rj: Option<&Mat3>,
     hess: bool,
     eps: f64,
-) -> Option<(f64, Mat3, Hess9)> {
+) -> Option<(f64, Mat3, SHess)> {
+    let s = &leading(s, n);
     let d = det_n(s, n);
     if !d.is_finite() || (eps == 0.0 && !(d > 0.0)) {
         return None;
@@ -217,9 +226,19 @@ pub fn eval_full(
     out.0.is_finite().then_some(out)
 }
 
+/// S with the rows and columns past n zeroed.
+pub fn leading(s: &Mat3, n: usize) -> Mat3 {
+    if n == 3 {
+        return *s;
+    }
+    [[s[0][0], s[0][1], 0.0], [s[1][0], s[1][1], 0.0], [0.0; 3]]
+}
+
 /// eta = f h / n with f = |S|^2, h = chi^(-2/n) for `(chi, chi', chi'')`
-/// (`chi` = det S when not regularised).
-fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, Hess9) {
+/// (`chi` = det S when not regularised). With grad chi = chi' C and
+/// Hess chi = chi' D2 + chi'' C C^T the Hessian is
+/// (2h/n) I + cross chi' (S C^T + C S^T) + (cc chi'^2 + dd chi'') C C^T + dd chi' D2.
+fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, SHess) {
     let nf = n as f64;
     let h = if n == 2 { 1.0 / d } else { 1.0 / (d.cbrt() * d.cbrt()) };
     let f = frob_n(s, n);
@@ -232,94 +251,84 @@ fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, M
             g[i][j] = (2.0 * h * s[i][j] - f * p * h / d * (d1 * c[i][j])) / nf;
         }
     }
-    let mut hm = [[0.0; 9]; 9];
+    let mut hm = SHess::default();
     if hess {
-        let d2 = d2det(s, n);
-        let (sf, cf) = (flat(s), flat(&c));
         let cross = -2.0 * p * h / d / nf;
         let cc = f * p * (p + 1.0) * h / (d * d) / nf;
         let dd = -f * p * h / d / nf;
-        for a in 0..9 {
-            if a % 3 >= n || a / 3 >= n {
-                continue;
-            }
-            for b in 0..9 {
-                if b % 3 >= n || b / 3 >= n {
-                    continue;
-                }
-                // grad chi = chi' C; Hess chi = chi' D2 + chi'' C C^T
-                let (ca, cb) = (d1 * cf[a], d1 * cf[b]);
-                hm[a][b] =
-                    cross * (sf[a] * cb + ca * sf[b]) + cc * ca * cb + dd * (d1 * d2[a][b] + d2c * cf[a] * cf[b]);
-            }
-            hm[a][a] += 2.0 * h / nf;
-        }
+        hm = SHess::identity(2.0 * h / nf, n);
+        hm.pair_c = cross * d1;
+        hm.pair = [*s, c];
+        hm.set_sq(0, cc * d1 * d1 + dd * d2c, &c);
+        hm.p = d2det_term(s, n, dd * d1);
     }
     (eta, g, hm)
 }
 
 /// |S - I|^2: gradient 2 (S - I), Hessian 2 I.
-fn tmp(n: usize, s: &Mat3) -> (f64, Mat3, Hess9) {
+fn tmp(n: usize, s: &Mat3) -> (f64, Mat3, SHess) {
     let mut v = 0.0;
     let mut g = [[0.0; 3]; 3];
-    let mut h = [[0.0; 9]; 9];
     for i in 0..n {
         for j in 0..n {
             let e = s[i][j] - if i == j { 1.0 } else { 0.0 };
             v += e * e;
             g[i][j] = 2.0 * e;
-            h[3 * i + j][3 * i + j] = 2.0;
         }
     }
-    (v, g, h)
+    (v, g, SHess::identity(2.0, n))
+}
+
+/// grad |cof S|^2 = 2 (|S|^2 S - S S^T S) (3x3: |cof S|^2 is the second
+/// elementary symmetric function of the squared singular values).
+fn cof_norm_gradient(s: &Mat3, a: f64) -> Mat3 {
+    let mut sst = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for k in 0..3 {
+            sst[i][k] = s[i][0] * s[k][0] + s[i][1] * s[k][1] + s[i][2] * s[k][2];
+        }
+    }
+    let mut out = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let ssts = sst[i][0] * s[0][j] + sst[i][1] * s[1][j] + sst[i][2] * s[2][j];
+            out[i][j] = 2.0 * (a * s[i][j] - ssts);
+        }
+    }
+    out
 }
 
 /// 3D condition number kappa = |S| |C| / (3 d) through L = ln kappa:
 /// grad kappa = kappa grad L, Hess kappa = kappa (Hess L + grad L grad L^T), with
-/// |S^-1| = |C| / d, grad |C|^2 = 2 D2 vec(C), Hess |C|^2 = 2 (D2^T D2 + E),
-/// E[(p,q),(r,s)] = sum_ij C_ij eps_ipr eps_jqs.
+/// |S^-1| = |C| / d, grad |C|^2 = 2 D2 vec(C), Hess |C|^2 = 2 (D2^T D2 + D2(C))
+/// (D2(C): the det-Hessian form with C in place of S).
 /// Regularised: d becomes chi, so ln kappa has -ln chi with gradient
 /// chi' C / chi and Hessian (chi' D2 + chi'' C C^T) / chi - chi'^2 C C^T / chi^2.
-fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, Hess9) {
+fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, SHess) {
     let c = cofactor(s);
     let a = frob_n(s, 3);
     let cc = frob_n(&c, 3);
     let kappa = (a * cc).sqrt() / (3.0 * d);
-    let d2 = d2det(s, 3);
-    let (sf, cf) = (flat(s), flat(&c));
-    // grad of |C|^2
-    let mut gc = [0.0; 9];
-    for a_ in 0..9 {
-        gc[a_] = 2.0 * (0..9).map(|b| d2[b][a_] * cf[b]).sum::<f64>();
-    }
-    let mut gl = [0.0; 9];
-    for k in 0..9 {
-        gl[k] = sf[k] / a + 0.5 * gc[k] / cc - d1 * cf[k] / d;
-    }
-    let mut g = [[0.0; 3]; 3];
+    let gc = cof_norm_gradient(s, a);
+    let mut gl = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            g[i][j] = kappa * gl[3 * i + j];
+            gl[i][j] = s[i][j] / a + 0.5 * gc[i][j] / cc - d1 * c[i][j] / d;
         }
     }
-    let mut hm = [[0.0; 9]; 9];
+    let g = gl.map(|r| r.map(|v| kappa * v));
+    let mut hm = SHess::default();
     if hess {
-        for p in 0..9 {
-            for q in 0..9 {
-                let (pi, pj, qi, qj) = (p / 3, p % 3, q / 3, q % 3);
-                // E term
-                let mut e = 0.0;
-                for i in 0..3 {
-                    for j in 0..3 {
-                        e += c[i][j] * eps3(i, pi, qi) * eps3(j, pj, qj);
-                    }
-                }
-                let dtd: f64 = (0..9).map(|b| d2[b][p] * d2[b][q]).sum();
-                let hc = 2.0 * (dtd + e);
-                let ha = if p == q { 2.0 } else { 0.0 };
-                let hl = 0.5 * (ha / a - 4.0 * sf[p] * sf[q] / (a * a)) + 0.5 * (hc / cc - gc[p] * gc[q] / (cc * cc))
-                    - ((d1 * d2[p][q] + d2c * cf[p] * cf[q]) / d - d1 * d1 * cf[p] * cf[q] / (d * d));
-                hm[p][q] = kappa * (hl + gl[p] * gl[q]);
+        hm = SHess::identity(kappa / a, 3);
+        hm.set_sq(0, -2.0 * kappa / (a * a), s);
+        hm.set_sq(1, -0.5 * kappa / (cc * cc), &gc);
+        hm.set_sq(2, kappa * (d1 * d1 / (d * d) - d2c / d), &c);
+        hm.set_sq(3, kappa, &gl);
+        hm.gram = kappa / cc;
+        hm.s = *s;
+        for i in 0..3 {
+            for j in 0..3 {
+                hm.p[i][j] = kappa * (c[i][j] / cc - d1 * s[i][j] / d);
             }
         }
     }
@@ -337,6 +346,7 @@ mod tests {
     fn fd_check_eps(metric: MetricKind, n: usize, s: Mat3, eps: f64) {
         let eval = |metric, n, s: &Mat3, hess| eval_regularised(metric, n, s, hess, eps);
         let (v, g, h) = eval(metric, n, &s, true).unwrap();
+        let h = h.dense();
         let step = 1e-5;
         let gs = g.iter().flatten().map(|x| x.abs()).fold(1e-12, f64::max);
         let hs = h.iter().flatten().map(|x| x.abs()).fold(1e-12, f64::max);
