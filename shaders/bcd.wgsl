@@ -91,12 +91,8 @@ fn main(
         }
         let w = cr.w;
         f0 += w * r.eta;
-        for (var i = 0; i < 3; i++) {
-            g[i] += w * r.grad[i];
-            for (var j = 0; j < 3; j++) {
-                h[i][j] += w * r.hess[i][j];
-            }
-        }
+        g += w * r.grad;
+        h += w * r.hess;
     }
     // a sliding vertex: the step in its tangent space, each trial put back on the boundary
     let slide = slides(v);

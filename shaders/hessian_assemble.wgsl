@@ -2,7 +2,7 @@
 // Hessian of its term, for `hessian_gather` and `gradient_gather` to sum
 // without float atomics; a lower block is the transpose of its upper one.
 // CPU twin: backend/cpu/hessian_assemble.rs (`Model::blocks`: the folded
-// closed form of `TetShape::hessian_blocks`, or the dense S-Hessian
+// closed form of `TetShape::hessian_blocks`, or the structured S-Hessian
 // contracted with B), each entry times the corner weight.
 
 #import layout
@@ -26,7 +26,7 @@ fn store_block(base: u32, k: u32, l: u32, blk: mat3x3<real>, w: real) {
     }
 }
 
-// `Model::blocks` through the dense S-Hessian.
+// `Model::blocks` through the structured S-Hessian.
 fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) -> bool {
     let n = model.dim;
     let m = model_eval(model, s, model_rjm(model, b), true);
@@ -34,41 +34,19 @@ fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) 
         return false;
     }
     let nv = n + 1u;
-    // t[l][(i,j)][q] = sum_m H[(i,j),(q,m)] b_l[m]
-    var t: array<array<vec3<real>, 9>, 4>;
+    var rows: array<SRow, 4>;
     for (var l = 0u; l < nv; l++) {
-        let bl = b[l];
-        for (var ij = 0u; ij < 9u; ij++) {
-            if ij / 3u >= n || ij % 3u >= n {
-                continue;
-            }
-            for (var q = 0u; q < n; q++) {
-                var acc = real(0.0);
-                for (var mm = 0u; mm < n; mm++) {
-                    acc += m.h[ij][3u * q + mm] * bl[mm];
-                }
-                t[l][ij][q] = acc;
-            }
-        }
-        let g = contract_g(m.g, bl, n);
-        for (var i = 0u; i < 3u; i++) {
-            elem[base + 3u * l + i] = g[i] * w;
-        }
+        rows[l] = shess_row(m.h, b[l]);
+        let g = mul_vec(m.g, b[l]);
+        elem[base + 3u * l] = g[0] * w;
+        elem[base + 3u * l + 1u] = g[1] * w;
+        elem[base + 3u * l + 2u] = g[2] * w;
     }
     for (var k = 0u; k < 4u; k++) {
         for (var l = k; l < 4u; l++) {
             var blk = mat3x3<real>();
             if l < nv {
-                let bk = b[k];
-                for (var i = 0u; i < n; i++) {
-                    for (var q = 0u; q < n; q++) {
-                        var acc = real(0.0);
-                        for (var j = 0u; j < n; j++) {
-                            acc += bk[j] * t[l][3u * i + j][q];
-                        }
-                        blk[i][q] = acc;
-                    }
-                }
+                blk = shess_block(m.h, rows[k], rows[l]);
                 if n == 2u && k == l {
                     blk[2][2] = real(1.0);
                 }

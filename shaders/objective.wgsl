@@ -56,7 +56,7 @@ fn main(
 #if FAST
                 g = mul_vec(g_s, cr.b[k]);
 #else
-                g = contract_g(g_s, cr.b[k], model.dim);
+                g = mul_vec(g_s, cr.b[k]);
 #endif
             }
             for (var i = 0u; i < 3u; i++) {

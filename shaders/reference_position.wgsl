@@ -69,12 +69,8 @@ fn patch_step(v: u32, xv: vec3<real>, min_step_sq: real) -> Step {
         }
         let w = cr.w;
         f0 += w * r.eta;
-        for (var i = 0; i < 3; i++) {
-            g[i] += w * r.grad[i];
-            for (var j = 0; j < 3; j++) {
-                h[i][j] += w * r.hess[i][j];
-            }
-        }
+        g += w * r.grad;
+        h += w * r.hess;
     }
     let neg_g = vec3<real>(-g[0], -g[1], -g[2]);
     let chol = cholesky_solve(h, neg_g);

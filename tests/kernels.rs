@@ -38,7 +38,9 @@ fn quantise(v: f64) -> f64 {
 }
 
 /// Every kind, under the closed-form model where it exists (the tetrahedral
-/// inverse mean ratio) and a general one (the condition number, average template).
+/// inverse mean ratio) and every general one's structured Hessian terms (the
+/// condition number's Gram and rank-one terms under the average template, the
+/// inverse mean ratio's pair term under it, the target metric's identity).
 fn cases() -> Vec<Case> {
     let mut out = Vec::new();
     for kind in KINDS {
@@ -46,6 +48,8 @@ fn cases() -> Vec<Case> {
         for (metric, template) in [
             (MetricKind::InverseMeanRatio, Template::Harmonic),
             (MetricKind::ConditionNumber, Template::Average),
+            (MetricKind::InverseMeanRatio, Template::Average),
+            (MetricKind::TargetShapeSize, Template::Harmonic),
         ] {
             let p = problem(&mesh, &reference, metric, template);
             let x: Vec<Vec3> = p.gather(&mesh.points).iter().map(|c| c.map(quantise)).collect();
@@ -123,7 +127,6 @@ fn rel(a: f64, b: f64) -> f64 {
 struct Pair<'c> {
     gpu: GpuBackend<'c>,
     cpu: CpuBackend<'c>,
-    software: bool,
 }
 
 impl<'c> Pair<'c> {
@@ -132,20 +135,7 @@ impl<'c> Pair<'c> {
         Pair {
             gpu: GpuBackend::new(ctx, &c.p, &c.x, &ls).unwrap(),
             cpu: CpuBackend::new(&c.p, &c.x, &ls).unwrap(),
-            software: ctx.is_software(),
         }
-    }
-
-    /// The per-vertex kernels on the every-corner metrics (cn-paper, rj) are
-    /// refused on software Vulkan, which miscomputes them (they match the CPU
-    /// on an NVIDIA H200: README): checks the refusal and says to skip.
-    fn per_vertex_refused(&mut self, c: &Case, run: impl FnOnce(&mut GpuBackend) -> meshsmooth::Result<()>) -> bool {
-        if !(self.software && c.p.model.metric.every_corner()) {
-            return false;
-        }
-        let err = run(&mut self.gpu).expect_err("refused on software Vulkan").to_string();
-        assert!(err.contains("software Vulkan"), "{}: {err}", c.name);
-        true
     }
 
     /// Runs `f` on both backends.
@@ -219,9 +209,6 @@ fn check_gradient_gather(pair: &mut Pair, c: &Case, tol: f64) {
 }
 
 fn check_bcd(pair: &mut Pair, c: &Case, tol: f64) {
-    if pair.per_vertex_refused(c, |g| g.bcd_color(0)) {
-        return;
-    }
     let edge = c.p.mean_edge_length(&c.x);
     for color in 0..c.p.colors.len() {
         pair.both(|be| {
@@ -253,9 +240,6 @@ fn check_bcd(pair: &mut Pair, c: &Case, tol: f64) {
 }
 
 fn check_reference_position(pair: &mut Pair, c: &Case, tol: f64) {
-    if pair.per_vertex_refused(c, |g| g.reference_positions(1).map(drop)) {
-        return;
-    }
     let edge = c.p.mean_edge_length(&c.x);
     // one safeguarded Newton step per vertex, as the bcd check sweeps once:
     // later steps near the minimiser are decided by rounding

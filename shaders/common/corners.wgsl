@@ -21,9 +21,11 @@ fn corner_point(v: u32) -> vec3<real> {
 }
 
 fn corner_points(c: u32) -> array<vec3<real>, 4> {
-    var pts: array<vec3<real>, 4>;
-    for (var k = 0u; k < 4u; k++) {
-        pts[k] = corner_point(corners[CORNER_STRIDE * c + k]);
-    }
-    return pts;
+    let at = CORNER_STRIDE * c;
+    return array<vec3<real>, 4>(
+        corner_point(corners[at]),
+        corner_point(corners[at + 1u]),
+        corner_point(corners[at + 2u]),
+        corner_point(corners[at + 3u]),
+    );
 }

@@ -28,14 +28,15 @@ fn cofactor3(m: mat3x3<real>) -> mat3x3<real> {
     );
 }
 
+// sum_ij a[i][j] b[i][j] in row order, unrolled (llvmpipe counts every loop
+// iteration against one budget per invocation, see `shess.wgsl`).
+fn frob_dot(a: mat3x3<real>, b: mat3x3<real>) -> real {
+    return a[0][0] * b[0][0] + a[0][1] * b[0][1] + a[0][2] * b[0][2] + a[1][0] * b[1][0] + a[1][1] * b[1][1]
+        + a[1][2] * b[1][2] + a[2][0] * b[2][0] + a[2][1] * b[2][1] + a[2][2] * b[2][2];
+}
+
 fn frobenius_sq(m: mat3x3<real>) -> real {
-    var f = real(0.0);
-    for (var i = 0; i < 3; i++) {
-        for (var j = 0; j < 3; j++) {
-            f += m[i][j] * m[i][j];
-        }
-    }
-    return f;
+    return frob_dot(m, m);
 }
 
 fn mul_vec(m: mat3x3<real>, v: vec3<real>) -> vec3<real> {

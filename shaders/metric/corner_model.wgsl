@@ -14,20 +14,13 @@ fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
     var out = m;
     let d1 = real(1.0) / (m.v * m.v);
     let d2 = real(-2.0) / (m.v * m.v * m.v);
-    let gf = flat9(m.g);
     if hess {
-        for (var a = 0u; a < 9u; a++) {
-            for (var b = 0u; b < 9u; b++) {
-                out.h[a][b] = d1 * m.h[a][b] + d2 * gf[a] * gf[b];
-            }
-        }
+        out.h = shess_scale(m.h, d1);
+        out.h.sq_c[TEMPLATE_SLOT] = d2;
+        out.h.sq[TEMPLATE_SLOT] = m.g;
     }
     out.v = real(1.0) - real(1.0) / m.v;
-    for (var i = 0u; i < 3u; i++) {
-        for (var j = 0u; j < 3u; j++) {
-            out.g[i][j] = m.g[i][j] * d1;
-        }
-    }
+    out.g = scaled3(m.g, d1);
     return out;
 }
 
@@ -66,45 +59,18 @@ fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<rea
     return vertex_gradient_hessian_of_s(s, b);
 #else
     var out: VertexGH;
-    let n = model.dim;
     let m = model_eval(model, s, rjm, true);
     out.ok = m.ok;
     if !m.ok {
         return out;
     }
     out.eta = m.v;
-    for (var i = 0u; i < n; i++) {
-        var gi = real(0.0);
-        for (var j = 0u; j < n; j++) {
-            gi += m.g[i][j] * b[j];
-        }
-        out.grad[i] = gi;
-        for (var q = 0u; q < n; q++) {
-            var acc = real(0.0);
-            for (var j = 0u; j < n; j++) {
-                for (var l = 0u; l < n; l++) {
-                    acc += m.h[3u * i + j][3u * q + l] * b[j] * b[l];
-                }
-            }
-            out.hess[i][q] = acc;
-        }
-    }
-    if n == 2u {
+    out.grad = mul_vec(m.g, b);
+    let row = shess_row(m.h, b);
+    out.hess = shess_block(m.h, row, row);
+    if model.dim == 2u {
         out.hess[2][2] = real(1.0);
     }
     return out;
 #endif
-}
-
-// sum_j g[i][j] b[j] over the leading n columns (`Model::gradient`).
-fn contract_g(g: mat3x3<real>, b: vec3<real>, n: u32) -> vec3<real> {
-    var out = vec3<real>(real(0.0));
-    for (var i = 0u; i < n; i++) {
-        var acc = real(0.0);
-        for (var j = 0u; j < n; j++) {
-            acc += g[i][j] * b[j];
-        }
-        out[i] = acc;
-    }
-    return out;
 }

@@ -9,41 +9,27 @@
 
 // S = sum_k x_k b_k^T
 fn s_of(x: array<vec3<real>, 4>, b: array<vec3<real>, 4>) -> mat3x3<real> {
-    var s = mat3x3<real>();
-    for (var k = 0; k < 4; k++) {
-        for (var i = 0; i < 3; i++) {
-            for (var j = 0; j < 3; j++) {
-                s[i][j] += x[k][i] * b[k][j];
-            }
-        }
-    }
-    return s;
+    return s_rest(x, b, 4u);
 }
 
-// S without vertex k's term, so that S(x_k = y) = rest + y b_k^T.
+// S without vertex k's term, so that S(x_k = y) = rest + y b_k^T (k = 4: all
+// terms). Row i is sum_j x_j[i] b_j in j order, as on the CPU; the skipped
+// term adds an exact zero. Unrolled: see `shess.wgsl` on llvmpipe's loop budget.
 fn s_rest(x: array<vec3<real>, 4>, b: array<vec3<real>, 4>, k: u32) -> mat3x3<real> {
-    var s = mat3x3<real>();
-    for (var j = 0u; j < 4u; j++) {
-        if j == k {
-            continue;
-        }
-        for (var i = 0; i < 3; i++) {
-            for (var c = 0; c < 3; c++) {
-                s[i][c] += x[j][i] * b[j][c];
-            }
-        }
-    }
-    return s;
+    let zero = vec3<real>(real(0.0));
+    let x0 = select(x[0], zero, k == 0u);
+    let x1 = select(x[1], zero, k == 1u);
+    let x2 = select(x[2], zero, k == 2u);
+    let x3 = select(x[3], zero, k == 3u);
+    return mat3x3<real>(
+        x0[0] * b[0] + x1[0] * b[1] + x2[0] * b[2] + x3[0] * b[3],
+        x0[1] * b[0] + x1[1] * b[1] + x2[1] * b[2] + x3[1] * b[3],
+        x0[2] * b[0] + x1[2] * b[1] + x2[2] * b[2] + x3[2] * b[3],
+    );
 }
 
 fn s_with(rest: mat3x3<real>, bk: vec3<real>, y: vec3<real>) -> mat3x3<real> {
-    var s = rest;
-    for (var i = 0; i < 3; i++) {
-        for (var c = 0; c < 3; c++) {
-            s[i][c] += y[i] * bk[c];
-        }
-    }
-    return s;
+    return mat3x3<real>(rest[0] + y[0] * bk, rest[1] + y[1] * bk, rest[2] + y[2] * bk);
 }
 
 fn cbrt_sq(d: real) -> real {
@@ -185,7 +171,7 @@ fn hess_s(p: SParts) -> array<array<real, 9>, 9> {
     return out;
 }
 
-// eta = f h / n with f = |S|^2, h = d^(-2/n), through the dense 9x9 Hessian.
+// eta = f h / n with f = |S|^2, h = d^(-2/n) (`smetric::imr`).
 fn imr(n: u32, s: mat3x3<real>, x: Chi, hess: bool) -> MetricEval {
     var out: MetricEval;
     let d = x.c;
@@ -199,34 +185,24 @@ fn imr(n: u32, s: mat3x3<real>, x: Chi, hess: bool) -> MetricEval {
     let c = cof_n(s, n);
     // d h / d det = -p h / d
     let p = real(2.0) / nf;
-    for (var i = 0u; i < n; i++) {
-        for (var j = 0u; j < n; j++) {
-            out.g[i][j] = (real(2.0) * h * s[i][j] - f * p * h / d * (x.c1 * c[i][j])) / nf;
-        }
-    }
+    let gc = f * p * h / d;
+    // s and c are zero past n, so the full matrix is the leading block
+    out.g = mat3x3<real>(
+        (real(2.0) * h * s[0] - gc * (x.c1 * c[0])) / nf,
+        (real(2.0) * h * s[1] - gc * (x.c1 * c[1])) / nf,
+        (real(2.0) * h * s[2] - gc * (x.c1 * c[2])) / nf,
+    );
     if hess {
-        let d2 = d2det(s, n);
-        let sf = flat9(s);
-        let cf = flat9(c);
         let cross = real(-2.0) * p * h / d / nf;
         let cc = f * p * (p + real(1.0)) * h / (d * d) / nf;
         let dd = -f * p * h / d / nf;
-        for (var a = 0u; a < 9u; a++) {
-            if a % 3u >= n || a / 3u >= n {
-                continue;
-            }
-            for (var b = 0u; b < 9u; b++) {
-                if b % 3u >= n || b / 3u >= n {
-                    continue;
-                }
-                // grad chi = chi' C; Hess chi = chi' D2 + chi'' C C^T
-                let ca = x.c1 * cf[a];
-                let cb = x.c1 * cf[b];
-                out.h[a][b] = cross * (sf[a] * cb + ca * sf[b]) + cc * ca * cb
-                    + dd * (x.c1 * d2[a][b] + x.c2 * cf[a] * cf[b]);
-            }
-            out.h[a][a] += real(2.0) * h / nf;
-        }
+        out.h = shess_identity(real(2.0) * h / nf, n);
+        out.h.pair_c = cross * x.c1;
+        out.h.pair0 = s;
+        out.h.pair1 = c;
+        out.h.sq_c[0] = cc * x.c1 * x.c1 + dd * x.c2;
+        out.h.sq[0] = c;
+        out.h.p = d2det_term(s, n, dd * x.c1);
     }
     return out;
 }

@@ -12,77 +12,50 @@ fn rj_weight(b: array<vec3<real>, 4>) -> mat3x3<real> {
     let winv = mat3x3<real>(b[1], b[2], b[3]);
     let d = det3(winv);
     let c = cofactor3(winv);
-    var w: mat3x3<real>;
-    for (var i = 0u; i < 3u; i++) {
-        for (var j = 0u; j < 3u; j++) {
-            w[i][j] = c[j][i] / d;
-        }
-    }
-    var norm = real(0.0);
-    for (var i = 0u; i < 3u; i++) {
-        for (var j = 0u; j < 3u; j++) {
-            norm += w[i][j] * w[i][j];
-        }
-    }
-    var m: mat3x3<real>;
-    for (var j = 0u; j < 3u; j++) {
-        for (var k = 0u; k < 3u; k++) {
-            var acc = real(0.0);
-            for (var c2 = 0u; c2 < 3u; c2++) {
-                acc += w[j][c2] * w[k][c2];
-            }
-            m[j][k] = acc / norm;
-        }
-    }
-    return m;
+    let w = mat3x3<real>(
+        vec3<real>(c[0][0], c[1][0], c[2][0]) / d,
+        vec3<real>(c[0][1], c[1][1], c[2][1]) / d,
+        vec3<real>(c[0][2], c[1][2], c[2][2]) / d,
+    );
+    let norm = frobenius_sq(w);
+    return mat3x3<real>(
+        vec3<real>(dot3(w[0], w[0]), dot3(w[0], w[1]), dot3(w[0], w[2])) / norm,
+        vec3<real>(dot3(w[1], w[0]), dot3(w[1], w[1]), dot3(w[1], w[2])) / norm,
+        vec3<real>(dot3(w[2], w[0]), dot3(w[2], w[1]), dot3(w[2], w[2])) / norm,
+    );
 }
 
 // `reference_jacobian::rj`
 fn rj(s: mat3x3<real>, d: real, m: mat3x3<real>, hess: bool) -> MetricEval {
     var a = s;
-    for (var i = 0u; i < 3u; i++) {
-        a[i][i] -= real(1.0);
-    }
-    var am: mat3x3<real>;
-    for (var i = 0u; i < 3u; i++) {
-        for (var k = 0u; k < 3u; k++) {
-            var acc = real(0.0);
-            for (var j = 0u; j < 3u; j++) {
-                acc += a[i][j] * m[j][k];
-            }
-            am[i][k] = acc;
-        }
-    }
-    var q = real(0.0);
-    for (var i = 0u; i < 3u; i++) {
-        for (var k = 0u; k < 3u; k++) {
-            q += am[i][k] * a[i][k];
-        }
-    }
+    a[0][0] -= real(1.0);
+    a[1][1] -= real(1.0);
+    a[2][2] -= real(1.0);
+    // row i of A M = sum_j a[i][j] m[j]
+    let am = mat3x3<real>(
+        a[0][0] * m[0] + a[0][1] * m[1] + a[0][2] * m[2],
+        a[1][0] * m[0] + a[1][1] * m[1] + a[1][2] * m[2],
+        a[2][0] * m[0] + a[2][1] * m[1] + a[2][2] * m[2],
+    );
+    let q = frob_dot(am, a);
     let c = cofactor3(s);
     var out: MetricEval;
     out.v = q / d;
-    for (var i = 0u; i < 3u; i++) {
-        for (var j = 0u; j < 3u; j++) {
-            out.g[i][j] = real(2.0) * am[i][j] / d - q * c[i][j] / (d * d);
-        }
-    }
+    let dd = d * d;
+    out.g = mat3x3<real>(
+        real(2.0) * am[0] / d - q * c[0] / dd,
+        real(2.0) * am[1] / d - q * c[1] / dd,
+        real(2.0) * am[2] / d - q * c[2] / dd,
+    );
     if hess {
-        let d2 = d2det(s, 3u);
-        for (var x = 0u; x < 9u; x++) {
-            let i = x / 3u;
-            let j = x % 3u;
-            for (var y = 0u; y < 9u; y++) {
-                let k = y / 3u;
-                let l = y % 3u;
-                var d2q = real(0.0);
-                if i == k {
-                    d2q = real(2.0) * m[j][l];
-                }
-                out.h[x][y] = d2q / d - real(2.0) * (am[i][j] * c[k][l] + c[i][j] * am[k][l]) / (d * d)
-                    + q * (real(2.0) * c[i][j] * c[k][l] / (d * d * d) - d2[x][y] / (d * d));
-            }
-        }
+        out.h = shess_identity(real(0.0), 3u);
+        out.h.r = mat3x3<real>(real(2.0) * m[0] / d, real(2.0) * m[1] / d, real(2.0) * m[2] / d);
+        out.h.pair_c = real(-2.0) / dd;
+        out.h.pair0 = am;
+        out.h.pair1 = c;
+        out.h.sq_c[0] = real(2.0) * q / (dd * d);
+        out.h.sq[0] = c;
+        out.h.p = scaled3(s, -q / dd);
     }
     return out;
 }

@@ -56,7 +56,7 @@ pub fn rj(s: &Mat3, d: f64, m: &Mat3, hess: bool) -> (f64, Mat3, SHess) {
             g[i][j] = 2.0 * am[i][j] / d - q * c[i][j] / (d * d);
         }
     }
-    let mut h = SHess::default();
+    let mut h = SHess::identity(0.0, 3);
     if hess {
         h.r = m.map(|r| r.map(|v| 2.0 * v / d));
         h.pair_c = -2.0 / (d * d);

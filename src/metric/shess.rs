@@ -30,6 +30,9 @@ pub const TEMPLATE_SLOT: usize = 4;
 /// A structured Hessian in S (see the module doc).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SHess {
+    /// The dimension: in 2D the delta_iq of the `r` term stops at 2, so the
+    /// z rows and columns of every block stay zero.
+    pub n: usize,
     pub r: Mat3,
     pub p: Mat3,
     pub gram: f64,
@@ -72,7 +75,7 @@ fn scaled(m: &Mat3, c: f64) -> Mat3 {
 impl SHess {
     /// c times the identity on the leading n x n block.
     pub fn identity(c: f64, n: usize) -> SHess {
-        let mut h = SHess::default();
+        let mut h = SHess { n, ..SHess::default() };
         for i in 0..n {
             h.r[i][i] = c;
         }
@@ -132,6 +135,8 @@ impl SHess {
             for q in 0..3 {
                 m[i][q] += self.pair_c * (a.pu[i] * c.pv[q] + a.pv[i] * c.pu[q]);
             }
+        }
+        for i in 0..self.n {
             m[i][i] += d;
         }
         if self.gram != 0.0 {
@@ -210,7 +215,7 @@ mod tests {
         for x in 0..9 {
             for y in 0..9 {
                 let (i, j, k, l) = (x / 3, x % 3, y / 3, y % 3);
-                let mut v = if i == k { h.r[j][l] } else { 0.0 };
+                let mut v = if i == k && i < h.n { h.r[j][l] } else { 0.0 };
                 v += cof_d(x, y, &h.p);
                 v += h.gram * (0..9).map(|b| cof_d(b, x, &h.s) * cof_d(b, y, &h.s)).sum::<f64>();
                 for t in 0..NSQ {
@@ -228,6 +233,19 @@ mod tests {
     fn blocks_are_the_contracted_terms() {
         let m = |a: f64| [[1.1 * a, 0.3, -0.2], [0.1, 0.9, 0.4 * a], [-0.3, 0.2 * a, 1.3]];
         let mut h = SHess::identity(0.7, 3);
+        let mut planar = SHess::identity(0.7, 2);
+        planar.r[0][1] = 0.2;
+        planar.r[1][0] = 0.2;
+        planar.p[2][2] = -0.3;
+        planar.set_sq(1, 0.9, &[[0.5, 1.5, 0.0], [-0.7, 0.2, 0.0], [0.0; 3]]);
+        let d = planar.dense();
+        for x in 0..9 {
+            for y in 0..9 {
+                if x % 3 == 2 || x / 3 == 2 || y % 3 == 2 || y / 3 == 2 {
+                    assert_eq!(d[x][y], 0.0, "planar [{x}][{y}]");
+                }
+            }
+        }
         h.r[0][2] = 0.25;
         h.r[2][0] = 0.25;
         h.p = m(0.5);

@@ -251,7 +251,7 @@ fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, M
             g[i][j] = (2.0 * h * s[i][j] - f * p * h / d * (d1 * c[i][j])) / nf;
         }
     }
-    let mut hm = SHess::default();
+    let mut hm = SHess::identity(0.0, n);
     if hess {
         let cross = -2.0 * p * h / d / nf;
         let cc = f * p * (p + 1.0) * h / (d * d) / nf;
@@ -317,7 +317,7 @@ fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, SHess
         }
     }
     let g = gl.map(|r| r.map(|v| kappa * v));
-    let mut hm = SHess::default();
+    let mut hm = SHess::identity(0.0, 3);
     if hess {
         hm = SHess::identity(kappa / a, 3);
         hm.set_sq(0, -2.0 * kappa / (a * a), s);

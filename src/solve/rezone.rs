@@ -78,9 +78,6 @@ pub fn reference_positions(p: &Problem, x: &[Vec3], device: Device, iters: usize
     let ls = Default::default();
     match device {
         Device::Cpu => CpuBackend::new(p, x, &ls)?.reference_positions(iters),
-        // lavapipe miscomputes this kernel (`GpuBackend::per_vertex_supported`);
-        // step 1 is cheap next to step 2, so it runs on the CPU there
-        Device::Gpu(ctx) if ctx.is_software() => CpuBackend::new(p, x, &ls)?.reference_positions(iters),
         Device::Gpu(ctx) => GpuBackend::new(ctx, p, x, &ls)?.reference_positions(iters),
         // rank 0 holds the whole problem, and step 1 moves no vertex: no
         // exchange would help it (step 2 runs on the ranks)

@@ -180,27 +180,6 @@ impl<'c> GpuBackend<'c> {
         })
     }
 
-    /// The per-vertex kernels (bcd, reference_position) on the every-corner
-    /// metrics (`cn-paper`, `rj`) come out wrong on lavapipe and right on an
-    /// NVIDIA H200 (README, "Reference-Jacobian rezoning"). The cause is
-    /// llvmpipe's loop limiter: every loop of one invocation shares a budget
-    /// of 65535 iterations (gallivm's `LP_MAX_TGSI_LOOP_ITERATIONS`), after
-    /// which each loop exits at once. A vertex with ~100 incident corners,
-    /// each through the general path's 9x9 S-Hessian loops, spends it, and
-    /// later loops (`s_rest`) return zeros. Refuse there rather than return a
-    /// wrong sweep; closed-form corner blocks without those loops (#14) lift it.
-    fn per_vertex_supported(&self) -> Result<()> {
-        if self.ctx.is_software() && self.problem.model.metric.every_corner() {
-            return Err(Error::Gpu(format!(
-                "the per-vertex kernels miscompute the {} metric on software Vulkan ({}); \
-                 use --device cpu or a hardware GPU",
-                self.problem.model.metric,
-                self.ctx.adapter_name()
-            )));
-        }
-        Ok(())
-    }
-
     fn buf(&self, b: Buf) -> &wgpu::Buffer {
         match b {
             Buf::Vector(i) => &self.vectors[i as usize],
@@ -490,7 +469,6 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn bcd_color(&mut self, color: usize) -> Result<()> {
-        self.per_vertex_supported()?;
         let (offset, count) = self.colors[color];
         if count == 0 {
             return Ok(());
@@ -537,7 +515,6 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
-        self.per_vertex_supported()?;
         if !self.bufs.contains_key(&Buf::Reference) {
             let buf = self.ctx.zeros_real("reference positions", 3 * self.n_vertices);
             self.bufs.insert(Buf::Reference, buf);

@@ -53,6 +53,7 @@ const SHARED: &[(&str, &str)] = &[
         "reference_jacobian",
         include_str!("../../../shaders/metric/reference_jacobian.wgsl"),
     ),
+    ("shess", include_str!("../../../shaders/metric/shess.wgsl")),
     ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
     (
         "corner_model",
@@ -190,9 +191,9 @@ kernels! {
 /// (`#if FAST`, the tetrahedral inverse mean ratio) or the general corner
 /// path for one metric. Each general instance carries only its own metric's
 /// code (`#if IMR`, `#if CN`, ...), not a runtime branch over all of them:
-/// less code per pipeline, and on lavapipe the cn prism
-/// sweep in f64 went wrong once the reference-Jacobian metric shared the
-/// shader (likely the same shared loop budget as `GpuBackend::per_vertex_supported`).
+/// less code per pipeline (llvmpipe gives all loops of one invocation a
+/// shared budget of 65535 iterations, so code that is never run still
+/// matters there when it sits in loops: see `shaders/metric/shess.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Form {
     Fast,
