@@ -72,6 +72,23 @@ pub enum StudyCommand {
     /// objective; every scheme under every strategy (static, dynamic every K) then runs the
     /// sequential BCD sweep to it. Writes a Markdown table and CSV of COT/RT/TT and ranks.
     Order(OrderStudyArgs),
+    /// The Newton vs coordinate descent study: ducts of growing size, heterogeneous clipped
+    /// cubes, small and large perturbations of an optimal duct; Newton and BCD on each, with
+    /// the paper's tables beside ours. Writes Markdown, CSV and SVG figures.
+    NewtonBcd(NewtonStudyArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct NewtonStudyArgs {
+    /// Output folder (newton-study.md, newton-study.csv, ratios.csv, fig*.svg).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Small meshes (about half a minute on two cores) instead of about the paper's sizes.
+    #[arg(long)]
+    pub quick: bool,
+    /// Seed of the perturbations.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
 }
 
 #[derive(Args, Debug)]
@@ -550,6 +567,7 @@ fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Devices) => commands::devices(),
         Some(Command::Generate(g)) => generate::generate(&g),
         Some(Command::Study(StudyCommand::Order(a))) => study::order(&a),
+        Some(Command::Study(StudyCommand::NewtonBcd(a))) => study::newton_bcd(&a),
     };
     match result {
         Ok(()) => 0,
