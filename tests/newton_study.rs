@@ -282,3 +282,18 @@ fn quick_study_writes_every_table_and_figure() {
     let ratios = std::fs::read_to_string(out.join("ratios.csv")).unwrap();
     assert_eq!(ratios.lines().count(), 1 + (6 + 4 + 16 + 9 + 7) * LEVELS.len());
 }
+
+#[test]
+fn generate_hetero_writes_a_graded_mesh_and_refuses_a_fifth_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("h.vtk");
+    let o = meshsmooth(&["generate", "hetero", "--paper", "2", "--tets", "3000", "-o", s(&out)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let mesh = meshsmooth::io::read(&out).unwrap();
+    let vols: Vec<f64> = (0..mesh.num_elements()).map(|e| volume(&tet(&mesh, e))).collect();
+    assert!(vols.iter().all(|&v| v > 0.0));
+    let ratio = vols.iter().cloned().fold(0.0, f64::max) / vols.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!(ratio > 1e4, "volume ratio {ratio:e}");
+    let o = meshsmooth(&["generate", "hetero", "--paper", "5", "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+}

@@ -377,6 +377,9 @@ pub enum GenerateCommand {
     Prism(PrismArgs),
     /// A tetrahedral box graded toward one corner (element volume max:min about RATIO).
     Graded(GradedArgs),
+    /// The Newton paper's heterogeneous meshes (Table 3): the unit cube less a clipped corner,
+    /// graded toward it in geometric layers, interior vertices jittered.
+    Hetero(HeteroArgs),
     /// A conforming mixed mesh: tetrahedra under prisms, hexahedra beside the prisms.
     Mixed(MixedArgs),
     /// A polyhedral Voronoi mesh of the unit cube (about the reference-Jacobian paper's
@@ -519,6 +522,18 @@ pub struct GradedArgs {
     pub ratio: f64,
     #[command(flatten)]
     pub perturb: PerturbArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct HeteroArgs {
+    /// Table 3's row: 1-4 (Hetero1-Hetero4: its volume ratio and worst element).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=4))]
+    pub paper: u8,
+    /// About this many tetrahedra (the paper's have 54000-60000).
+    #[arg(long, default_value_t = 55000)]
+    pub tets: usize,
     #[command(flatten)]
     pub out: OutputArgs,
 }

@@ -238,7 +238,17 @@ fn perturb_options(perturbation: Perturbation, fraction: f64, seed: u64) -> Pert
 fn perturbed(suite: Suite, name: String, optimal: &Mesh, p: Perturbation, fraction: f64, seed: u64) -> Result<Case> {
     let mut mesh = optimal.clone();
     let stats = generate::perturb(&mut mesh, &perturb_options(p, fraction, seed))?;
-    run_case(suite, name, &mesh, Some((p.to_string(), stats)))
+    run_case(suite, name, &mesh, Some((short(p), stats)))
+}
+
+/// The perturbation as `generate --perturb` takes it, to four digits.
+fn short(p: Perturbation) -> String {
+    match p {
+        Perturbation::Random { alpha } => format!("random:{alpha:.3e}"),
+        Perturbation::ShiftR { alpha } => format!("shift-r:{alpha:.4}"),
+        Perturbation::ShiftNe { alpha } => format!("shift-ne:{alpha:.4}"),
+        Perturbation::Oscillatory { alpha, omega } => format!("osc:{alpha:.3e}:{omega:.4}"),
+    }
 }
 
 /// The paper's name of a Table 5 perturbation: "Rand .01", "Osc .05 (l=63)".
