@@ -170,7 +170,7 @@ pub fn ratios_svg(title: &str, levels: &[f64], series: &[(String, Vec<Option<f64
     while v <= hi + 1e-9 {
         let _ = writeln!(
             svg,
-            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            r#"<text x="{}" y="{}" text-anchor="end">{:.2}</text>"#,
             PAD - 4.0,
             sy(v) + 4.0,
             10f64.powf(v)
