@@ -11,6 +11,7 @@ pub mod io;
 pub mod mesh;
 pub mod metric;
 pub mod metric_report;
+pub mod newton_study;
 pub mod order_study;
 pub mod partition;
 pub use backend::cpu::objective;

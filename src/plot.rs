@@ -123,10 +123,116 @@ pub fn histories_svg(series: &[(String, &History)]) -> String {
     svg
 }
 
+/// Time-ratio curves (Figures 3 and 5-7 of the Newton paper): for each
+/// series, Newton's time over BCD's against the improvement level in
+/// percent, on a log axis with the line at 1 where the preferred method
+/// changes. Missing points break nothing: a series is drawn through the
+/// levels it has.
+pub fn ratios_svg(title: &str, levels: &[f64], series: &[(String, Vec<Option<f64>>)]) -> String {
+    let vals: Vec<f64> = series
+        .iter()
+        .flat_map(|(_, r)| r.iter().flatten().map(|v| v.max(1e-6).log10()))
+        .chain([0.0])
+        .collect();
+    let (mut lo, mut hi) = vals
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    lo = lo.floor().min(-0.5);
+    hi = hi.ceil().max(0.5);
+    let width = W + 160.0;
+    let sx = |l: f64| PAD + (W - PAD - 10.0) * l / 100.0;
+    let sy = |v: f64| 20.0 + (H - PAD) * (1.0 - (v - lo) / (hi - lo));
+    let mut svg = String::new();
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{}" font-family="sans-serif" font-size="11">"#,
+        H + 40.0
+    );
+    let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="14" text-anchor="middle" font-weight="bold">{title}</text>"#,
+        W / 2.0
+    );
+    let _ = writeln!(
+        svg,
+        r#"<rect x="{PAD}" y="20" width="{}" height="{}" fill="none" stroke="black"/>"#,
+        W - PAD - 10.0,
+        H - PAD
+    );
+    let _ = writeln!(
+        svg,
+        r#"<line x1="{PAD}" y1="{y}" x2="{}" y2="{y}" stroke="gray" stroke-dasharray="4,3"/>"#,
+        W - 10.0,
+        y = sy(0.0)
+    );
+    let mut v = lo;
+    while v <= hi + 1e-9 {
+        let _ = writeln!(
+            svg,
+            r#"<text x="{}" y="{}" text-anchor="end">{:.2}</text>"#,
+            PAD - 4.0,
+            sy(v) + 4.0,
+            10f64.powf(v)
+        );
+        v += 0.5;
+    }
+    for l in [0.0, 25.0, 50.0, 75.0, 100.0] {
+        let _ = writeln!(
+            svg,
+            r#"<text x="{}" y="{}" text-anchor="middle">{l}</text>"#,
+            sx(l),
+            H - PAD + 36.0
+        );
+    }
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="{}" text-anchor="middle">improvement (%); Newton time / BCD time, above 1: BCD faster</text>"#,
+        W / 2.0,
+        H - PAD + 52.0
+    );
+    for (si, (name, r)) in series.iter().enumerate() {
+        let color = COLORS[si % COLORS.len()];
+        let pts: Vec<String> = levels
+            .iter()
+            .zip(r)
+            .filter_map(|(&l, v)| v.map(|v| format!("{:.2},{:.2}", sx(l), sy(v.max(1e-6).log10()))))
+            .collect();
+        let _ = writeln!(
+            svg,
+            r#"<polyline fill="none" stroke="{color}" stroke-width="1.5" points="{}"/>"#,
+            pts.join(" ")
+        );
+        let _ = writeln!(
+            svg,
+            r#"<text x="{}" y="{}" fill="{color}">{name}</text>"#,
+            W + 4.0,
+            30.0 + 14.0 * si as f64
+        );
+    }
+    svg.push_str("</svg>\n");
+    svg
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::solve::Record;
+
+    #[test]
+    fn ratio_svg_draws_each_series_and_the_unit_line() {
+        let levels = [10.0, 50.0, 90.0];
+        let svg = ratios_svg(
+            "t",
+            &levels,
+            &[
+                ("a".into(), vec![Some(2.0), None, Some(0.5)]),
+                ("b".into(), vec![None, None, None]),
+            ],
+        );
+        assert_eq!(svg.matches("<polyline").count(), 2);
+        assert!(svg.contains("stroke-dasharray") && !svg.contains("NaN") && !svg.contains("inf"));
+    }
 
     #[test]
     fn svg_has_a_polyline_per_series_and_panel() {

@@ -135,6 +135,11 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             perturb(&mut mesh, &a.perturb)?;
             save(&a.out, &mesh)
         }
+        GenerateCommand::Hetero(a) => {
+            positive(&[a.tets], "--tets")?;
+            let opts = generate::HeteroOptions::paper(a.paper as usize, a.tets);
+            save(&a.out, &generate::hetero_tet_box(&opts))
+        }
         GenerateCommand::Graded(a) => {
             positive(&[a.cells], "--cells")?;
             if !(a.ratio >= 1.0 && a.ratio.is_finite()) {

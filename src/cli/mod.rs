@@ -72,6 +72,23 @@ pub enum StudyCommand {
     /// objective; every scheme under every strategy (static, dynamic every K) then runs the
     /// sequential BCD sweep to it. Writes a Markdown table and CSV of COT/RT/TT and ranks.
     Order(OrderStudyArgs),
+    /// The Newton vs coordinate descent study: ducts of growing size, heterogeneous clipped
+    /// cubes, small and large perturbations of an optimal duct; Newton and BCD on each, with
+    /// the paper's tables beside ours. Writes Markdown, CSV and SVG figures.
+    NewtonBcd(NewtonStudyArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct NewtonStudyArgs {
+    /// Output folder (newton-study.md, newton-study.csv, ratios.csv, fig*.svg).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Small meshes (about half a minute on two cores) instead of about the paper's sizes.
+    #[arg(long)]
+    pub quick: bool,
+    /// Seed of the perturbations.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
 }
 
 #[derive(Args, Debug)]
@@ -360,6 +377,9 @@ pub enum GenerateCommand {
     Prism(PrismArgs),
     /// A tetrahedral box graded toward one corner (element volume max:min about RATIO).
     Graded(GradedArgs),
+    /// The Newton paper's heterogeneous meshes (Table 3): the unit cube less a clipped corner,
+    /// graded toward it in geometric layers, interior vertices jittered.
+    Hetero(HeteroArgs),
     /// A conforming mixed mesh: tetrahedra under prisms, hexahedra beside the prisms.
     Mixed(MixedArgs),
     /// A polyhedral Voronoi mesh of the unit cube (about the reference-Jacobian paper's
@@ -507,6 +527,18 @@ pub struct GradedArgs {
 }
 
 #[derive(Args, Debug)]
+pub struct HeteroArgs {
+    /// Table 3's row: 1-4 (Hetero1-Hetero4: its volume ratio and worst element).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=4))]
+    pub paper: u8,
+    /// About this many tetrahedra (the paper's have 54000-60000).
+    #[arg(long, default_value_t = 55000)]
+    pub tets: usize,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
 pub struct DemoArgs {
     /// Also write the smoothed demo mesh here.
     #[arg(short, long)]
@@ -550,6 +582,7 @@ fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Devices) => commands::devices(),
         Some(Command::Generate(g)) => generate::generate(&g),
         Some(Command::Study(StudyCommand::Order(a))) => study::order(&a),
+        Some(Command::Study(StudyCommand::NewtonBcd(a))) => study::newton_bcd(&a),
     };
     match result {
         Ok(()) => 0,

@@ -5,6 +5,7 @@
 pub mod box_mesh;
 pub mod graded;
 pub mod grid;
+pub mod hetero;
 pub mod horseshoe;
 pub mod mixed;
 pub mod perturb;
@@ -14,6 +15,7 @@ pub mod voronoi;
 pub use box_mesh::{duct, tet_box};
 pub use graded::graded_tet_box;
 pub use grid::{hex_box, quad_grid, tri_grid};
+pub use hetero::{HeteroOptions, hetero_tet_box};
 pub use horseshoe::{HorseshoeKind, horseshoe};
 pub use mixed::mixed_block;
 pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb, perturb_unguarded};

@@ -221,6 +221,12 @@ pub struct Info {
     pub colors: usize,
     /// CG iterations over all Newton steps (Newton only).
     pub cg_iterations: Option<usize>,
+    /// Newton steps whose CG met negative curvature (Newton only): the
+    /// paper's explanation of Newton's slow start on heterogeneous meshes.
+    pub negative_curvature_steps: Option<usize>,
+    /// Objective evaluations in Newton's line searches (Newton only): many
+    /// per step when the direction is poor.
+    pub line_search_trials: Option<usize>,
 }
 
 /// What every backend checks before its first step: usable settings and a
@@ -429,6 +435,10 @@ pub struct Sweep {
     pub max_move_sq: f64,
     /// CG iterations of the step (Newton).
     pub cg_iterations: usize,
+    /// Whether the step's CG met negative curvature (Newton).
+    pub negative_curvature: bool,
+    /// Trial points the step's line search evaluated (Newton).
+    pub line_search_trials: usize,
     /// Time of the optimisation proper within the step, where the method
     /// separates it (BCD: the sweep); otherwise the whole step counts.
     pub optimise_seconds: Option<f64>,
@@ -486,6 +496,7 @@ fn iterate(
     };
     let mut iterations = 0;
     let mut cg_iterations = 0;
+    let (mut negative_curvature_steps, mut line_search_trials) = (0, 0);
     let mut optimise_seconds = 0.0;
     let (mut reorder_seconds, mut reorderings) = begin.first_reorder;
     while stop.is_none() {
@@ -508,6 +519,8 @@ fn iterate(
         let sweep = step()?;
         iterations += 1;
         cg_iterations += sweep.cg_iterations;
+        negative_curvature_steps += sweep.negative_curvature as usize;
+        line_search_trials += sweep.line_search_trials;
         optimise_seconds += sweep.optimise_seconds.unwrap_or(0.0);
         reorder_seconds += sweep.reorder_seconds;
         reorderings += sweep.reorderings;
@@ -550,6 +563,8 @@ fn iterate(
         memory_bytes: setup.memory_bytes,
         colors: setup.colors,
         cg_iterations: (method == Method::Newton).then_some(cg_iterations),
+        negative_curvature_steps: (method == Method::Newton).then_some(negative_curvature_steps),
+        line_search_trials: (method == Method::Newton).then_some(line_search_trials),
     })
 }
 

@@ -5,7 +5,7 @@
 //! rejected. Written once over `Backend`.
 
 use super::line_search::LineSearch;
-use super::pcg::{FIRST_FREE_SLOT, NegativeCurvature, PcgInfo, PcgParams, PcgWork, Preconditioner, pcg};
+use super::pcg::{FIRST_FREE_SLOT, NegativeCurvature, PcgInfo, PcgParams, PcgStop, PcgWork, Preconditioner, pcg};
 use super::{Sweep, accepted_step_inverted};
 use crate::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
 use crate::error::Result;
@@ -143,8 +143,10 @@ impl Newton {
         let info = pcg(be, &self.work, self.rhs, self.d, &pcg_params)?;
         self.cg_iterations += info.iterations;
         self.last_pcg = Some(info);
-        let stay = Sweep {
+        let negative_curvature = info.stop == PcgStop::NegativeCurvature;
+        let mut stay = Sweep {
             cg_iterations: info.iterations,
+            negative_curvature,
             ..stay
         };
         be.dot(self.g, self.d, SLOPE, None)?;
@@ -160,7 +162,8 @@ impl Newton {
         }
         let ls = &self.params.line_search;
         let mut alpha = 1.0;
-        for _ in 0..=ls.max_backtracks {
+        for trial in 1..=ls.max_backtracks + 1 {
+            stay.line_search_trials = trial;
             be.trial(Coef::value(alpha), self.d)?;
             be.evaluate(Points::Trial, EVAL, None)?;
             let s = be.flush()?;
@@ -181,6 +184,8 @@ impl Newton {
                     grad_norm: self.current.1,
                     max_move_sq: alpha * alpha * s[DMAX.0 as usize],
                     cg_iterations: info.iterations,
+                    negative_curvature,
+                    line_search_trials: trial,
                     ..Default::default()
                 });
             }
