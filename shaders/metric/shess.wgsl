@@ -74,13 +74,26 @@ fn shess_row(h: SHess, b: vec3<real>) -> SRow {
     var o: SRow;
     o.b = b;
     o.rb = mul_vec(h.r, b);
-    o.sq[0] = mul_vec(h.sq[0], b);
-    o.sq[1] = mul_vec(h.sq[1], b);
-    o.sq[2] = mul_vec(h.sq[2], b);
-    o.sq[3] = mul_vec(h.sq[3], b);
-    o.sq[4] = mul_vec(h.sq[4], b);
-    o.pu = mul_vec(h.pair0, b);
-    o.pv = mul_vec(h.pair1, b);
+    // most metrics use a few of the terms: the others' products stay zero
+    if h.pair_c != real(0.0) {
+        o.pu = mul_vec(h.pair0, b);
+        o.pv = mul_vec(h.pair1, b);
+    }
+    if h.sq_c[0] != real(0.0) {
+        o.sq[0] = mul_vec(h.sq[0], b);
+    }
+    if h.sq_c[1] != real(0.0) {
+        o.sq[1] = mul_vec(h.sq[1], b);
+    }
+    if h.sq_c[2] != real(0.0) {
+        o.sq[2] = mul_vec(h.sq[2], b);
+    }
+    if h.sq_c[3] != real(0.0) {
+        o.sq[3] = mul_vec(h.sq[3], b);
+    }
+    if h.sq_c[4] != real(0.0) {
+        o.sq[4] = mul_vec(h.sq[4], b);
+    }
     if h.gram != real(0.0) {
         o.w0 = cross3(b, h.s[0]);
         o.w1 = cross3(b, h.s[1]);
@@ -98,16 +111,28 @@ fn outer_add(m: mat3x3<real>, c: real, u: vec3<real>, v: vec3<real>) -> mat3x3<r
 fn shess_block(h: SHess, a: SRow, c: SRow) -> mat3x3<real> {
     var m = mat3x3<real>();
     let d = dot3(a.b, c.rb);
-    m = outer_add(m, h.sq_c[0], a.sq[0], c.sq[0]);
-    m = outer_add(m, h.sq_c[1], a.sq[1], c.sq[1]);
-    m = outer_add(m, h.sq_c[2], a.sq[2], c.sq[2]);
-    m = outer_add(m, h.sq_c[3], a.sq[3], c.sq[3]);
-    m = outer_add(m, h.sq_c[4], a.sq[4], c.sq[4]);
-    m[0] += h.pair_c * (a.pu[0] * c.pv + a.pv[0] * c.pu);
+    if h.sq_c[0] != real(0.0) {
+        m = outer_add(m, h.sq_c[0], a.sq[0], c.sq[0]);
+    }
+    if h.sq_c[1] != real(0.0) {
+        m = outer_add(m, h.sq_c[1], a.sq[1], c.sq[1]);
+    }
+    if h.sq_c[2] != real(0.0) {
+        m = outer_add(m, h.sq_c[2], a.sq[2], c.sq[2]);
+    }
+    if h.sq_c[3] != real(0.0) {
+        m = outer_add(m, h.sq_c[3], a.sq[3], c.sq[3]);
+    }
+    if h.sq_c[4] != real(0.0) {
+        m = outer_add(m, h.sq_c[4], a.sq[4], c.sq[4]);
+    }
+    if h.pair_c != real(0.0) {
+        m[0] += h.pair_c * (a.pu[0] * c.pv + a.pv[0] * c.pu);
+        m[1] += h.pair_c * (a.pu[1] * c.pv + a.pv[1] * c.pu);
+        m[2] += h.pair_c * (a.pu[2] * c.pv + a.pv[2] * c.pu);
+    }
     m[0][0] += d;
-    m[1] += h.pair_c * (a.pu[1] * c.pv + a.pv[1] * c.pu);
     m[1][1] += d;
-    m[2] += h.pair_c * (a.pu[2] * c.pv + a.pv[2] * c.pu);
     if h.n == 3u {
         m[2][2] += d;
     }

@@ -9,6 +9,7 @@
 
 use super::mat3::{Mat3, Vec3, inverse, mul_vec};
 use super::mean_ratio::TetShape;
+use super::planar;
 use super::reference_jacobian;
 use super::shess::{SHess, TEMPLATE_SLOT};
 use super::smetric::{self, MetricKind};
@@ -90,17 +91,29 @@ impl Model {
         n == 3 && self.metric == MetricKind::InverseMeanRatio && self.template == Template::Harmonic && self.eps == 0.0
     }
 
+    /// The planar closed forms apply (`planar.rs`): the inverse mean ratio
+    /// (which the condition number equals in 2D) under the harmonic template.
+    #[inline]
+    pub fn planar(&self, n: usize) -> bool {
+        n == 2
+            && self.metric != MetricKind::TargetShapeSize
+            && self.metric != MetricKind::ReferenceJacobian
+            && self.template == Template::Harmonic
+            && self.eps == 0.0
+    }
+
     /// The template applied to a metric value, gradient and Hessian in S.
-    fn templated(&self, (m, g, mut h): (f64, Mat3, SHess), hess: bool) -> (f64, Mat3, SHess) {
+    #[inline]
+    fn templated(&self, (m, g): (f64, Mat3), hess: Option<&mut SHess>) -> (f64, Mat3) {
         match self.template {
-            Template::Harmonic => (m, g, h),
+            Template::Harmonic => (m, g),
             Template::Average => {
                 let (d1, d2) = (1.0 / (m * m), -2.0 / (m * m * m));
-                if hess {
+                if let Some(h) = hess {
                     h.scale(d1);
                     h.set_sq(TEMPLATE_SLOT, d2, &g);
                 }
-                (1.0 - 1.0 / m, g.map(|r| r.map(|v| v * d1)), h)
+                (1.0 - 1.0 / m, g.map(|r| r.map(|v| v * d1)))
             }
         }
     }
@@ -108,12 +121,14 @@ impl Model {
     /// The metric of S for a corner of `shape` (the reference-Jacobian metric
     /// reads the corner's M from it; the others only its dimension).
     #[inline]
-    fn eval(&self, shape: &CornerShape, s: &Mat3, hess: bool) -> Option<(f64, Mat3, SHess)> {
-        if self.metric == MetricKind::ReferenceJacobian {
-            let m = reference_jacobian::weight(&shape.winv())?;
-            return smetric::eval_with(self.metric, shape.n, s, Some(&m), hess);
-        }
-        smetric::eval_regularised(self.metric, shape.n, s, hess, self.eps)
+    fn eval(&self, shape: &CornerShape, s: &Mat3, mut hess: Option<&mut SHess>) -> Option<(f64, Mat3)> {
+        let m = if self.metric == MetricKind::ReferenceJacobian {
+            Some(reference_jacobian::weight(&shape.winv())?)
+        } else {
+            None
+        };
+        let mg = smetric::eval_full(self.metric, shape.n, s, m.as_ref(), hess.as_deref_mut(), self.eps)?;
+        Some(self.templated(mg, hess))
     }
 
     /// Objective term of a corner of `shape` from its S.
@@ -122,11 +137,10 @@ impl Model {
         if self.fast(shape.n) {
             return TetShape::value_of_s(s);
         }
-        let m = self.eval(shape, s, false)?.0;
-        Some(match self.template {
-            Template::Harmonic => m,
-            Template::Average => 1.0 - 1.0 / m,
-        })
+        if self.planar(shape.n) {
+            return planar::value_of_s(s);
+        }
+        Some(self.eval(shape, s, None)?.0)
     }
 
     #[inline]
@@ -143,7 +157,14 @@ impl Model {
         if self.fast(n) {
             return TetShape::vertex_gradient_hessian_at(s, b);
         }
-        let (v, g, h) = self.templated(self.eval(shape, &s, true)?, true);
+        if self.planar(n) {
+            let p = planar::parts(&s)?;
+            let mut hv = p.block(b, b);
+            hv[2][2] = 1.0;
+            return Some((p.eta, p.gradient(b), hv));
+        }
+        let mut h = SHess::default();
+        let (v, g) = self.eval(shape, &s, Some(&mut h))?;
         let mut hv = h.block(&h.row(b), &h.row(b));
         if n == 2 {
             hv[2][2] = 1.0;
@@ -158,7 +179,15 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
-        let (v, g, _) = self.templated(self.eval(shape, &s, false)?, false);
+        if self.planar(n) {
+            let p = planar::parts(&s)?;
+            let mut out = [[0.0; 3]; 4];
+            for (k, o) in out.iter_mut().enumerate().take(3) {
+                *o = p.gradient(shape.tet.b(k));
+            }
+            return Some((p.eta, out));
+        }
+        let (v, g) = self.eval(shape, &s, None)?;
         let mut out = [[0.0; 3]; 4];
         for (k, o) in out.iter_mut().enumerate().take(n + 1) {
             *o = mul_vec(&g, shape.tet.b(k));
@@ -173,7 +202,11 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
-        let (v, g, h) = self.templated(self.eval(shape, &s, true)?, true);
+        if self.planar(n) {
+            return planar_blocks(shape, &s, out);
+        }
+        let mut h = SHess::default();
+        let (v, g) = self.eval(shape, &s, Some(&mut h))?;
         let nv = n + 1;
         let mut grad = [[0.0; 3]; 4];
         let mut rows = [h.row(&[0.0; 3]); 4];
@@ -181,13 +214,18 @@ impl Model {
             rows[l] = h.row(shape.tet.b(l));
             grad[l] = mul_vec(&g, shape.tet.b(l));
         }
+        // H is symmetric: the lower blocks are the upper ones transposed,
+        // as the device's assembly stores them
         for k in 0..4 {
-            for l in 0..4 {
-                out[k][l] = if k < nv && l < nv {
+            for l in k..4 {
+                out[k][l] = if l < nv {
                     h.block(&rows[k], &rows[l])
                 } else {
                     [[0.0; 3]; 3]
                 };
+                if l > k {
+                    out[l][k] = std::array::from_fn(|i| std::array::from_fn(|q| out[k][l][q][i]));
+                }
             }
             if n == 2 && k < nv {
                 out[k][k][2][2] = 1.0;
@@ -195,4 +233,27 @@ impl Model {
         }
         Some((v, grad))
     }
+}
+
+/// `Model::blocks` for a planar corner (3 vertices) through `planar.rs`.
+fn planar_blocks(shape: &CornerShape, s: &Mat3, out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
+    let p = planar::parts(s)?;
+    let mut grad = [[0.0; 3]; 4];
+    for k in 0..4 {
+        for l in k..4 {
+            out[k][l] = if l < 3 {
+                p.block(shape.tet.b(k), shape.tet.b(l))
+            } else {
+                [[0.0; 3]; 3]
+            };
+            if l > k {
+                out[l][k] = std::array::from_fn(|i| std::array::from_fn(|q| out[k][l][q][i]));
+            }
+        }
+        if k < 3 {
+            grad[k] = p.gradient(shape.tet.b(k));
+            out[k][k][2][2] = 1.0;
+        }
+    }
+    Some((p.eta, grad))
 }

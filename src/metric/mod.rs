@@ -5,6 +5,7 @@ pub mod corner;
 pub mod corner_model;
 pub mod mat3;
 pub mod mean_ratio;
+pub mod planar;
 pub mod reference_jacobian;
 pub mod shess;
 pub mod smetric;

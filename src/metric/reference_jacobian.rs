@@ -31,7 +31,7 @@ pub fn weight(winv: &Mat3) -> Option<Mat3> {
 /// du = -C / d^2, d2u = 2 C C^T / d^3 - D2 / d^2 (C = cofactor = d det / dS,
 /// D2 its derivative), f = q u and the product rule: the Hessian is
 /// I x (2M/d) - (2/d^2) (AM C^T + C (AM)^T) + (2q/d^3) C C^T - (q/d^2) D2.
-pub fn rj(s: &Mat3, d: f64, m: &Mat3, hess: bool) -> (f64, Mat3, SHess) {
+pub fn rj(s: &Mat3, d: f64, m: &Mat3, hess: Option<&mut SHess>) -> (f64, Mat3) {
     let mut a = *s;
     for (i, row) in a.iter_mut().enumerate() {
         row[i] -= 1.0;
@@ -56,15 +56,15 @@ pub fn rj(s: &Mat3, d: f64, m: &Mat3, hess: bool) -> (f64, Mat3, SHess) {
             g[i][j] = 2.0 * am[i][j] / d - q * c[i][j] / (d * d);
         }
     }
-    let mut h = SHess::identity(0.0, 3);
-    if hess {
+    if let Some(h) = hess {
+        h.clear(3, 0.0);
         h.r = m.map(|r| r.map(|v| 2.0 * v / d));
         h.pair_c = -2.0 / (d * d);
         h.pair = [am, c];
         h.set_sq(0, 2.0 * q / (d * d * d), &c);
         h.p = s.map(|r| r.map(|v| -q / (d * d) * v));
     }
-    (v, g, h)
+    (v, g)
 }
 
 #[cfg(test)]
@@ -95,11 +95,11 @@ mod tests {
         let j = [[0.9, 0.5, 0.1], [-0.2, 1.1, 0.3], [0.2, -0.1, 1.0]];
         let s = mul(&j, &inverse(&jr).unwrap());
         let m = weight(&inverse(&jr).unwrap()).unwrap();
-        let (v, _, _) = rj(&s, det(&s), &m, false);
+        let (v, _) = rj(&s, det(&s), &m, None);
         assert!((v - paper(&j, &jr)).abs() < 1e-13 * v, "{v} vs {}", paper(&j, &jr));
         // zero exactly at the reference
         let id = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-        assert_eq!(rj(&id, 1.0, &m, false).0, 0.0);
+        assert_eq!(rj(&id, 1.0, &m, None).0, 0.0);
     }
 
     #[test]
@@ -107,8 +107,9 @@ mod tests {
         let jr = [[1.0, 0.4, 0.0], [0.1, 0.7, 0.3], [0.0, -0.2, 1.3]];
         let m = weight(&inverse(&jr).unwrap()).unwrap();
         let s = [[1.1, 0.3, -0.2], [0.1, 0.9, 0.4], [-0.3, 0.2, 1.3]];
-        let f = |s: &Mat3| rj(s, det(s), &m, false);
-        let (_, g, h) = rj(&s, det(&s), &m, true);
+        let f = |s: &Mat3| rj(s, det(s), &m, None);
+        let mut h = SHess::default();
+        let (_, g) = rj(&s, det(&s), &m, Some(&mut h));
         let h = h.dense();
         let step = 1e-5;
         for x in 0..9 {

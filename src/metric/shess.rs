@@ -82,6 +82,22 @@ impl SHess {
         h
     }
 
+    /// Resets to c times the identity on the leading n x n block, every
+    /// other term off. The matrices of the terms that are off are left as
+    /// they were: no product reads them (`row` and `block` skip them).
+    #[inline]
+    pub fn clear(&mut self, n: usize, c: f64) {
+        self.n = n;
+        self.r = [[0.0; 3]; 3];
+        for i in 0..n {
+            self.r[i][i] = c;
+        }
+        self.p = [[0.0; 3]; 3];
+        self.gram = 0.0;
+        self.sq_c = [0.0; NSQ];
+        self.pair_c = 0.0;
+    }
+
     /// c vec(U) vec(U)^T as rank-one term `slot`: the metrics use slots
     /// 0..4, the average template slot `TEMPLATE_SLOT`.
     pub fn set_sq(&mut self, slot: usize, c: f64, u: &Mat3) {
@@ -100,16 +116,22 @@ impl SHess {
         self.pair_c *= c;
     }
 
+    #[inline]
     pub fn row(&self, b: &Vec3) -> Row {
         let mut out = Row {
             b: *b,
             rb: mul_vec(&self.r, b),
-            pu: mul_vec(&self.pair[0], b),
-            pv: mul_vec(&self.pair[1], b),
             ..Row::default()
         };
+        // most metrics use a few of the terms: the others' products stay zero
+        if self.pair_c != 0.0 {
+            out.pu = mul_vec(&self.pair[0], b);
+            out.pv = mul_vec(&self.pair[1], b);
+        }
         for t in 0..NSQ {
-            out.sq[t] = mul_vec(&self.sq[t], b);
+            if self.sq_c[t] != 0.0 {
+                out.sq[t] = mul_vec(&self.sq[t], b);
+            }
         }
         if self.gram != 0.0 {
             for k in 0..3 {
@@ -120,20 +142,26 @@ impl SHess {
     }
 
     /// The 3x3 block of rows `a` and `c` (vertex k's and vertex l's B rows).
+    #[inline]
     pub fn block(&self, a: &Row, c: &Row) -> Mat3 {
         let mut m = [[0.0; 3]; 3];
         let d = dot(&a.b, &c.rb);
         for t in 0..NSQ {
             let ct = self.sq_c[t];
+            if ct == 0.0 {
+                continue;
+            }
             for i in 0..3 {
                 for q in 0..3 {
                     m[i][q] += ct * a.sq[t][i] * c.sq[t][q];
                 }
             }
         }
-        for i in 0..3 {
-            for q in 0..3 {
-                m[i][q] += self.pair_c * (a.pu[i] * c.pv[q] + a.pv[i] * c.pu[q]);
+        if self.pair_c != 0.0 {
+            for i in 0..3 {
+                for q in 0..3 {
+                    m[i][q] += self.pair_c * (a.pu[i] * c.pv[q] + a.pv[i] * c.pu[q]);
+                }
             }
         }
         for i in 0..self.n {

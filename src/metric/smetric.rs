@@ -156,7 +156,22 @@ fn d2det_term(s: &Mat3, n: usize, c: f64) -> Mat3 {
 /// # Panics
 /// For the reference-Jacobian metric, which needs the corner's M: use [`eval_with`].
 pub fn eval(metric: MetricKind, n: usize, s: &Mat3, hess: bool) -> Option<(f64, Mat3, SHess)> {
-    eval_full(metric, n, s, None, hess, 0.0)
+    owned(metric, n, s, None, hess, 0.0)
+}
+
+/// [`eval_full`] with the Hessian returned (tests and one-off callers; the
+/// solvers pass their own `SHess` to fill).
+fn owned(
+    metric: MetricKind,
+    n: usize,
+    s: &Mat3,
+    rj: Option<&Mat3>,
+    hess: bool,
+    eps: f64,
+) -> Option<(f64, Mat3, SHess)> {
+    let mut h = SHess::default();
+    let (v, g) = eval_full(metric, n, s, rj, hess.then_some(&mut h), eps)?;
+    Some((v, g, h))
 }
 
 /// The regularised determinant of Garanzha et al. ("Foldover-free maps in 50
@@ -183,27 +198,29 @@ pub fn chi(d: f64, eps: f64) -> (f64, f64, f64) {
 /// towards untangling it. The target metric has no determinant and is the
 /// same for every eps. eps = 0 is `eval`.
 pub fn eval_regularised(metric: MetricKind, n: usize, s: &Mat3, hess: bool, eps: f64) -> Option<(f64, Mat3, SHess)> {
-    eval_full(metric, n, s, None, hess, eps)
+    owned(metric, n, s, None, hess, eps)
 }
 
 /// [`eval`] with the reference-Jacobian metric's per-corner weight M
 /// (`reference_jacobian::weight`), which the other metrics ignore.
 pub fn eval_with(metric: MetricKind, n: usize, s: &Mat3, rj: Option<&Mat3>, hess: bool) -> Option<(f64, Mat3, SHess)> {
-    eval_full(metric, n, s, rj, hess, 0.0)
+    owned(metric, n, s, rj, hess, 0.0)
 }
 
 /// [`eval_with`] and [`eval_regularised`] in one: the reference-Jacobian
 /// weight and untangling's eps (the reference-Jacobian term is never
-/// regularised: rezoning starts from a valid mesh). In 2D only the leading
-/// 2x2 block of S is read, and every matrix returned is zero outside it.
+/// regularised: rezoning starts from a valid mesh). The Hessian goes into
+/// `hess` when given. In 2D only the leading 2x2 block of S is read, and
+/// every matrix returned is zero outside it.
+#[inline]
 pub fn eval_full(
     metric: MetricKind,
     n: usize,
     s: &Mat3,
     rj: Option<&Mat3>,
-    hess: bool,
+    hess: Option<&mut SHess>,
     eps: f64,
-) -> Option<(f64, Mat3, SHess)> {
+) -> Option<(f64, Mat3)> {
     let s = &leading(s, n);
     let d = det_n(s, n);
     if !d.is_finite() || (eps == 0.0 && !(d > 0.0)) {
@@ -214,7 +231,7 @@ pub fn eval_full(
         MetricKind::InverseMeanRatio => imr(n, s, x, hess),
         MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper if n == 2 => imr(n, s, x, hess),
         MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper => cn3(s, x, hess),
-        MetricKind::TargetShapeSize => tmp(n, s),
+        MetricKind::TargetShapeSize => tmp(n, s, hess),
         MetricKind::ReferenceJacobian => {
             if !(d > 0.0) {
                 return None;
@@ -238,7 +255,8 @@ pub fn leading(s: &Mat3, n: usize) -> Mat3 {
 /// (`chi` = det S when not regularised). With grad chi = chi' C and
 /// Hess chi = chi' D2 + chi'' C C^T the Hessian is
 /// (2h/n) I + cross chi' (S C^T + C S^T) + (cc chi'^2 + dd chi'') C C^T + dd chi' D2.
-fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, SHess) {
+#[inline]
+fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: Option<&mut SHess>) -> (f64, Mat3) {
     let nf = n as f64;
     let h = if n == 2 { 1.0 / d } else { 1.0 / (d.cbrt() * d.cbrt()) };
     let f = frob_n(s, n);
@@ -251,22 +269,21 @@ fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, M
             g[i][j] = (2.0 * h * s[i][j] - f * p * h / d * (d1 * c[i][j])) / nf;
         }
     }
-    let mut hm = SHess::identity(0.0, n);
-    if hess {
+    if let Some(hm) = hess {
         let cross = -2.0 * p * h / d / nf;
         let cc = f * p * (p + 1.0) * h / (d * d) / nf;
         let dd = -f * p * h / d / nf;
-        hm = SHess::identity(2.0 * h / nf, n);
+        hm.clear(n, 2.0 * h / nf);
         hm.pair_c = cross * d1;
         hm.pair = [*s, c];
         hm.set_sq(0, cc * d1 * d1 + dd * d2c, &c);
         hm.p = d2det_term(s, n, dd * d1);
     }
-    (eta, g, hm)
+    (eta, g)
 }
 
 /// |S - I|^2: gradient 2 (S - I), Hessian 2 I.
-fn tmp(n: usize, s: &Mat3) -> (f64, Mat3, SHess) {
+fn tmp(n: usize, s: &Mat3, hess: Option<&mut SHess>) -> (f64, Mat3) {
     let mut v = 0.0;
     let mut g = [[0.0; 3]; 3];
     for i in 0..n {
@@ -276,7 +293,10 @@ fn tmp(n: usize, s: &Mat3) -> (f64, Mat3, SHess) {
             g[i][j] = 2.0 * e;
         }
     }
-    (v, g, SHess::identity(2.0, n))
+    if let Some(h) = hess {
+        h.clear(n, 2.0);
+    }
+    (v, g)
 }
 
 /// grad |cof S|^2 = 2 (|S|^2 S - S S^T S) (3x3: |cof S|^2 is the second
@@ -304,7 +324,8 @@ fn cof_norm_gradient(s: &Mat3, a: f64) -> Mat3 {
 /// (D2(C): the det-Hessian form with C in place of S).
 /// Regularised: d becomes chi, so ln kappa has -ln chi with gradient
 /// chi' C / chi and Hessian (chi' D2 + chi'' C C^T) / chi - chi'^2 C C^T / chi^2.
-fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, SHess) {
+#[inline]
+fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: Option<&mut SHess>) -> (f64, Mat3) {
     let c = cofactor(s);
     let a = frob_n(s, 3);
     let cc = frob_n(&c, 3);
@@ -317,9 +338,8 @@ fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, SHess
         }
     }
     let g = gl.map(|r| r.map(|v| kappa * v));
-    let mut hm = SHess::identity(0.0, 3);
-    if hess {
-        hm = SHess::identity(kappa / a, 3);
+    if let Some(hm) = hess {
+        hm.clear(3, kappa / a);
         hm.set_sq(0, -2.0 * kappa / (a * a), s);
         hm.set_sq(1, -0.5 * kappa / (cc * cc), &gc);
         hm.set_sq(2, kappa * (d1 * d1 / (d * d) - d2c / d), &c);
@@ -332,7 +352,7 @@ fn cn3(s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: bool) -> (f64, Mat3, SHess
             }
         }
     }
-    (kappa, g, hm)
+    (kappa, g)
 }
 
 #[cfg(test)]

@@ -1,0 +1,162 @@
+//! Coloured BCD sweep throughput per metric x template x element kind: the
+//! CPU coloured sweep (all cores) against the GPU sweep (f32, and f64 where
+//! the adapter has it), elements per second and the GPU:CPU ratio. Every
+//! general corner kernel goes through the structured S-Hessian
+//! (`shaders/metric/shess.wgsl`); the tetrahedral inverse mean ratio under the
+//! harmonic template through its own closed forms. Issue #14's target for
+//! lavapipe is a ratio of at least 1/3 in every row.
+//!
+//! Run: `cargo bench --bench corner_kernels [-- --quick] [--adapter NAME]`
+
+use meshsmooth::backend::cpu::bcd;
+use meshsmooth::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::{Backend, Slot};
+use meshsmooth::generate::{self, PerturbOptions, Perturbation, VoronoiOptions};
+use meshsmooth::metric::corner_model::Template;
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::problem::{Problem, ProblemOptions};
+use meshsmooth::{ElementKind, Mesh};
+use std::time::Instant;
+
+/// Median seconds per call of `f` over `reps` calls after one warm-up call.
+fn time(reps: usize, mut f: impl FnMut()) -> f64 {
+    f();
+    let mut t: Vec<f64> = (0..reps)
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+fn perturbed(mut m: Mesh, alpha: f64) -> Mesh {
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha },
+        fraction: 1.0,
+        seed: 3,
+    };
+    generate::perturb(&mut m, &opts).unwrap();
+    m
+}
+
+/// (kind, reference mesh, perturbed mesh) at about `scale` elements.
+fn meshes(scale: usize) -> Vec<(ElementKind, Mesh, Mesh)> {
+    let side = |per: usize, dim: u32| ((scale / per) as f64).powf(1.0 / dim as f64).round().max(2.0) as usize;
+    let (n2t, n2q, n3t, n3h) = (side(2, 2), side(1, 2), side(6, 3), side(1, 3));
+    let mut out = vec![
+        (ElementKind::Triangle, generate::tri_grid(n2t, n2t, [n2t as f64; 2])),
+        (
+            ElementKind::Quadrilateral,
+            generate::quad_grid(n2q, n2q, [n2q as f64; 2]),
+        ),
+        (
+            ElementKind::Tetrahedron,
+            generate::tet_box(n3t, n3t, n3t, [n3t as f64; 3]),
+        ),
+        (
+            ElementKind::Hexahedron,
+            generate::hex_box(n3h, n3h, n3h, [n3h as f64; 3]),
+        ),
+        (ElementKind::Prism, generate::prism_mesh(false, 0)),
+    ];
+    if let Ok(v) = generate::voronoi_mesh(&VoronoiOptions::default()) {
+        out.push((ElementKind::Polyhedron, v));
+    }
+    out.into_iter()
+        .map(|(k, m)| {
+            // the Voronoi cells' 120-degree corners flatten sooner under the same noise
+            let alpha = if k == ElementKind::Polyhedron { 0.05 } else { 0.25 };
+            (k, m.clone(), perturbed(m, alpha))
+        })
+        .collect()
+}
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    let adapter = std::env::args().skip_while(|a| a != "--adapter").nth(1);
+    let reps = if quick { 2 } else { 5 };
+    let gpus: Vec<(String, GpuContext)> = [Precision::F32, Precision::F64]
+        .into_iter()
+        .filter_map(|precision| {
+            let ctx = GpuContext::new(&GpuOptions {
+                adapter: adapter.clone(),
+                precision,
+            })
+            .map_err(|e| eprintln!("no {precision:?} context: {e}"))
+            .ok()?;
+            Some((format!("{precision:?}").to_lowercase(), ctx))
+        })
+        .collect();
+    if let Some((_, ctx)) = gpus.first() {
+        println!("GPU: {}", ctx.adapter_name());
+    }
+    println!("CPU threads: {}\n", rayon::current_num_threads());
+    let mut header = String::from("| kind | metric | template | elements | CPU coloured |");
+    for (p, _) in &gpus {
+        header.push_str(&format!(" GPU {p} | GPU {p} : CPU |"));
+    }
+    println!("{header}");
+    println!("|{}", "---|".repeat(header.matches('|').count() - 1));
+    let models = [
+        (MetricKind::InverseMeanRatio, Template::Harmonic),
+        (MetricKind::InverseMeanRatio, Template::Average),
+        (MetricKind::ConditionNumber, Template::Harmonic),
+        (MetricKind::ConditionNumber, Template::Average),
+        (MetricKind::TargetShapeSize, Template::Harmonic),
+        (MetricKind::ConditionNumberPaper, Template::Harmonic),
+    ];
+    for (kind, reference, mesh) in meshes(if quick { 2000 } else { 20000 }) {
+        for (metric, template) in models {
+            if metric == MetricKind::ConditionNumberPaper && kind.dim() == 2 {
+                continue;
+            }
+            let opts = ProblemOptions {
+                metric,
+                template,
+                reference: (metric == MetricKind::TargetShapeSize).then_some(&reference),
+                ..Default::default()
+            };
+            let p = match Problem::with_options(&mesh, &opts) {
+                Ok(p) => p,
+                Err(e) => {
+                    eprintln!("{kind} {metric} {template:?}: {e}");
+                    continue;
+                }
+            };
+            let x0 = p.gather(&mesh.points);
+            let ne = p.num_elements() as f64;
+            let ls = Default::default();
+            let mut x = x0.clone();
+            let cpu = time(reps, || {
+                for c in 0..p.colors.len() {
+                    bcd::sweep_color(&p, &mut x, c, &ls);
+                }
+            });
+            let rate = |s: f64| format!("{:.3} M/s ({:.1} ms)", ne / s / 1e6, s * 1e3);
+            let mut row = format!(
+                "| {kind} | {metric} | {template:?} | {} | {} |",
+                p.num_elements(),
+                rate(cpu)
+            );
+            for (_, ctx) in &gpus {
+                match GpuBackend::new(ctx, &p, &x0, &ls) {
+                    Ok(mut g) => {
+                        let s = time(reps, || {
+                            for c in 0..g.num_colors() {
+                                g.bcd_color(c).unwrap();
+                            }
+                            g.max_move(Slot(0)).unwrap();
+                            g.flush().unwrap();
+                        });
+                        row.push_str(&format!(" {} | {:.2} |", rate(s), cpu / s));
+                    }
+                    Err(e) => row.push_str(&format!(" {e} | |")),
+                }
+            }
+            println!("{row}");
+        }
+    }
+}
