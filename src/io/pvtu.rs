@@ -341,8 +341,9 @@ pub fn piece_path(path: &Path, r: usize) -> PathBuf {
 /// Writes `mesh` as the index `path` and `parts` pieces beside it (see
 /// [`piece_path`]): piece r holds the elements whose first vertex `owner`
 /// gives to r, the vertices they use and the vertices r owns that no element
-/// uses. Each piece is written atomically, the index last, so an index never
-/// names a piece that was not written. Returns the pieces' paths.
+/// uses; a part with none of these gets no piece. Each piece is written
+/// atomically, the index last, so an index never names a piece that was not
+/// written. Returns the pieces' paths.
 pub fn write_pieces(
     path: &Path,
     mesh: &Mesh,
@@ -384,11 +385,9 @@ pub fn write_pieces(
             .collect();
         verts.sort_unstable();
         verts.dedup();
+        // a part owning no element and no lone vertex has nothing to write
         if verts.is_empty() {
-            return Err(Error::InvalidArgument(format!(
-                "{}: piece {r} would be empty (the mesh has too few vertices for {parts} pieces)",
-                path.display()
-            )));
+            continue;
         }
         let piece = piece_mesh(mesh, &verts, elems);
         let data: Vec<Vec<f64>> = cell_data
@@ -411,11 +410,16 @@ pub fn write_pieces(
                 .unwrap_or_default(),
         );
         paths.push(p);
-        if r == 0 {
+        if first_piece.is_none() {
             first_piece = Some((piece, data));
         }
     }
-    let (piece, data) = first_piece.expect("at least one piece");
+    let Some((piece, data)) = first_piece else {
+        return Err(Error::InvalidArgument(format!(
+            "{}: the mesh has no points to write",
+            path.display()
+        )));
+    };
     let piece_data: Vec<CellData> = cell_data
         .iter()
         .zip(&data)
