@@ -63,6 +63,8 @@ impl Partitioner {
 
     /// The owning part of each vertex of `p` at positions `x` (problem
     /// numbering), `parts` parts.
+    // without METIS only the positions matter
+    #[cfg_attr(not(feature = "metis"), allow(unused_variables))]
     pub fn owners(self, p: &Problem, x: &[Vec3], parts: usize) -> Result<Vec<u32>> {
         match self {
             #[cfg(feature = "metis")]
