@@ -290,3 +290,47 @@ fn the_cli_writes_pieces_that_read_back_as_its_whole_output() {
     assert!(!ok && log.contains(".pvtu"), "{log}");
     assert!(!dir.path().join("bad.vtu").exists() && !dir.path().join("bad_0.vtu").exists());
 }
+
+/// Pieces VTK 9.7.2 wrote (tests/data/interop/pvtu/make_pvtu.py): no global ids,
+/// single-precision points, points no cell of the piece uses, and with one ghost
+/// level duplicate cells flagged in vtkGhostType. Each reads as the whole mesh
+/// (its coordinates rounded to f32, as VTK wrote them), every element once.
+#[test]
+fn pieces_written_by_vtk_merge_into_the_whole_mesh() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop/pvtu");
+    let whole = io::read(&dir.join("whole.vtu")).unwrap();
+    let f32_of = |p: &[f64; 3]| p.map(|c| c as f32);
+    for index in ["vtk_ghost0.pvtu", "vtk_ghost1.pvtu"] {
+        let got = io::read(&dir.join(index)).unwrap_or_else(|e| panic!("{index}: {e}"));
+        assert_eq!(got.num_points(), whole.num_points(), "{index}");
+        assert_eq!(got.num_elements(), whole.num_elements(), "{index}");
+        let map: Vec<usize> = got
+            .points
+            .iter()
+            .map(|p| {
+                whole
+                    .points
+                    .iter()
+                    .position(|w| f32_of(w) == f32_of(p))
+                    .unwrap_or_else(|| panic!("{index}: {p:?} is no point of the whole mesh"))
+            })
+            .collect();
+        let mut cells_got: Vec<Vec<usize>> = (0..got.num_elements())
+            .map(|e| got.element(e).iter().map(|&v| map[v as usize]).collect())
+            .collect();
+        let mut cells_whole: Vec<Vec<usize>> = (0..whole.num_elements())
+            .map(|e| whole.element(e).iter().map(|&v| v as usize).collect())
+            .collect();
+        cells_got.sort();
+        cells_whole.sort();
+        assert_eq!(cells_got, cells_whole, "{index}: the elements differ");
+        assert!(
+            got.data
+                .point
+                .iter()
+                .chain(&got.data.cell)
+                .all(|a| a.name != "vtkGhostType"),
+            "{index}: ghost flags are the pieces' business, not the mesh's"
+        );
+    }
+}

@@ -14,8 +14,9 @@
 //! id — else when their coordinates are bitwise equal, the merged points in
 //! order of first appearance. Cells ParaView marks as duplicates (bit 1 of
 //! `vtkGhostType`) are dropped; the others are ordered by `GlobalCellIds`
-//! when every piece has it, else piece after piece. Id arrays that merely
-//! count 0..n are implied by that order and dropped.
+//! when every piece has it, else piece after piece. Points no remaining cell
+//! uses are dropped (VTK's piece extraction leaves such points in a piece).
+//! Id arrays that merely count 0..n are implied by that order and dropped.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -189,7 +190,6 @@ fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<Mesh> {
     };
     let point_start = starts(&|m| m.num_points());
     let cell_start = starts(&|m| m.num_elements());
-    let point_rows: Vec<usize> = first.iter().map(|&(i, l)| point_start[i] + l).collect();
 
     let mut cells: Vec<(usize, usize)> = Vec::new();
     for (i, piece) in pieces.iter().enumerate() {
@@ -219,7 +219,32 @@ fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<Mesh> {
         }
     }
     let cell_rows: Vec<usize> = cells.iter().map(|&(i, e)| cell_start[i] + e).collect();
+    // points no kept cell uses are artefacts of the split (VTK's piece
+    // extraction keeps them, and the ghost cells dropped used some): dropped
+    let mut used = vec![false; first.len()];
+    for &(i, e) in &cells {
+        for &v in pieces[i].element(e) {
+            used[local[i][v as usize] as usize] = true;
+        }
+    }
+    if used.iter().any(|&u| !u) {
+        let mut renumber = vec![u32::MAX; first.len()];
+        let mut kept = Vec::new();
+        for (m, &u) in used.iter().enumerate() {
+            if u {
+                renumber[m] = kept.len() as u32;
+                kept.push(first[m]);
+            }
+        }
+        first = kept;
+        for map in &mut local {
+            for m in map.iter_mut() {
+                *m = renumber[*m as usize];
+            }
+        }
+    }
 
+    let point_rows: Vec<usize> = first.iter().map(|&(i, l)| point_start[i] + l).collect();
     let mut mesh = Mesh::new(first.iter().map(|&(i, l)| pieces[i].points[l]).collect());
     for &(i, e) in &cells {
         let piece = &pieces[i];
