@@ -285,6 +285,26 @@ fn the_cli_writes_pieces_that_read_back_as_its_whole_output() {
     let (ok, log) = run("one.pvtu", &[]);
     assert!(ok, "{log}");
     assert!(dir.path().join("one_0.vtu").exists() && !dir.path().join("one_1.vtu").exists());
+    // a piece would replace the input: refused before anything is written
+    std::fs::copy(&input, dir.path().join("clash_1.vtu")).unwrap();
+    let o = Command::new(BIN)
+        .arg("smooth")
+        .arg(dir.path().join("clash_1.vtu"))
+        .arg("-o")
+        .arg(dir.path().join("clash.pvtu"))
+        .args(["--pieces", "2", "--device", "cpu"])
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && log.contains("clash_1.vtu") && log.contains("input"),
+        "{log}"
+    );
+    assert!(!dir.path().join("clash_0.vtu").exists() && !dir.path().join("clash.pvtu").exists());
+    assert_eq!(
+        io::read(&dir.path().join("clash_1.vtu")).unwrap(),
+        io::read(&input).unwrap()
+    );
     // --pieces needs a .pvtu index to name them
     let (ok, log) = run("bad.vtu", &["--pieces", "2"]);
     assert!(!ok && log.contains(".pvtu"), "{log}");

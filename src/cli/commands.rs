@@ -458,6 +458,9 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         None => output_format(&a.output, a.format.as_deref())?,
     };
     refuse_overwrite(&a.input, &a.output)?;
+    if let Some(count) = pieces {
+        refuse_overwriting_pieces(&a.input, &a.output, count)?;
+    }
     #[cfg(feature = "mpi")]
     super::ranks::set_partitioner(a.partitioner);
     if let Some(h) = &a.history {
@@ -499,9 +502,6 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     match pieces {
         Some(count) => {
             let (owner, count) = piece_owners(&mesh, count, a.partitioner)?;
-            for r in 0..count {
-                refuse_overwrite(&a.input, &io::piece_path(&a.output, r))?;
-            }
             let written = io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?;
             if !a.quiet {
                 println!(
@@ -523,6 +523,10 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     Ok(())
 }
 
+fn is_pvtu(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("pvtu"))
+}
+
 /// `Some(count)` when the output is a .pvtu index with pieces (`None`: as
 /// many as the partition has parts).
 fn pieces_wanted(output: &Path, pieces: Option<Option<usize>>) -> Result<Option<Option<usize>>> {
@@ -536,6 +540,32 @@ fn pieces_wanted(output: &Path, pieces: Option<Option<usize>>) -> Result<Option<
         ))),
         (false, None) => Ok(None),
     }
+}
+
+/// Refuses pieces that would replace the input or, when it is a .pvtu, one
+/// of its pieces (checked before the solve, so no work is lost to it).
+fn refuse_overwriting_pieces(input: &Path, output: &Path, count: Option<usize>) -> Result<()> {
+    #[cfg(feature = "mpi")]
+    let count = count.unwrap_or(super::ranks::size());
+    #[cfg(not(feature = "mpi"))]
+    let count = count.unwrap_or(1);
+    let mut inputs = vec![input.to_path_buf()];
+    if is_pvtu(input)
+        && let Ok(data) = std::fs::read(input)
+    {
+        inputs.extend(io::piece_paths(input, &data).unwrap_or_default());
+    }
+    for r in 0..count {
+        let piece = io::piece_path(output, r);
+        if let Some(i) = inputs.iter().find(|i| io::same_file(i, &piece)) {
+            return Err(Error::InvalidArgument(format!(
+                "output piece {} is the input {}; meshsmooth never overwrites its input",
+                piece.display(),
+                i.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The pieces' format: VTK XML, ASCII unless --format names another VTU encoding.
@@ -571,7 +601,7 @@ fn piece_owners(mesh: &Mesh, count: Option<usize>, partitioner: Partitioner) -> 
 /// A partitioned run reads a .pvtu's pieces on rank 0 and ships parts; say so.
 #[cfg(feature = "mpi")]
 fn note_pieces_read_on_rank_0(input: &Path, quiet: bool) {
-    if quiet || super::ranks::size() < 2 {
+    if quiet || super::ranks::size() < 2 || !is_pvtu(input) {
         return;
     }
     let Ok(data) = std::fs::read(input) else { return };
