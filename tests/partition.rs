@@ -71,6 +71,21 @@ fn metis_repeats_itself() {
     let p = Problem::new(&mesh).unwrap();
     let x = p.gather(&mesh.points);
     let a = Partitioner::Metis.owners(&p, &x, 3).unwrap();
-    let b = Partitioner::Metis.owners(&p, &x, 3).unwrap();
-    assert_eq!(a, b);
+    // also when called from several threads at once
+    let others: Vec<Vec<u32>> = std::thread::scope(|s| {
+        let runs: Vec<_> = (0..4)
+            .map(|_| s.spawn(|| Partitioner::Metis.owners(&p, &x, 3).unwrap()))
+            .collect();
+        runs.into_iter().map(|r| r.join().unwrap()).collect()
+    });
+    for b in others {
+        assert_eq!(a, b);
+    }
+    // and after partitioning another graph (METIS's state outlives a call)
+    let other = tet_box(8, 6, 5, [1.0, 1.0, 1.0]);
+    let q = Problem::new(&other).unwrap();
+    for parts in 2..=4 {
+        Partitioner::Metis.owners(&q, &q.gather(&other.points), parts).unwrap();
+    }
+    assert_eq!(Partitioner::Metis.owners(&p, &x, 3).unwrap(), a);
 }

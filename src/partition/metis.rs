@@ -6,6 +6,16 @@
 
 use crate::error::{Error, Result};
 use crate::problem::Problem;
+use std::sync::Mutex;
+
+/// Some of METIS's (GKlib's) state outlives a call and is not reset by the
+/// seed: a thread's earlier calls change its later partitions (seen in the
+/// tests). Each call runs on a thread of its own, so a graph always gets the
+/// same partition, and one at a time, in case a build keeps that state global.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+/// Stack of the thread METIS runs on (its recursion is shallow; the graph lives on the heap).
+const STACK: usize = 16 << 20;
 
 /// METIS's part of each vertex (problem numbering), `parts` parts, within
 /// METIS's default 3% imbalance.
@@ -29,11 +39,24 @@ pub fn metis(p: &Problem, parts: usize) -> Result<Vec<u32>> {
     let mut part = vec![0 as metis::Idx; n];
     let fail =
         |e: &dyn std::fmt::Display| Error::InvalidArgument(format!("METIS could not partition the vertex graph: {e}"));
-    metis::Graph::new(1, nparts, &xadj, &adjncy)
-        .map_err(|e| fail(&e))?
-        // a fixed seed: the same mesh gives the same partition on every run
-        .set_option(metis::option::Seed(1))
-        .part_kway(&mut part)
-        .map_err(|e| fail(&e))?;
+    let run = || -> Result<()> {
+        metis::Graph::new(1, nparts, &xadj, &adjncy)
+            .map_err(|e| fail(&e))?
+            // a fixed seed: with fresh state, the same graph gets the same partition
+            .set_option(metis::option::Seed(1))
+            .part_kway(&mut part)
+            .map_err(|e| fail(&e))?;
+        Ok(())
+    };
+    let _only = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .name("metis".into())
+            .stack_size(STACK)
+            .spawn_scoped(s, run)
+            .map_err(|e| Error::InvalidArgument(format!("METIS: cannot start its thread: {e}")))?
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })?;
     Ok(part.into_iter().map(|r| r as u32).collect())
 }
