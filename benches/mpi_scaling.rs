@@ -8,6 +8,10 @@
 //! one exchange per CG iteration and per line-search trial) and per
 //! exchange (for Newton, what one CG iteration sends).
 //!
+//! Newton runs on both partitioners (METIS on the vertex graph, recursive
+//! coordinate bisection), so their cuts and traffic compare; the traffic
+//! model uses METIS's ghosts.
+//!
 //! Run: cargo bench --features mpi --bench mpi_scaling [-- --cells N]
 //! (default N = 16: a perturbed box of 6 N^3 tetrahedra). Times are wall
 //! times of the solver loop on the slowest rank; on a machine with fewer
@@ -42,8 +46,8 @@ fn number_after(text: &str, key: &str) -> f64 {
     s.parse().unwrap_or_else(|_| panic!("'{key}' followed by '{s}'"))
 }
 
-fn run(ranks: usize, input: &str, method: &str) -> Measured {
-    let out = std::env::temp_dir().join(format!("mpi_scaling_{ranks}_{method}.vtu"));
+fn run(ranks: usize, input: &str, method: &str, partitioner: &str) -> Measured {
+    let out = std::env::temp_dir().join(format!("mpi_scaling_{ranks}_{method}_{partitioner}.vtu"));
     let o = Command::new("mpirun")
         .args([
             "--allow-run-as-root",
@@ -56,7 +60,7 @@ fn run(ranks: usize, input: &str, method: &str) -> Measured {
             "-o",
         ])
         .arg(&out)
-        .args(["--method", method, "--device", "cpu"])
+        .args(["--method", method, "--device", "cpu", "--partitioner", partitioner])
         .output()
         .expect("mpirun runs");
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
@@ -105,17 +109,17 @@ fn main() {
     let tets = 6 * cells * cells * cells;
     println!("# MPI strong scaling: perturbed tet box, {tets} tetrahedra, {cells}^3 cubes\n");
     println!(
-        "| method | ranks | iterations | wall s | speed-up | comm % | edge cut | ghost fraction | free ghosts | halo bytes per iteration | halo bytes per exchange | exchanges | reductions |"
+        "| method | partitioner | ranks | iterations | wall s | speed-up | comm % | edge cut | ghost fraction | free ghosts | halo bytes per iteration | halo bytes per exchange | exchanges | reductions |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut ghost_model = Vec::new();
-    for method in ["bcd-colored", "newton"] {
+    for (method, partitioner) in [("bcd-colored", "metis"), ("newton", "metis"), ("newton", "rcb")] {
         let mut base = None;
         for ranks in 1..=4 {
-            let m = run(ranks, input, method);
+            let m = run(ranks, input, method, partitioner);
             let t1 = *base.get_or_insert(m.wall);
             println!(
-                "| {method} | {ranks} | {:.0} | {:.3} | {:.2} | {:.0} | {:.0} | {:.3} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
+                "| {method} | {partitioner} | {ranks} | {:.0} | {:.3} | {:.2} | {:.0} | {:.0} | {:.3} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
                 m.iterations,
                 m.wall,
                 t1 / m.wall,
@@ -128,7 +132,7 @@ fn main() {
                 m.exchanges,
                 m.reductions
             );
-            if method == "newton" && ranks > 1 {
+            if method == "newton" && partitioner == "metis" && ranks > 1 {
                 ghost_model.push((ranks, m.halo_values));
             }
         }

@@ -26,7 +26,11 @@ struct Run {
 }
 
 fn smooth(ranks: Option<usize>, input: &Path, dir: &Path, method: &str) -> Run {
-    let tag = ranks.map_or("plain".to_string(), |n| format!("np{n}"));
+    smooth_by(ranks, input, dir, method, "metis")
+}
+
+fn smooth_by(ranks: Option<usize>, input: &Path, dir: &Path, method: &str, partitioner: &str) -> Run {
+    let tag = ranks.map_or("plain".to_string(), |n| format!("np{n}-{partitioner}"));
     let out = dir.join(format!("{tag}-{method}.vtu"));
     let history = dir.join(format!("{tag}-{method}.csv"));
     let mut cmd = match ranks {
@@ -41,7 +45,15 @@ fn smooth(ranks: Option<usize>, input: &Path, dir: &Path, method: &str) -> Run {
         .arg(input)
         .arg("-o")
         .arg(&out)
-        .args(["--method", method, "--device", "cpu", "--history"])
+        .args([
+            "--method",
+            method,
+            "--device",
+            "cpu",
+            "--partitioner",
+            partitioner,
+            "--history",
+        ])
         .arg(&history)
         .env_remove("OMPI_COMM_WORLD_SIZE");
     let o = cmd.output().expect("mpirun runs (apt-get install openmpi-bin)");
@@ -124,7 +136,7 @@ fn assert_fixed_unmoved(input: &Mesh, out: &[[f64; 3]], what: &str) {
     }
 }
 
-fn compare(method: &str, f_tol: f64, x_tol: f64) {
+fn compare(method: &str, partitioner: &str, ranks: std::ops::RangeInclusive<usize>, f_tol: f64, x_tol: f64) {
     let dir = tempfile::tempdir().unwrap();
     for input in meshes(dir.path()) {
         let mesh = meshsmooth::io::read(&input).unwrap();
@@ -134,15 +146,20 @@ fn compare(method: &str, f_tol: f64, x_tol: f64) {
             "{}: the plain run did nothing",
             input.display()
         );
-        for ranks in 1..=4 {
-            let what = format!("{} {method} on {ranks} ranks", input.display());
-            let many = smooth(Some(ranks), &input, dir.path(), method);
+        for ranks in ranks.clone() {
+            let what = format!("{} {method} on {ranks} ranks ({partitioner})", input.display());
+            let many = smooth_by(Some(ranks), &input, dir.path(), method, partitioner);
             assert!(
                 many.stdout.contains(&format!("mpi ({ranks} ranks)")),
                 "{what}: not partitioned:\n{}",
                 many.stdout
             );
             assert!(many.stdout.contains("edge cut"), "{what}: no partition report");
+            assert!(
+                many.stdout.contains(&format!("partitioner {partitioner}")),
+                "{what}: the report does not name the partitioner:\n{}",
+                many.stdout
+            );
             assert_eq!(many.objective.len(), one.objective.len(), "{what}: iteration count");
             for (k, (a, b)) in one.objective.iter().zip(&many.objective).enumerate() {
                 assert!(
@@ -160,12 +177,81 @@ fn compare(method: &str, f_tol: f64, x_tol: f64) {
 
 #[test]
 fn newton_on_ranks_matches_one_process() {
-    compare("newton", 1e-10, 1e-10);
+    compare("newton", "metis", 1..=4, 1e-10, 1e-10);
 }
 
 #[test]
 fn colored_bcd_on_ranks_matches_one_process() {
-    compare("bcd-colored", 1e-8, 1e-8);
+    compare("bcd-colored", "metis", 1..=4, 1e-8, 1e-8);
+}
+
+/// The geometric fallback partitions as well as METIS for the solve's answer.
+#[test]
+fn newton_on_a_bisection_partition_matches_one_process() {
+    compare("newton", "rcb", 2..=4, 1e-10, 1e-10);
+}
+
+/// Runs the binary under mpirun on `ranks` ranks; its stdout.
+fn mpirun(ranks: usize, args: &[&std::ffi::OsStr]) -> String {
+    let o = Command::new("mpirun")
+        .args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string(), BIN])
+        .args(args)
+        .output()
+        .expect("mpirun runs");
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{args:?} on {ranks} ranks failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    stdout
+}
+
+/// A 3-rank run writes its parts as .pvtu pieces; they read back, with and
+/// without MPI, as the mesh the same run writes gathered into one file.
+#[test]
+fn pieces_of_a_three_rank_run_read_back_as_the_gathered_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let all = meshes(dir.path());
+    for input in [&all[0], &all[2]] {
+        let name = input.file_stem().unwrap().to_string_lossy().into_owned();
+        let path = |f: &str| dir.path().join(format!("{name}-{f}"));
+        let smooth = |ranks: usize, from: &Path, to: &Path| {
+            mpirun(
+                ranks,
+                &[
+                    "smooth".as_ref(),
+                    from.as_os_str(),
+                    "-o".as_ref(),
+                    to.as_os_str(),
+                    "--device".as_ref(),
+                    "cpu".as_ref(),
+                ],
+            )
+        };
+        smooth(3, input, &path("gathered.vtu"));
+        let log = smooth(3, input, &path("pieces.pvtu"));
+        assert!(log.contains("wrote 3 pieces"), "{name}: {log}");
+        for r in 0..3 {
+            assert!(path(&format!("pieces_{r}.vtu")).exists(), "{name}: piece {r} missing");
+        }
+        let gathered = meshsmooth::io::read(&path("gathered.vtu")).unwrap();
+        // without MPI: the library reads all pieces and merges them
+        assert_eq!(meshsmooth::io::read(&path("pieces.pvtu")).unwrap(), gathered, "{name}");
+        // under MPI, with as many ranks as pieces and with fewer: the same mesh, so the same run
+        for ranks in [3, 2] {
+            let log = smooth(ranks, &path("pieces.pvtu"), &path(&format!("again-pieces-{ranks}.vtu")));
+            assert!(log.contains("read and merged on rank 0"), "{name}: {log}");
+            smooth(
+                ranks,
+                &path("gathered.vtu"),
+                &path(&format!("again-gathered-{ranks}.vtu")),
+            );
+            let a = meshsmooth::io::read(&path(&format!("again-pieces-{ranks}.vtu"))).unwrap();
+            let b = meshsmooth::io::read(&path(&format!("again-gathered-{ranks}.vtu"))).unwrap();
+            assert_eq!(a, b, "{name} on {ranks} ranks");
+        }
+    }
 }
 
 #[test]

@@ -10,6 +10,7 @@ use meshsmooth::mesh::fixing::RuleCount;
 use meshsmooth::mesh::sweep_order::SweepOrder;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report;
+use meshsmooth::partition::{self, Partitioner};
 use meshsmooth::problem::boundary::{VertexClass, classify};
 use meshsmooth::problem::{BoundaryMode, ProblemOptions};
 use meshsmooth::report::quality_report;
@@ -451,8 +452,17 @@ pub fn untangle(a: &UntangleArgs) -> Result<()> {
 }
 
 pub fn smooth(a: &SmoothArgs) -> Result<()> {
-    let format = output_format(&a.output, a.format.as_deref())?;
+    let pieces = pieces_wanted(&a.output, a.pieces)?;
+    let format = match pieces {
+        Some(_) => piece_format(a.format.as_deref())?,
+        None => output_format(&a.output, a.format.as_deref())?,
+    };
     refuse_overwrite(&a.input, &a.output)?;
+    if let Some(count) = pieces {
+        refuse_overwriting_pieces(&a.input, &a.output, count)?;
+    }
+    #[cfg(feature = "mpi")]
+    super::ranks::set_partitioner(a.partitioner);
     if let Some(h) = &a.history {
         refuse_overwrite(&a.input, h)?;
         for (other, what) in [(&a.output, "the output mesh (-o)"), (&a.input, "the input mesh")] {
@@ -465,6 +475,8 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         }
     }
     let mut mesh = io::read(&a.input)?;
+    #[cfg(feature = "mpi")]
+    note_pieces_read_on_rank_0(&a.input, a.quiet);
     if a.drop_data {
         mesh.data = Default::default();
     }
@@ -475,7 +487,10 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         Ok(info) => info,
         Err(e) => {
             if a.save_partial && mesh.points != start {
-                let partial = partial_path(&a.output);
+                let mut partial = partial_path(&a.output);
+                if pieces.is_some() {
+                    partial.set_extension("vtu");
+                }
                 match write_partial(&partial, &mesh, format) {
                     Ok(()) => eprintln!("saved the last positions to {}", partial.display()),
                     Err(w) => eprintln!("could not save partial positions: {w}"),
@@ -484,7 +499,21 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
             return Err(e);
         }
     };
-    io::write_mesh(&a.output, &mesh, format)?;
+    match pieces {
+        Some(count) => {
+            let (owner, count) = piece_owners(&mesh, count, a.partitioner)?;
+            let written = io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?;
+            if !a.quiet {
+                println!(
+                    "wrote {} pieces ({} to {})",
+                    written.len(),
+                    written[0].display(),
+                    written[written.len() - 1].display()
+                );
+            }
+        }
+        None => io::write_mesh(&a.output, &mesh, format)?,
+    }
     if let Some(h) = &a.history {
         io::write_atomic(h, |w| Ok(w.write_all(info.history.to_csv().as_bytes())?))?;
     }
@@ -492,6 +521,98 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         println!("wrote {}", a.output.display());
     }
     Ok(())
+}
+
+fn is_pvtu(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("pvtu"))
+}
+
+/// `Some(count)` when the output is a .pvtu index with pieces (`None`: as
+/// many as the partition has parts).
+fn pieces_wanted(output: &Path, pieces: Option<Option<usize>>) -> Result<Option<Option<usize>>> {
+    let pvtu = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("pvtu"));
+    match (pvtu, pieces) {
+        (_, Some(Some(0))) => Err(Error::InvalidArgument("--pieces must be at least 1".into())),
+        (true, p) => Ok(Some(p.flatten())),
+        (false, Some(_)) => Err(Error::InvalidArgument(format!(
+            "--pieces writes a .pvtu index and .vtu pieces beside it: give -o NAME.pvtu (not {})",
+            output.display()
+        ))),
+        (false, None) => Ok(None),
+    }
+}
+
+/// Refuses pieces that would replace the input or, when it is a .pvtu, one
+/// of its pieces (checked before the solve, so no work is lost to it).
+fn refuse_overwriting_pieces(input: &Path, output: &Path, count: Option<usize>) -> Result<()> {
+    #[cfg(feature = "mpi")]
+    let count = count.unwrap_or(super::ranks::size());
+    #[cfg(not(feature = "mpi"))]
+    let count = count.unwrap_or(1);
+    let mut inputs = vec![input.to_path_buf()];
+    if is_pvtu(input)
+        && let Ok(data) = std::fs::read(input)
+    {
+        inputs.extend(io::piece_paths(input, &data).unwrap_or_default());
+    }
+    for r in 0..count {
+        let piece = io::piece_path(output, r);
+        if let Some(i) = inputs.iter().find(|i| io::same_file(i, &piece)) {
+            return Err(Error::InvalidArgument(format!(
+                "output piece {} is the input {}; meshsmooth never overwrites its input",
+                piece.display(),
+                i.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The pieces' format: VTK XML, ASCII unless --format names another VTU encoding.
+fn piece_format(name: Option<&str>) -> Result<Format> {
+    match name.map(Format::from_name) {
+        None => Ok(Format::VtuAscii),
+        Some(Some(f @ (Format::VtuAscii | Format::VtuBinary | Format::VtuZlib))) => Ok(f),
+        Some(_) => Err(Error::InvalidArgument(format!(
+            "--format {}: .pvtu pieces are .vtu files (vtu, vtu-binary or vtu-zlib)",
+            name.unwrap_or_default()
+        ))),
+    }
+}
+
+/// The owner of each vertex for the pieces, and their count: the partitioned
+/// solve's own partition when there was one with that many parts, else a new
+/// one by `partitioner`.
+fn piece_owners(mesh: &Mesh, count: Option<usize>, partitioner: Partitioner) -> Result<(Vec<u32>, usize)> {
+    #[cfg(feature = "mpi")]
+    if let Some(report) = super::ranks::report()
+        && count.is_none_or(|c| c == report.ranks.len())
+        && report.owner.len() == mesh.num_points()
+    {
+        return Ok((report.owner, report.ranks.len()));
+    }
+    #[cfg(feature = "mpi")]
+    let count = count.unwrap_or(super::ranks::size());
+    #[cfg(not(feature = "mpi"))]
+    let count = count.unwrap_or(1);
+    Ok((partition::mesh_owners(mesh, count, partitioner)?, count))
+}
+
+/// A partitioned run reads a .pvtu's pieces on rank 0 and ships parts; say so.
+#[cfg(feature = "mpi")]
+fn note_pieces_read_on_rank_0(input: &Path, quiet: bool) {
+    if quiet || super::ranks::size() < 2 || !is_pvtu(input) {
+        return;
+    }
+    let Ok(data) = std::fs::read(input) else { return };
+    if let Ok(pieces) = io::piece_paths(input, &data) {
+        println!(
+            "note: the {} pieces of {} were read and merged on rank 0; the {} ranks get their parts from the partitioner, not from the pieces",
+            pieces.len(),
+            input.display(),
+            super::ranks::size()
+        );
+    }
 }
 
 pub fn quality(a: &QualityArgs) -> Result<()> {

@@ -17,6 +17,7 @@ use meshsmooth::backend::gpu::Precision;
 use meshsmooth::generate::HorseshoeKind;
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::partition::Partitioner;
 use meshsmooth::problem::Ordering;
 use meshsmooth::solve::newton::NewtonParams;
 use meshsmooth::solve::pcg::{NegativeCurvature, Preconditioner};
@@ -181,6 +182,16 @@ pub struct SmoothArgs {
     /// Refuse a tangled input (inverted elements) instead of untangling it first.
     #[arg(long)]
     pub no_untangle: bool,
+    /// How the vertices are shared out among MPI ranks (under mpirun) and among --pieces:
+    /// metis (METIS 5 on the vertex graph: fewest cut edges; built with --features mpi) or
+    /// rcb (recursive coordinate bisection).
+    #[arg(long, value_enum, default_value_t = Partitioner::default())]
+    pub partitioner: Partitioner,
+    /// Write the output as a ParaView .pvtu index (-o NAME.pvtu) and N .vtu pieces beside it
+    /// (NAME_0.vtu ...), each holding the elements one part owns; N defaults to the number of
+    /// MPI ranks (the solve's own partition), or 1 without MPI. An -o ending in .pvtu implies it.
+    #[arg(long, value_name = "N", num_args = 0..=1)]
+    pub pieces: Option<Option<usize>>,
 }
 
 #[derive(Args, Debug)]

@@ -2,8 +2,9 @@
 //! with every solve partitioned over the ranks (`Device::Mpi`); the other
 //! ranks only solve the parts rank 0 sends them.
 
+use meshsmooth::partition::Partitioner;
 use meshsmooth::solve::Device;
-use meshsmooth::solve::distributed::{Cluster, follow};
+use meshsmooth::solve::distributed::{Cluster, Report, follow};
 use std::cell::Cell;
 
 thread_local! {
@@ -59,10 +60,19 @@ pub fn device() -> Option<Device<'static>> {
     CLUSTER.with(|c| c.get()).map(Device::Mpi)
 }
 
+/// The ranks of this MPI job (1 outside one).
+pub fn size() -> usize {
+    CLUSTER.with(|c| c.get()).map_or(1, |c| c.size())
+}
+
+/// How the solves of this command share out the vertices.
+pub fn set_partitioner(partitioner: Partitioner) {
+    if let Some(c) = CLUSTER.with(|c| c.get()) {
+        c.set_partitioner(partitioner);
+    }
+}
+
 /// The partition and communication report of the last solve, if it was partitioned.
-pub fn report() -> Option<String> {
-    CLUSTER
-        .with(|c| c.get())
-        .and_then(|c| c.take_report())
-        .map(|r| r.to_string())
+pub fn report() -> Option<Report> {
+    CLUSTER.with(|c| c.get()).and_then(|c| c.report())
 }

@@ -24,12 +24,14 @@ mod codec;
 mod gmsh;
 mod lex;
 mod medit;
+mod pvtu;
 mod smoothed;
 mod vtk;
 mod vtu;
 
 pub use atomic::{same_file, same_target, write_atomic};
-pub use smoothed::{eta_field, write_mesh};
+pub use pvtu::{GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, piece_path, piece_paths, write_pieces};
+pub use smoothed::{eta_field, write_mesh, write_mesh_pieces};
 
 use std::fmt;
 use std::path::Path;
@@ -56,7 +58,7 @@ pub enum Format {
     Medit,
 }
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
 
 impl Format {
     pub const ALL: [Format; 10] = [
@@ -168,8 +170,18 @@ fn sniff(data: &[u8]) -> Option<Family> {
 }
 
 /// Read a mesh, detecting the format from the content (falling back to the
-/// extension), and validate it.
+/// extension), and validate it. A `.pvtu` index is read with all its pieces,
+/// merged into one mesh (see `pvtu`).
 pub fn read(path: &Path) -> Result<Mesh> {
+    read_file(path, true)
+}
+
+/// One piece of a `.pvtu` index: any mesh file but another index.
+fn read_piece(path: &Path) -> Result<Mesh> {
+    read_file(path, false)
+}
+
+fn read_file(path: &Path, index_allowed: bool) -> Result<Mesh> {
     let data = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if data.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(Error::parse(path, None, "file is empty"));
@@ -183,6 +195,14 @@ pub fn read(path: &Path) -> Result<Mesh> {
             _ => Family::Gmsh,
         },
     };
+    if family == Family::Vtu && pvtu::is_index(&data) {
+        if !index_allowed {
+            return Err(Error::parse(path, None, "a piece of a .pvtu index is itself an index"));
+        }
+        let mesh = pvtu::read(path, &data)?;
+        mesh.validate().map_err(|e| in_file(path, e))?;
+        return Ok(mesh);
+    }
     let raw = match family {
         Family::Vtk => vtk::read(path, &data)?,
         Family::Vtu => vtu::read(path, &data)?,
@@ -190,7 +210,12 @@ pub fn read(path: &Path) -> Result<Mesh> {
         Family::Medit => medit::read(path, &data)?,
     };
     let mesh = raw.into_mesh(path)?;
-    mesh.validate().map_err(|e| in_file(path, e))?;
+    if index_allowed {
+        mesh.validate().map_err(|e| in_file(path, e))?;
+    } else {
+        // a piece may hold points only other pieces' cells use; the merged mesh is validated whole
+        mesh.validate_structure().map_err(|e| in_file(path, e))?;
+    }
     if matches!(family, Family::Vtk | Family::Vtu) {
         check_wedge_convention(path, &mesh)?;
     }

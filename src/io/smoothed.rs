@@ -2,7 +2,7 @@
 //! element, and the per-element quality as cell data for ParaView. The CLI
 //! and Rust callers share it.
 
-use super::{CellData, Format, write};
+use super::{CellData, Format, write, write_pieces};
 use crate::error::{Error, Result};
 use crate::{Mesh, metric};
 use std::path::Path;
@@ -18,13 +18,7 @@ pub fn eta_field(mesh: &Mesh) -> Vec<f64> {
 /// Writes `mesh` with its `inverse_mean_ratio` cell data, refusing (and
 /// writing nothing) if any element is inverted.
 pub fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
-    let bad = metric::inverted_elements(mesh, &mesh.points);
-    if !bad.is_empty() {
-        return Err(Error::Inverted {
-            count: bad.len(),
-            first: bad.into_iter().take(5).collect(),
-        });
-    }
+    refuse_inverted(mesh)?;
     let eta = eta_field(mesh);
     write(
         path,
@@ -35,4 +29,40 @@ pub fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
             values: &eta,
         }],
     )
+}
+
+/// [`write_mesh`] as a `.pvtu` index at `path` and `parts` pieces, split by
+/// `owner` (the owning part of each vertex); returns the pieces' paths.
+pub fn write_mesh_pieces(
+    path: &Path,
+    mesh: &Mesh,
+    owner: &[u32],
+    parts: usize,
+    format: Format,
+) -> Result<Vec<std::path::PathBuf>> {
+    refuse_inverted(mesh)?;
+    let eta = eta_field(mesh);
+    write_pieces(
+        path,
+        mesh,
+        owner,
+        parts,
+        format,
+        &[CellData {
+            name: "inverse_mean_ratio",
+            values: &eta,
+        }],
+    )
+}
+
+fn refuse_inverted(mesh: &Mesh) -> Result<()> {
+    let bad = metric::inverted_elements(mesh, &mesh.points);
+    if bad.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::Inverted {
+            count: bad.len(),
+            first: bad.into_iter().take(5).collect(),
+        })
+    }
 }

@@ -50,7 +50,7 @@ fn xml_type(name: &str) -> Option<Ty> {
     }))
 }
 
-fn xml_type_name(t: ValueType) -> &'static str {
+pub(crate) fn xml_type_name(t: ValueType) -> &'static str {
     match t {
         ValueType::I8 => "Int8",
         ValueType::U8 => "UInt8",
@@ -304,7 +304,7 @@ fn tag_name(s: &Spec) -> &'static str {
     if s.ty == Ty::Str { "Array" } else { "DataArray" }
 }
 
-fn attr(e: &BytesStart, key: &str) -> Option<String> {
+pub(crate) fn attr(e: &BytesStart, key: &str) -> Option<String> {
     e.attributes()
         .flatten()
         .find(|a| a.key.local_name().as_ref() == key)
@@ -1023,7 +1023,7 @@ impl PolyArrays {
 }
 
 /// Escape an attribute value.
-fn xml_attr(s: &str) -> String {
+pub(crate) fn xml_attr(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -1281,5 +1281,53 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
     writeln!(o.w, "    </Piece>")?;
     writeln!(o.w, "  </UnstructuredGrid>")?;
     writeln!(o.w, "</VTKFile>")?;
+    Ok(())
+}
+
+/// A `.pvtu` index over pieces shaped like `piece` (same arrays, as
+/// [`write`] writes them), at `sources` (relative to the index).
+pub(crate) fn write_index(w: &mut dyn Write, piece: &Mesh, cell_data: &[CellData], sources: &[String]) -> WriteResult {
+    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    writeln!(
+        w,
+        "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
+    )?;
+    writeln!(w, "  <PUnstructuredGrid GhostLevel=\"0\">")?;
+    let header = |w: &mut dyn Write, name: &str, ty: ValueType, components: usize| -> std::io::Result<()> {
+        let tag = if ty == ValueType::Str { "PArray" } else { "PDataArray" };
+        writeln!(
+            w,
+            "      <{tag} type=\"{}\" Name=\"{}\" NumberOfComponents=\"{components}\"/>",
+            xml_type_name(ty),
+            xml_attr(name)
+        )
+    };
+    let points_data: Vec<&DataArray> = piece.data.point.iter().filter(|a| a.name != "fixed").collect();
+    if !piece.fixed.is_empty() || !points_data.is_empty() {
+        writeln!(w, "    <PPointData>")?;
+        if !piece.fixed.is_empty() {
+            header(w, "fixed", ValueType::I32, 1)?;
+        }
+        for a in points_data {
+            header(w, &a.name, a.ty, a.components)?;
+        }
+        writeln!(w, "    </PPointData>")?;
+    }
+    let cells = out_cell_arrays(piece, cell_data);
+    if !cells.is_empty() {
+        writeln!(w, "    <PCellData>")?;
+        for a in &cells {
+            header(w, &a.name, a.ty, a.components)?;
+        }
+        writeln!(w, "    </PCellData>")?;
+    }
+    writeln!(w, "    <PPoints>")?;
+    header(w, "Points", ValueType::F64, 3)?;
+    writeln!(w, "    </PPoints>")?;
+    for s in sources {
+        writeln!(w, "    <Piece Source=\"{}\"/>", xml_attr(s))?;
+    }
+    writeln!(w, "  </PUnstructuredGrid>")?;
+    writeln!(w, "</VTKFile>")?;
     Ok(())
 }

@@ -167,6 +167,14 @@ impl Mesh {
     /// dimension, finite coordinates, indices in range, no repeated vertex in an
     /// element, no unused vertices, no coincident vertices unless both are fixed.
     pub fn validate(&self) -> Result<()> {
+        self.validate_structure()?;
+        self.validate_vertices()
+    }
+
+    /// The checks of [`validate`](Self::validate) that a piece of a
+    /// partitioned file passes too: every element well formed, arrays of the
+    /// right lengths; no check that each vertex is used once and by something.
+    pub fn validate_structure(&self) -> Result<()> {
         if self.points.is_empty() {
             return Err(Error::InvalidMesh("mesh has no vertices".into()));
         }
@@ -198,7 +206,6 @@ impl Mesh {
             )));
         }
         let n = self.points.len();
-        let mut used = vec![false; n];
         let polyhedra = self.kinds.contains(&ElementKind::Polyhedron);
         if polyhedra
             && (self.faces.elem.len() != self.kinds.len() + 1
@@ -238,7 +245,6 @@ impl Mesh {
                 if vs[..i].contains(&v) {
                     return Err(Error::InvalidMesh(format!("element {e} uses vertex {v} twice: {vs:?}")));
                 }
-                used[v as usize] = true;
             }
             if self.kinds[e] == ElementKind::Polyhedron {
                 if let Some(&v) = self.faces.of(e).flatten().find(|&&v| v as usize >= n) {
@@ -257,7 +263,17 @@ impl Mesh {
                 )));
             }
         }
-        self.data.check(n, self.num_elements(), self.lower.len())?;
+        self.data.check(n, self.num_elements(), self.lower.len())
+    }
+
+    /// No duplicate elements, no vertex used by no element, no free vertex
+    /// on top of another.
+    fn validate_vertices(&self) -> Result<()> {
+        let n = self.points.len();
+        let mut used = vec![false; n];
+        for &v in &self.conn {
+            used[v as usize] = true;
+        }
         if let Some((a, b)) = self.duplicate_elements() {
             let mut vs = self.element(b).to_vec();
             vs.sort_unstable();

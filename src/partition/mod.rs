@@ -12,17 +12,97 @@
 //! from the whole problem's colouring, so a coloured sweep visits exactly what
 //! one process visits. Nothing here needs MPI: the split runs on one process
 //! (rank 0) and the parts are shipped.
+//!
+//! Who owns which vertex comes from a [`Partitioner`]: METIS on the vertex
+//! graph where built in (feature `metis`, which `mpi` enables), else the
+//! built-in recursive coordinate bisection.
 
+#[cfg(feature = "metis")]
+mod metis;
 mod quality;
 mod rcb;
 
+#[cfg(feature = "metis")]
+pub use metis::metis;
 pub use quality::Quality;
 pub use rcb::rcb;
+
+use crate::error::Result;
 
 use crate::mesh::topology::Csr;
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use std::time::Duration;
+
+/// How the vertices are shared out among the parts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+pub enum Partitioner {
+    /// METIS 5's multilevel k-way partitioning of the vertex graph (fewest cut edges).
+    Metis,
+    /// Recursive coordinate bisection of the vertex positions (no library needed).
+    Rcb,
+}
+
+impl Default for Partitioner {
+    fn default() -> Self {
+        if cfg!(feature = "metis") {
+            Partitioner::Metis
+        } else {
+            Partitioner::Rcb
+        }
+    }
+}
+
+impl Partitioner {
+    pub fn name(self) -> &'static str {
+        match self {
+            Partitioner::Metis => "metis",
+            Partitioner::Rcb => "rcb",
+        }
+    }
+
+    /// The owning part of each vertex of `p` at positions `x` (problem
+    /// numbering), `parts` parts.
+    // without METIS only the positions matter
+    #[cfg_attr(not(feature = "metis"), allow(unused_variables))]
+    pub fn owners(self, p: &Problem, x: &[Vec3], parts: usize) -> Result<Vec<u32>> {
+        match self {
+            #[cfg(feature = "metis")]
+            Partitioner::Metis => metis(p, parts),
+            #[cfg(not(feature = "metis"))]
+            Partitioner::Metis => Err(crate::error::Error::Unsupported(
+                "--partitioner metis: this build has no METIS (build with --features metis or mpi); use rcb".into(),
+            )),
+            Partitioner::Rcb => Ok(rcb(x, parts)),
+        }
+    }
+}
+
+/// The owning part of each vertex of `mesh` (its own numbering), `parts`
+/// parts, as a partitioned solve of the mesh would share them out.
+pub fn mesh_owners(mesh: &crate::Mesh, parts: usize, partitioner: Partitioner) -> Result<Vec<u32>> {
+    let p = Problem::new(mesh)?;
+    let x = p.gather(&mesh.points);
+    let owner = partitioner.owners(&p, &x, parts)?;
+    let mut out = vec![0; mesh.num_points()];
+    for (&old, &r) in p.order.iter().zip(&owner) {
+        out[old as usize] = r;
+    }
+    Ok(out)
+}
+
+/// Edges of `p`'s vertex graph whose ends have different owners.
+pub fn edge_cut(p: &Problem, owner: &[u32]) -> usize {
+    (0..p.num_vertices())
+        .map(|v| {
+            p.neighbours
+                .of(v)
+                .iter()
+                .filter(|&&w| (w as usize) > v && owner[v] != owner[w as usize])
+                .count()
+        })
+        .sum()
+}
 
 /// The positions a part exchanges with one other part, as indices into the
 /// part's free-vertex vectors (so one list serves positions and vectors:

@@ -24,16 +24,10 @@ pub struct Quality {
 
 impl Quality {
     pub fn of(p: &Problem, owner: &[u32], parts: &[Part]) -> Quality {
-        let mut edges = 0;
-        let mut edge_cut = 0;
-        for v in 0..p.num_vertices() {
-            for &w in p.neighbours.of(v) {
-                if (w as usize) > v {
-                    edges += 1;
-                    edge_cut += usize::from(owner[v] != owner[w as usize]);
-                }
-            }
-        }
+        let edges = (0..p.num_vertices())
+            .map(|v| p.neighbours.of(v).iter().filter(|&&w| (w as usize) > v).count())
+            .sum();
+        let edge_cut = super::edge_cut(p, owner);
         let max_mean = |counts: Vec<usize>| {
             let mean = counts.iter().sum::<usize>() as f64 / counts.len().max(1) as f64;
             counts.into_iter().max().unwrap_or(0) as f64 / mean.max(1e-300)
@@ -54,7 +48,7 @@ impl fmt::Display for Quality {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} parts (recursive coordinate bisection): edge cut {} of {} edges ({:.2}%), ghost fraction {:.3}, imbalance {:.3} (vertices) {:.3} (corners), {} ghost positions per halo exchange",
+            "{} parts: edge cut {} of {} edges ({:.2}%), ghost fraction {:.3}, imbalance {:.3} (vertices) {:.3} (corners), {} ghost positions per halo exchange",
             self.parts,
             self.edge_cut,
             self.edges,

@@ -16,12 +16,12 @@ use crate::backend::distributed::DistributedBackend;
 use crate::backend::distributed::comm::CommStats;
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
-use crate::partition::{self, Part, Quality};
+use crate::partition::{self, Part, Partitioner, Quality};
 use crate::problem::Problem;
 use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::fmt;
 use std::time::Instant;
 
@@ -33,6 +33,7 @@ pub struct Cluster {
     universe: RefCell<Option<Universe>>,
     world: SimpleCommunicator,
     report: RefCell<Option<Report>>,
+    partitioner: Cell<Partitioner>,
 }
 
 impl Cluster {
@@ -52,6 +53,7 @@ impl Cluster {
             universe: RefCell::new(Some(universe)),
             world,
             report: RefCell::new(None),
+            partitioner: Cell::new(Partitioner::default()),
         })
     }
 
@@ -63,9 +65,14 @@ impl Cluster {
         self.world.size() as usize
     }
 
+    /// How the next solves share out the vertices (rank 0 decides).
+    pub fn set_partitioner(&self, partitioner: Partitioner) {
+        self.partitioner.set(partitioner);
+    }
+
     /// The report of the last partitioned solve (rank 0).
-    pub fn take_report(&self) -> Option<Report> {
-        self.report.borrow_mut().take()
+    pub fn report(&self) -> Option<Report> {
+        self.report.borrow().clone()
     }
 
     /// Rank 0 releases the waiting ranks; then MPI is finalised. Call once, at the end.
@@ -94,6 +101,13 @@ pub struct RankReport {
 /// What a partitioned solve reports besides `Info`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Report {
+    /// The partitioner that made the partition.
+    pub partitioner: Partitioner,
+    /// Why it is not the one asked for, if it is not.
+    pub fallback: Option<String>,
+    /// The owning rank of each vertex of the mesh (mesh numbering, as
+    /// `Problem::order` maps it), so outputs can be written per rank.
+    pub owner: Vec<u32>,
     pub quality: Quality,
     pub ranks: Vec<RankReport>,
     pub iterations: usize,
@@ -109,7 +123,16 @@ impl fmt::Display for Report {
         let bytes: usize = self.ranks.iter().map(|r| r.comm.halo_bytes).sum();
         let exchanges = self.ranks.iter().map(|r| r.comm.halo_exchanges).max().unwrap_or(0);
         let reductions = self.ranks.iter().map(|r| r.comm.reductions).max().unwrap_or(0);
-        writeln!(f, "mpi: {} ranks; {}", self.ranks.len(), self.quality)?;
+        write!(
+            f,
+            "mpi: {} ranks; partitioner {}",
+            self.ranks.len(),
+            self.partitioner.name()
+        )?;
+        if let Some(why) = &self.fallback {
+            write!(f, " ({why})")?;
+        }
+        writeln!(f, "; {}", self.quality)?;
         writeln!(
             f,
             "mpi time (slowest rank): {:.3} s, of which compute {:.3} s and communication {:.3} s ({:.1}%)",
@@ -163,7 +186,7 @@ pub fn lead(
 ) -> Result<Info> {
     refuse(p, opts)?;
     let size = cluster.size();
-    let owner = partition::rcb(x, size);
+    let (partitioner, owner, fallback) = share_out(cluster.partitioner.get(), p, x, size)?;
     let parts = partition::split(p, x, &owner, size);
     let quality = Quality::of(p, &owner, &parts);
     for (r, part) in parts.iter().enumerate().skip(1) {
@@ -199,13 +222,43 @@ pub fn lead(
             x[g as usize] = *y;
         }
     }
+    let mut mesh_owner = vec![0; p.order.len()];
+    for (&old, &r) in p.order.iter().zip(&owner) {
+        mesh_owner[old as usize] = r;
+    }
     *cluster.report.borrow_mut() = Some(Report {
+        partitioner,
+        fallback,
+        owner: mesh_owner,
         quality,
         ranks: outcomes.iter().map(|o| o.rank).collect(),
         iterations: info.iterations,
         cg_iterations: info.cg_iterations.unwrap_or(0),
     });
     Ok(info)
+}
+
+/// The owner of each vertex by `asked`, or by coordinate bisection when METIS
+/// leaves a rank without vertices (a graph smaller than the rank count).
+fn share_out(
+    asked: Partitioner,
+    p: &Problem,
+    x: &[Vec3],
+    size: usize,
+) -> Result<(Partitioner, Vec<u32>, Option<String>)> {
+    let owner = asked.owners(p, x, size)?;
+    let mut count = vec![0usize; size];
+    for &r in &owner {
+        count[r as usize] += 1;
+    }
+    match count.iter().position(|&c| c == 0) {
+        Some(r) if asked != Partitioner::Rcb => Ok((
+            Partitioner::Rcb,
+            partition::rcb(x, size),
+            Some(format!("{} left rank {r} without vertices", asked.name())),
+        )),
+        _ => Ok((asked, owner, None)),
+    }
 }
 
 /// What a partitioned run cannot do (see the module documentation).

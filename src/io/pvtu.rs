@@ -1,0 +1,506 @@
+//! ParaView's partitioned unstructured grid (`.pvtu`): an XML index naming
+//! `.vtu` pieces, one per part of a partitioned run.
+//!
+//! Written pieces hold the elements one part owns (an element belongs to the
+//! owner of its first vertex, as in a partitioned solve) and the vertices
+//! those use, so the pieces together hold every element once; vertices on the
+//! interfaces appear in each piece that uses them, as ParaView writes them.
+//! Each piece carries `GlobalPointIds` and `GlobalCellIds` (VTK's names for
+//! global ids): the numbers of its points and cells in the whole mesh.
+//!
+//! Reading merges the pieces back into one mesh. Points are the same point
+//! when they have the same global id — a `GlobalPointIds` or `GlobalNodeIds`
+//! point array present in every piece, the merged points then in ascending
+//! id — else when their coordinates are bitwise equal, the merged points in
+//! order of first appearance. Cells ParaView marks as duplicates (bit 1 of
+//! `vtkGhostType`) are dropped; the others are ordered by `GlobalCellIds`
+//! when every piece has it, else piece after piece. Points no remaining cell
+//! uses are dropped (VTK's piece extraction leaves such points in a piece).
+//! Id arrays that merely count 0..n are implied by that order and dropped.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use quick_xml::events::Event;
+use quick_xml::reader::Reader;
+use rayon::prelude::*;
+
+use super::{CellData, Format, vtu, write, write_atomic};
+use crate::error::{Error, Result};
+use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
+
+pub const GLOBAL_POINT_IDS: &str = "GlobalPointIds";
+pub const GLOBAL_CELL_IDS: &str = "GlobalCellIds";
+/// Point id arrays read, in order of preference (VTK's, then ParaView's D3 filter's).
+const POINT_ID_NAMES: [&str; 2] = [GLOBAL_POINT_IDS, "GlobalNodeIds"];
+const GHOST: &str = "vtkGhostType";
+/// vtkDataSetAttributes::DUPLICATECELL: the cell belongs to another piece.
+const DUPLICATE_CELL: i64 = 1;
+
+/// Whether `data` (an XML VTK file) is a `.pvtu` index.
+pub(crate) fn is_index(data: &[u8]) -> bool {
+    let head = &data[..data.len().min(1024)];
+    head.windows(17).any(|w| w == b"PUnstructuredGrid")
+}
+
+/// The piece files an index lists, in order, resolved beside the index.
+pub fn piece_paths(path: &Path, data: &[u8]) -> Result<Vec<PathBuf>> {
+    let text = std::str::from_utf8(data).map_err(|_| Error::parse(path, None, "a .pvtu index must be UTF-8 text"))?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut reader = Reader::from_str(text);
+    let mut pieces = Vec::new();
+    loop {
+        let ev = reader
+            .read_event()
+            .map_err(|e| Error::parse(path, None, format!("malformed XML: {e}")))?;
+        match ev {
+            Event::Start(ref e) | Event::Empty(ref e) => match e.local_name().as_ref() {
+                "VTKFile" => match vtu::attr(e, "type").as_deref() {
+                    Some("PUnstructuredGrid") => {}
+                    t => {
+                        return Err(Error::parse(
+                            path,
+                            None,
+                            format!(
+                                "VTKFile type '{}' is not a partitioned unstructured grid (PUnstructuredGrid)",
+                                t.unwrap_or("")
+                            ),
+                        ));
+                    }
+                },
+                "Piece" => match vtu::attr(e, "Source") {
+                    Some(s) if !s.trim().is_empty() => pieces.push(dir.join(s.trim())),
+                    _ => {
+                        return Err(Error::parse(
+                            path,
+                            None,
+                            format!("piece {} has no Source attribute naming its .vtu file", pieces.len()),
+                        ));
+                    }
+                },
+                _ => {}
+            },
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    if pieces.is_empty() {
+        return Err(Error::parse(path, None, "the index lists no Piece"));
+    }
+    Ok(pieces)
+}
+
+/// Reads every piece of the index at `path` (holding `data`) and merges them.
+pub(crate) fn read(path: &Path, data: &[u8]) -> Result<Mesh> {
+    let sources = piece_paths(path, data)?;
+    let pieces = sources
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            super::read_piece(s).map_err(|e| Error::parse(path, None, format!("piece {i} ({}): {e}", s.display())))
+        })
+        .collect::<Result<Vec<Mesh>>>()?;
+    merge(path, &pieces, &sources)
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+enum Key {
+    Id(i64),
+    Bits([u64; 3]),
+}
+
+fn point_ids(piece: &Mesh) -> Option<&DataArray> {
+    POINT_ID_NAMES.iter().find_map(|&n| {
+        piece
+            .data
+            .point
+            .iter()
+            .find(|a| a.name == n && a.components == 1 && matches!(a.values, Values::Int(_)))
+    })
+}
+
+fn cell_ids(piece: &Mesh) -> Option<&DataArray> {
+    piece
+        .data
+        .cell
+        .iter()
+        .find(|a| a.name == GLOBAL_CELL_IDS && a.components == 1 && matches!(a.values, Values::Int(_)))
+}
+
+/// The pieces as one mesh (see the module documentation).
+fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<Mesh> {
+    let err = |i: usize, msg: String| Error::parse(path, None, format!("piece {i} ({}): {msg}", names[i].display()));
+    let ids: Option<Vec<&DataArray>> = pieces.iter().map(point_ids).collect();
+    // the first (piece, point) of each merged point
+    let mut first: Vec<(usize, usize)> = Vec::new();
+    let mut key_of: HashMap<Key, u32> = HashMap::new();
+    let mut local: Vec<Vec<u32>> = Vec::with_capacity(pieces.len());
+    for (i, piece) in pieces.iter().enumerate() {
+        let mut map = Vec::with_capacity(piece.num_points());
+        for (l, p) in piece.points.iter().enumerate() {
+            let key = match &ids {
+                Some(ids) => Key::Id(ids[i].get_i64(l)),
+                None => Key::Bits(p.map(f64::to_bits)),
+            };
+            let m = *key_of.entry(key).or_insert_with(|| {
+                first.push((i, l));
+                (first.len() - 1) as u32
+            });
+            let (fi, fl) = first[m as usize];
+            if pieces[fi].points[fl].map(f64::to_bits) != p.map(f64::to_bits) {
+                let Key::Id(id) = key else { unreachable!() };
+                return Err(err(
+                    i,
+                    format!(
+                        "point {l} has global id {id} at {p:?}, but piece {fi} ({}) has that id at {:?}",
+                        names[fi].display(),
+                        pieces[fi].points[fl]
+                    ),
+                ));
+            }
+            map.push(m);
+        }
+        local.push(map);
+    }
+    // with global ids the merged points come in ascending id
+    if let Some(ids) = &ids {
+        let mut order: Vec<u32> = (0..first.len() as u32).collect();
+        order.sort_by_key(|&m| {
+            let (i, l) = first[m as usize];
+            ids[i].get_i64(l)
+        });
+        let mut rank = vec![0u32; first.len()];
+        for (r, &m) in order.iter().enumerate() {
+            rank[m as usize] = r as u32;
+        }
+        first = order.iter().map(|&m| first[m as usize]).collect();
+        for map in &mut local {
+            for m in map.iter_mut() {
+                *m = rank[*m as usize];
+            }
+        }
+    }
+    // offset of each piece's points and cells in the concatenation of all
+    let starts = |count: &dyn Fn(&Mesh) -> usize| {
+        let mut s = vec![0usize];
+        for piece in pieces {
+            s.push(s.last().unwrap() + count(piece));
+        }
+        s
+    };
+    let point_start = starts(&|m| m.num_points());
+    let cell_start = starts(&|m| m.num_elements());
+
+    let mut cells: Vec<(usize, usize)> = Vec::new();
+    for (i, piece) in pieces.iter().enumerate() {
+        let ghost = piece.data.cell_array(GHOST);
+        cells.extend(
+            (0..piece.num_elements())
+                .filter(|&e| ghost.is_none_or(|g| g.get_i64(e) & DUPLICATE_CELL == 0))
+                .map(|e| (i, e)),
+        );
+    }
+    let cell_id_arrays: Option<Vec<&DataArray>> = pieces.iter().map(cell_ids).collect();
+    if let Some(cids) = &cell_id_arrays {
+        cells.sort_by_key(|&(i, e)| cids[i].get_i64(e));
+        if let Some(w) = cells
+            .windows(2)
+            .find(|w| cids[w[0].0].get_i64(w[0].1) == cids[w[1].0].get_i64(w[1].1))
+        {
+            let ((a, ea), (b, eb)) = (w[0], w[1]);
+            return Err(err(
+                b,
+                format!(
+                    "cell {eb} has global cell id {}, as has cell {ea} of piece {a} ({}): the pieces overlap",
+                    cids[b].get_i64(eb),
+                    names[a].display()
+                ),
+            ));
+        }
+    }
+    let cell_rows: Vec<usize> = cells.iter().map(|&(i, e)| cell_start[i] + e).collect();
+    // points no kept cell uses are artefacts of the split (VTK's piece
+    // extraction keeps them, and the ghost cells dropped used some): dropped
+    let mut used = vec![false; first.len()];
+    for &(i, e) in &cells {
+        for &v in pieces[i].element(e) {
+            used[local[i][v as usize] as usize] = true;
+        }
+    }
+    if used.iter().any(|&u| !u) {
+        let mut renumber = vec![u32::MAX; first.len()];
+        let mut kept = Vec::new();
+        for (m, &u) in used.iter().enumerate() {
+            if u {
+                renumber[m] = kept.len() as u32;
+                kept.push(first[m]);
+            }
+        }
+        first = kept;
+        for map in &mut local {
+            for m in map.iter_mut() {
+                *m = renumber[*m as usize];
+            }
+        }
+    }
+
+    let point_rows: Vec<usize> = first.iter().map(|&(i, l)| point_start[i] + l).collect();
+    let mut mesh = Mesh::new(first.iter().map(|&(i, l)| pieces[i].points[l]).collect());
+    for &(i, e) in &cells {
+        let piece = &pieces[i];
+        let verts: Vec<u32> = piece.element(e).iter().map(|&v| local[i][v as usize]).collect();
+        if piece.kinds[e] == ElementKind::Polyhedron {
+            let faces: Vec<Vec<u32>> = piece
+                .faces
+                .of(e)
+                .map(|f| f.iter().map(|&v| local[i][v as usize]).collect())
+                .collect();
+            mesh.push_polyhedron(&verts, faces.iter().map(Vec::as_slice));
+        } else {
+            mesh.push_element(piece.kinds[e], &verts);
+        }
+    }
+    if pieces.iter().any(|p| !p.fixed.is_empty()) {
+        mesh.fixed = first
+            .iter()
+            .map(|&(i, l)| pieces[i].fixed.get(l).copied().unwrap_or(false))
+            .collect();
+    }
+    let same_arrays = |of: &dyn Fn(&Mesh) -> Vec<&DataArray>, what: &str| -> Result<Vec<Vec<DataArray>>> {
+        let shape = |m: &Mesh| -> Vec<(String, ValueType, usize)> {
+            of(m).iter().map(|a| (a.name.clone(), a.ty, a.components)).collect()
+        };
+        let want = shape(&pieces[0]);
+        for (i, piece) in pieces.iter().enumerate().skip(1) {
+            if shape(piece) != want {
+                let list =
+                    |s: Vec<(String, ValueType, usize)>| s.into_iter().map(|(n, ..)| n).collect::<Vec<_>>().join(", ");
+                return Err(err(
+                    i,
+                    format!(
+                        "its {what} arrays ({}) differ from piece 0's ({}) in names, types or components",
+                        list(shape(piece)),
+                        list(want)
+                    ),
+                ));
+            }
+        }
+        Ok(pieces.iter().map(|m| of(m).into_iter().cloned().collect()).collect())
+    };
+    let point_arrays = same_arrays(
+        &|m| {
+            m.data
+                .point
+                .iter()
+                .filter(|a| a.name != "fixed" && a.name != GHOST)
+                .collect()
+        },
+        "point",
+    )?;
+    let cell_arrays = same_arrays(&|m| m.data.cell.iter().filter(|a| a.name != GHOST).collect(), "cell")?;
+    mesh.data.point = concat_select(&point_arrays, &point_rows);
+    mesh.data.cell = concat_select(&cell_arrays, &cell_rows);
+    mesh.data.field = pieces[0].data.field.clone();
+    drop_counting_ids(&mut mesh.data.point, &POINT_ID_NAMES);
+    drop_counting_ids(&mut mesh.data.cell, &[GLOBAL_CELL_IDS]);
+    Ok(mesh)
+}
+
+/// Array k of every piece, end to end, restricted to `rows`.
+fn concat_select(per_piece: &[Vec<DataArray>], rows: &[usize]) -> Vec<DataArray> {
+    (0..per_piece[0].len())
+        .map(|k| {
+            let first = &per_piece[0][k];
+            let values = match &first.values {
+                Values::Int(_) => Values::Int(
+                    per_piece
+                        .iter()
+                        .flat_map(|a| match &a[k].values {
+                            Values::Int(v) => v.clone(),
+                            _ => Vec::new(),
+                        })
+                        .collect(),
+                ),
+                Values::Float(_) => Values::Float(
+                    per_piece
+                        .iter()
+                        .flat_map(|a| match &a[k].values {
+                            Values::Float(v) => v.clone(),
+                            _ => Vec::new(),
+                        })
+                        .collect(),
+                ),
+                Values::Str(_) => Values::Str(
+                    per_piece
+                        .iter()
+                        .flat_map(|a| match &a[k].values {
+                            Values::Str(v) => v.clone(),
+                            _ => Vec::new(),
+                        })
+                        .collect(),
+                ),
+            };
+            DataArray::new(first.name.clone(), first.ty, first.components, values).select(rows)
+        })
+        .collect()
+}
+
+/// Removes the id arrays called `names` whose values are 0, 1, ..., n-1.
+fn drop_counting_ids(arrays: &mut Vec<DataArray>, names: &[&str]) {
+    arrays.retain(|a| {
+        !(names.contains(&a.name.as_str())
+            && a.components == 1
+            && matches!(&a.values, Values::Int(v) if v.iter().enumerate().all(|(i, &x)| x == i as i64)))
+    });
+}
+
+/// `path` with `_r.vtu` in place of its extension: piece r's file.
+pub fn piece_path(path: &Path, r: usize) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}_{r}.vtu"))
+}
+
+/// Writes `mesh` as the index `path` and `parts` pieces beside it (see
+/// [`piece_path`]): piece r holds the elements whose first vertex `owner`
+/// gives to r, the vertices they use and the vertices r owns that no element
+/// uses; a part with none of these gets no piece. Each piece is written
+/// atomically, the index last, so an index never names a piece that was not
+/// written. Returns the pieces' paths.
+pub fn write_pieces(
+    path: &Path,
+    mesh: &Mesh,
+    owner: &[u32],
+    parts: usize,
+    format: Format,
+    cell_data: &[CellData],
+) -> Result<Vec<PathBuf>> {
+    if !matches!(format, Format::VtuAscii | Format::VtuBinary | Format::VtuZlib) {
+        return Err(Error::InvalidArgument(format!(
+            "{}: pieces are VTK XML files: the format must be vtu, vtu-binary or vtu-zlib, not {format}",
+            path.display()
+        )));
+    }
+    if owner.len() != mesh.num_points() || owner.iter().any(|&r| r as usize >= parts) {
+        return Err(Error::InvalidArgument(format!(
+            "{}: the partition does not fit the mesh ({} owners for {} points, {parts} parts)",
+            path.display(),
+            owner.len(),
+            mesh.num_points()
+        )));
+    }
+    let mut elems: Vec<Vec<usize>> = vec![Vec::new(); parts];
+    for e in 0..mesh.num_elements() {
+        elems[owner[mesh.element(e)[0] as usize] as usize].push(e);
+    }
+    let mut used = vec![false; mesh.num_points()];
+    for &v in &mesh.conn {
+        used[v as usize] = true;
+    }
+    let mut sources = Vec::with_capacity(parts);
+    let mut paths = Vec::with_capacity(parts);
+    let mut first_piece = None;
+    for (r, elems) in elems.iter().enumerate() {
+        let mut verts: Vec<usize> = elems
+            .iter()
+            .flat_map(|&e| mesh.element(e).iter().map(|&v| v as usize))
+            .chain((0..mesh.num_points()).filter(|&v| !used[v] && owner[v] as usize == r))
+            .collect();
+        verts.sort_unstable();
+        verts.dedup();
+        // a part owning no element and no lone vertex has nothing to write
+        if verts.is_empty() {
+            continue;
+        }
+        let piece = piece_mesh(mesh, &verts, elems);
+        let data: Vec<Vec<f64>> = cell_data
+            .iter()
+            .map(|c| elems.iter().map(|&e| c.values[e]).collect())
+            .collect();
+        let piece_data: Vec<CellData> = cell_data
+            .iter()
+            .zip(&data)
+            .map(|(c, v)| CellData {
+                name: c.name,
+                values: v,
+            })
+            .collect();
+        let p = piece_path(path, r);
+        write(&p, &piece, format, &piece_data)?;
+        sources.push(
+            p.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        );
+        paths.push(p);
+        if first_piece.is_none() {
+            first_piece = Some((piece, data));
+        }
+    }
+    let Some((piece, data)) = first_piece else {
+        return Err(Error::InvalidArgument(format!(
+            "{}: the mesh has no points to write",
+            path.display()
+        )));
+    };
+    let piece_data: Vec<CellData> = cell_data
+        .iter()
+        .zip(&data)
+        .map(|(c, v)| CellData {
+            name: c.name,
+            values: v,
+        })
+        .collect();
+    write_atomic(path, |w| vtu::write_index(w, &piece, &piece_data, &sources))?;
+    Ok(paths)
+}
+
+/// The part of `mesh` on vertices `verts` and elements `elems` (both
+/// ascending), with their global ids.
+fn piece_mesh(mesh: &Mesh, verts: &[usize], elems: &[usize]) -> Mesh {
+    let mut local = HashMap::with_capacity(verts.len());
+    for (l, &v) in verts.iter().enumerate() {
+        local.insert(v as u32, l as u32);
+    }
+    let mut piece = Mesh::new(verts.iter().map(|&v| mesh.points[v]).collect());
+    for &e in elems {
+        let vs: Vec<u32> = mesh.element(e).iter().map(|v| local[v]).collect();
+        if mesh.kinds[e] == ElementKind::Polyhedron {
+            let faces: Vec<Vec<u32>> = mesh.faces.of(e).map(|f| f.iter().map(|v| local[v]).collect()).collect();
+            piece.push_polyhedron(&vs, faces.iter().map(Vec::as_slice));
+        } else {
+            piece.push_element(mesh.kinds[e], &vs);
+        }
+    }
+    if !mesh.fixed.is_empty() {
+        piece.fixed = verts.iter().map(|&v| mesh.fixed[v]).collect();
+    }
+    let ids = |name: &str, rows: &[usize]| {
+        DataArray::new(
+            name,
+            ValueType::I64,
+            1,
+            Values::Int(rows.iter().map(|&i| i as i64).collect()),
+        )
+    };
+    piece.data.point = mesh
+        .data
+        .point
+        .iter()
+        .filter(|a| !POINT_ID_NAMES.contains(&a.name.as_str()))
+        .map(|a| a.select(verts))
+        .chain([ids(GLOBAL_POINT_IDS, verts)])
+        .collect();
+    piece.data.cell = mesh
+        .data
+        .cell
+        .iter()
+        .filter(|a| a.name != GLOBAL_CELL_IDS)
+        .map(|a| a.select(elems))
+        .chain([ids(GLOBAL_CELL_IDS, elems)])
+        .collect();
+    piece.data.field = mesh.data.field.clone();
+    piece
+}
