@@ -101,19 +101,7 @@ fn main(
         g = mul_vec(p, g);
         h = constrain_hessian(p, h);
     }
-    let neg_g = vec3<real>(-g[0], -g[1], -g[2]);
-    // the block is positive definite for the mean ratio; fall back to a scaled
-    // steepest descent step should rounding say otherwise
-    let chol = cholesky_solve(h, neg_g);
-    var d = chol.x;
-    if !chol.ok {
-        let tr = h[0][0] + h[1][1] + h[2][2];
-        var s = real(1.0);
-        if tr > real(0.0) {
-            s = real(3.0) / tr;
-        }
-        d = vec3<real>(neg_g[0] * s, neg_g[1] * s, neg_g[2] * s);
-    }
+    let d = newton_direction(g, h);
     let slope = dot3(g, d);
     if !(slope < real(0.0)) {
         return;

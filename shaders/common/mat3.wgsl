@@ -87,3 +87,20 @@ fn cholesky_solve(h: mat3x3<real>, rhs: vec3<real>) -> CholeskySolve {
     out.ok = true;
     return out;
 }
+
+// `mat3::newton_direction`: the Newton step -h^-1 g on a vertex block, or a
+// scaled steepest descent step where Cholesky fails (the block is positive
+// definite for the mean ratio; rounding may say otherwise).
+fn newton_direction(g: vec3<real>, h: mat3x3<real>) -> vec3<real> {
+    let neg_g = vec3<real>(-g[0], -g[1], -g[2]);
+    let chol = cholesky_solve(h, neg_g);
+    if chol.ok {
+        return chol.x;
+    }
+    let tr = h[0][0] + h[1][1] + h[2][2];
+    var s = real(1.0);
+    if tr > real(0.0) {
+        s = real(3.0) / tr;
+    }
+    return vec3<real>(neg_g[0] * s, neg_g[1] * s, neg_g[2] * s);
+}

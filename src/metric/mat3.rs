@@ -92,6 +92,19 @@ pub fn cholesky_solve(h: &Mat3, rhs: &Vec3) -> Option<Vec3> {
 }
 
 /// General inverse through the adjugate; `None` for a singular matrix.
+/// The Newton step -h^-1 g on a vertex block, or a scaled steepest descent
+/// step where Cholesky fails (the block is positive definite for the mean
+/// ratio; rounding may say otherwise). Twin of `newton_direction` in
+/// `shaders/common/mat3.wgsl`.
+pub fn newton_direction(g: &Vec3, h: &Mat3) -> Vec3 {
+    let neg_g = [-g[0], -g[1], -g[2]];
+    cholesky_solve(h, &neg_g).unwrap_or_else(|| {
+        let tr = h[0][0] + h[1][1] + h[2][2];
+        let s = if tr > 0.0 { 3.0 / tr } else { 1.0 };
+        neg_g.map(|c| c * s)
+    })
+}
+
 pub fn inverse(m: &Mat3) -> Option<Mat3> {
     let d = det(m);
     if d == 0.0 || !d.is_finite() {

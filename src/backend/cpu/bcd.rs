@@ -6,7 +6,7 @@
 
 use super::project_boundary::{constrain_block, project_vertex};
 use crate::metric::TetShape;
-use crate::metric::mat3::{Mat3, Vec3, cholesky_solve, dot};
+use crate::metric::mat3::{Mat3, Vec3, dot, newton_direction};
 use crate::problem::Problem;
 use crate::solve::line_search::LineSearch;
 use rayon::prelude::*;
@@ -110,14 +110,7 @@ pub fn patch_step(p: &Problem, patch: &Patch, v: usize, xv: &Vec3, ls: &LineSear
         Some(s) => constrain_block(&s.projector[v], &g, &h),
         None => (g, h),
     };
-    let neg_g = [-g[0], -g[1], -g[2]];
-    // the block is positive definite for the mean ratio; fall back to a scaled
-    // steepest descent step should rounding say otherwise
-    let d = cholesky_solve(&h, &neg_g).unwrap_or_else(|| {
-        let tr = h[0][0] + h[1][1] + h[2][2];
-        let s = if tr > 0.0 { 3.0 / tr } else { 1.0 };
-        neg_g.map(|c| c * s)
-    });
+    let d = newton_direction(&g, &h);
     let slope = dot(&g, &d);
     if !(slope < 0.0) || dot(&d, &d) <= min_step_sq {
         return None;
