@@ -93,6 +93,8 @@ class Result:
         quality: per-cell inverse mean ratio at the new positions (1 is ideal).
         info: everything else the solver reported (device, seconds,
             setup_seconds, memory_bytes, colors, cg_iterations, method;
+            Newton's negative_curvature_steps and line_search_trials, None
+            for the other methods;
             optimise_seconds, reorder_seconds and reorderings: the
             reordering paper's COT, RT and the number of sweep orderings).
         untangle: what untangling a tangled input did first (the keys of

@@ -321,6 +321,8 @@ fn smooth<'py>(
     d.set_item("memory_bytes", info.memory_bytes)?;
     d.set_item("colors", info.colors)?;
     d.set_item("cg_iterations", info.cg_iterations)?;
+    d.set_item("negative_curvature_steps", info.negative_curvature_steps)?;
+    d.set_item("line_search_trials", info.line_search_trials)?;
     let rec = &info.history.records;
     let history = PyDict::new(py);
     let column = |f: fn(&Record) -> f64| rec.iter().map(f).collect::<Vec<f64>>().into_pyarray(py);

@@ -76,6 +76,11 @@ def test_result_fields(hex_box):
     assert rep["elements"] == len(hexes) and rep["inverted"] == 0
     assert abs(rep["objective"] - r.quality.mean()) < 1e-12
     assert "cpu" in r.info["device"]
+    # Newton's counters belong to Newton: None for a sweep method, counts for Newton
+    assert r.info["negative_curvature_steps"] is None and r.info["line_search_trials"] is None
+    n = ms.smooth(points, hexes, method="newton", tol=1e-5)
+    assert n.info["line_search_trials"] >= n.iterations >= 1
+    assert 0 <= n.info["negative_curvature_steps"] <= n.iterations
 
 
 def test_planar_quads_keep_two_columns(quad_grid):
