@@ -116,6 +116,7 @@ fn main() {
             let ctx = GpuContext::new(&GpuOptions {
                 adapter: adapter.clone(),
                 precision,
+                ..Default::default()
             })
             .map_err(|e| eprintln!("no {precision:?} context: {e}"))
             .ok()?;

@@ -21,7 +21,7 @@ fn store_block(base: u32, k: u32, l: u32, blk: mat3x3<real>, w: real) {
     let at = base + 12u + 9u * upper_block(k, l);
     for (var i = 0u; i < 3u; i++) {
         for (var q = 0u; q < 3u; q++) {
-            elem[at + 3u * i + q] = blk[i][q] * w;
+            elem_set(at + 3u * i + q, blk[i][q] * w);
         }
     }
 }
@@ -52,7 +52,7 @@ fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) 
         }
         let g = contract_g(m.g, bl, n);
         for (var i = 0u; i < 3u; i++) {
-            elem[base + 3u * l + i] = g[i] * w;
+            elem_set(base + 3u * l + i, g[i] * w);
         }
     }
     for (var k = 0u; k < 4u; k++) {
@@ -108,7 +108,7 @@ fn main(
     if !p.ok || !ok {
         // assembly runs at accepted (feasible) points only; zeros keep the sums finite
         for (var i = 0u; i < ELEM_STRIDE; i++) {
-            elem[base + i] = real(0.0);
+            elem_set(base + i, real(0.0));
         }
         return;
     }
@@ -127,7 +127,7 @@ fn main(
     for (var k = 0u; k < 4u; k++) {
         let g = mul_vec(p.grad_s, b[k]);
         for (var i = 0u; i < 3u; i++) {
-            elem[base + 3u * k + i] = g[i] * w;
+            elem_set(base + 3u * k + i, g[i] * w);
         }
         let sk = mul_vec(p.s, b[k]);
         cv[k] = mul_vec(p.cof, b[k]);

@@ -11,7 +11,7 @@ struct CornerRef {
 }
 
 fn corner_ref(c: u32) -> CornerRef {
-    let t = 4u * corners[CORNER_STRIDE * c + 4u];
+    let t = 4u * corners_get(CORNER_STRIDE * c + 4u);
     let r0 = shapes[t];
     return CornerRef(array<vec3<real>, 4>(r0.xyz, shapes[t + 1u].xyz, shapes[t + 2u].xyz, shapes[t + 3u].xyz), r0.w);
 }
@@ -23,7 +23,7 @@ fn corner_point(v: u32) -> vec3<real> {
 fn corner_points(c: u32) -> array<vec3<real>, 4> {
     var pts: array<vec3<real>, 4>;
     for (var k = 0u; k < 4u; k++) {
-        pts[k] = corner_point(corners[CORNER_STRIDE * c + k]);
+        pts[k] = corner_point(corners_get(CORNER_STRIDE * c + k));
     }
     return pts;
 }
