@@ -7,8 +7,9 @@
 
 use super::buffers::{BindingLimits, check_bindings};
 use super::context::GpuContext;
-use super::layout::{ELEM_STRIDE, ModelUniform, Op, corner_tables};
+use super::layout::{CORNER_STRIDE, ELEM_STRIDE, ModelUniform, Op, corner_tables};
 use super::shader::{Access, Form, Kernel, Variant};
+use super::sweep_layout::SweepLayout;
 use crate::backend::cpu::hessian_assemble::HessianPattern;
 use crate::backend::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::{Error, Result};
@@ -79,6 +80,8 @@ pub struct GpuBackend<'c> {
     ops: Vec<u8>,
     n_blocks: usize,
     problem: &'c Problem,
+    /// The device numbering of vertices and corners.
+    layout: SweepLayout,
 }
 
 fn groups_of(n: usize) -> usize {
@@ -97,7 +100,12 @@ impl<'c> GpuBackend<'c> {
             )));
         }
         let r = ctx.real_size();
-        let (slide_real, slide_idx) = slide_tables(p);
+        let layout = if ctx.problem_numbering {
+            SweepLayout::identity(p)
+        } else {
+            SweepLayout::colour_by_colour(p)
+        };
+        let (slide_real, slide_idx) = slide_tables(p, &layout);
         check_bindings(
             &BindingLimits::of(&ctx.limits),
             &[
@@ -112,8 +120,19 @@ impl<'c> GpuBackend<'c> {
         )?;
         super::buffers::grid(nc)?;
         let model = ModelUniform::of(p);
-        let (corner_items, table) = corner_tables(p);
-        let flat: Vec<f64> = x.iter().flatten().copied().collect();
+        let (problem_corners, table) = corner_tables(p);
+        let stride = CORNER_STRIDE as usize;
+        let corner_items: Vec<u32> = layout
+            .corner_of
+            .iter()
+            .flat_map(|&c| {
+                let rec = &problem_corners[stride * c as usize..stride * (c as usize + 1)];
+                rec[..4].iter().map(|&v| layout.vertex[v as usize]).chain([rec[4]])
+            })
+            .collect();
+        drop(problem_corners);
+        let incidence = layout.incidence(&p.incidence);
+        let flat: Vec<f64> = layout.to_device(x.as_flattened(), 3);
         let partials = groups_of(nc.max(nv).max(nf));
         let mut single = HashMap::new();
         single.insert(Buf::Model, ctx.uniform_bytes("model", model.bytes(ctx.real)));
@@ -135,10 +154,16 @@ impl<'c> GpuBackend<'c> {
         single.insert(Buf::Shapes, ctx.storage_real("corner shapes", &table));
         single.insert(
             Buf::IncOffsets,
-            ctx.storage_u32("incidence offsets", &p.incidence.offsets),
+            ctx.storage_u32("incidence offsets", &incidence.offsets),
         );
-        single.insert(Buf::Free, ctx.storage_u32("free vertices", &p.free_vertices));
-        single.insert(Buf::Colors, ctx.storage_u32("colours", &p.colors.items));
+        single.insert(
+            Buf::Free,
+            ctx.storage_u32("free vertices", &layout.vertex_ids(&p.free_vertices)),
+        );
+        single.insert(
+            Buf::Colors,
+            ctx.storage_u32("colours", &layout.vertex_ids(&p.colors.items)),
+        );
         single.insert(Buf::Moves, ctx.zeros_real("moves", 3 * nv));
         single.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
         single.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
@@ -150,7 +175,7 @@ impl<'c> GpuBackend<'c> {
         single.insert(Buf::SlideIdx, ctx.storage_u32("sliding candidates", &slide_idx));
         let mut bufs: HashMap<Buf, Vec<wgpu::Buffer>> = single.into_iter().map(|(k, b)| (k, vec![b])).collect();
         bufs.insert(Buf::Corners, ctx.split_u32("corners", &corner_items));
-        bufs.insert(Buf::Inc, ctx.split_u32("incidence", &p.incidence.items));
+        bufs.insert(Buf::Inc, ctx.split_u32("incidence", &incidence.items));
         bufs.insert(Buf::CornerGrad, ctx.split_zeros_real("corner gradients", 12 * nc));
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scalar slots read back"),
@@ -178,6 +203,7 @@ impl<'c> GpuBackend<'c> {
             ops: Vec::new(),
             n_blocks: 0,
             problem: p,
+            layout,
         })
     }
 
@@ -357,7 +383,7 @@ impl<'c> GpuBackend<'c> {
 /// `boundary.wgsl`'s tables: projectors then primitives (reals), and the
 /// vertex count, candidate offsets and candidates (u32s). Without sliding,
 /// all offsets are zero: no vertex slides.
-fn slide_tables(p: &Problem) -> (Vec<f64>, Vec<u32>) {
+fn slide_tables(p: &Problem, layout: &SweepLayout) -> (Vec<f64>, Vec<u32>) {
     let nv = p.num_vertices();
     match &p.sliding {
         None => (
@@ -365,27 +391,26 @@ fn slide_tables(p: &Problem) -> (Vec<f64>, Vec<u32>) {
             [nv as u32].into_iter().chain(std::iter::repeat_n(0, nv + 1)).collect(),
         ),
         Some(s) => {
-            let real = s
-                .projector
-                .iter()
-                .flatten()
-                .flatten()
-                .chain(s.primitives.iter().flatten().flatten())
-                .copied()
+            let projector: Vec<f64> = s.projector.iter().flatten().flatten().copied().collect();
+            let real = layout
+                .to_device(&projector, 9)
+                .into_iter()
+                .chain(s.primitives.iter().flatten().flatten().copied())
                 .collect();
+            let candidates = layout.lists(&s.candidates);
             let idx = [nv as u32]
                 .into_iter()
-                .chain(s.candidates.offsets.iter().copied())
-                .chain(s.candidates.items.iter().copied())
+                .chain(candidates.offsets)
+                .chain(candidates.items)
                 .collect();
             (real, idx)
         }
     }
 }
 
-/// Per block slot, its element contributions `corner * 16 + 4 a + b` in
-/// ascending corner order (the CPU assembly's sum order).
-fn contributions(pattern: &HessianPattern) -> (Vec<u32>, Vec<u32>) {
+/// Per block slot, its element contributions `corner * 16 + 4 a + b` (the
+/// device corner) in ascending problem corner order (the CPU assembly's sum order).
+fn contributions(pattern: &HessianPattern, layout: &SweepLayout) -> (Vec<u32>, Vec<u32>) {
     let nb = pattern.matrix.blocks.len();
     let mut offsets = vec![0u32; nb + 1];
     for s in pattern.slots.iter().flatten() {
@@ -401,7 +426,7 @@ fn contributions(pattern: &HessianPattern) -> (Vec<u32>, Vec<u32>) {
     for (e, slots) in pattern.slots.iter().enumerate() {
         for (ab, &s) in slots.iter().enumerate() {
             if s != u32::MAX {
-                items[fill[s as usize] as usize] = 16 * e as u32 + ab as u32;
+                items[fill[s as usize] as usize] = 16 * layout.corner[e] + ab as u32;
                 fill[s as usize] += 1;
             }
         }
@@ -455,7 +480,8 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn download(&mut self) -> Result<Vec<Vec3>> {
-        self.read_vec3(Buf::X, self.n_vertices)
+        let x = self.read_vec3(Buf::X, self.n_vertices)?;
+        Ok(self.layout.to_problem(&x))
     }
 
     fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
@@ -610,14 +636,15 @@ impl Backend for GpuBackend<'_> {
                 self.n_free,
             )?;
         }
-        self.read_vec3(Buf::Reference, self.n_vertices)
+        let xr = self.read_vec3(Buf::Reference, self.n_vertices)?;
+        Ok(self.layout.to_problem(&xr))
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {
         let ctx = self.ctx;
         let pattern = HessianPattern::new(self.problem);
         let nb = pattern.matrix.blocks.len();
-        let (c_off, c_items) = contributions(&pattern);
+        let (c_off, c_items) = contributions(&pattern, &self.layout);
         let r = ctx.real_size();
         check_bindings(
             &BindingLimits::of(&ctx.limits),

@@ -27,6 +27,9 @@ pub struct GpuOptions {
     /// offers, so that tests reach split arrays (`Binding::split`) with
     /// small meshes.
     pub max_binding_bytes: Option<u64>,
+    /// Keep the problem's vertex and corner numbering on the device instead
+    /// of storing them colour by colour (`sweep_layout`): for comparing the two.
+    pub problem_numbering: bool,
 }
 
 /// One adapter as `meshsmooth devices` lists it.
@@ -107,6 +110,8 @@ pub struct GpuContext {
     pub(crate) queue: wgpu::Queue,
     pub(crate) real: Real,
     pub(crate) limits: wgpu::Limits,
+    /// `GpuOptions::problem_numbering`.
+    pub(crate) problem_numbering: bool,
     info: wgpu::AdapterInfo,
     /// Built on first use: a run needs the instances of one metric only, and
     /// compiling all of them costs seconds on a software adapter.
@@ -210,6 +215,7 @@ impl GpuContext {
             queue,
             real,
             limits,
+            problem_numbering: opts.problem_numbering,
             info: adapter.get_info(),
             pipelines: Mutex::new(HashMap::new()),
             errors,

@@ -9,6 +9,7 @@ pub mod context;
 pub(crate) mod layout;
 pub mod mean_ratio_eval;
 pub mod shader;
+pub(crate) mod sweep_layout;
 
 pub use backend::GpuBackend;
 pub use buffers::{BindingLimits, check_bindings};
