@@ -11,9 +11,8 @@
 //! - `--max-tets N`: skip meshes with more elements;
 //! - `--tet-sizes N,N,...`: these tetrahedral boxes instead (N^3 cubes, 6 N^3 tets);
 //! - `--no-hex`: leave out the hexahedral boxes;
-//! - `--problem-numbering`: keep the problem's vertex numbering on the device
-//!   (`GpuOptions::problem_numbering`) instead of storing colour by colour,
-//!   the layout before issue #14's item 2.
+//! - `--layout by-valence|by-colour|problem`: the device numbering
+//!   (`GpuOptions::layout`; `problem` is the layout before issue #14's item 2).
 //!
 //! Bytes moved per sweep are a model, not a counter: per free vertex its
 //! incidence offsets (8 B) and, for each incident corner, the incidence item
@@ -28,7 +27,7 @@
 //! b_k); both are estimates, quoted to compare devices, not kernels.
 
 use meshsmooth::backend::cpu::bcd;
-use meshsmooth::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::gpu::{DeviceLayout, GpuBackend, GpuContext, GpuOptions, Precision};
 use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::metric::corner_model::Template;
@@ -82,7 +81,9 @@ fn main() {
     let max_elems: usize = arg("--max-tets")
         .map(|s| s.parse().expect("--max-tets N"))
         .unwrap_or(usize::MAX);
-    let problem_numbering = std::env::args().any(|a| a == "--problem-numbering");
+    let layout = arg("--layout").map_or(DeviceLayout::default(), |s| {
+        <DeviceLayout as clap::ValueEnum>::from_str(&s, true).expect("--layout by-valence|by-colour|problem")
+    });
     let listed: Option<Vec<usize>> =
         arg("--tet-sizes").map(|s| s.split(',').map(|n| n.parse().expect("--tet-sizes N,N")).collect());
     let tet_sizes: &[usize] = match (&listed, quick, gpu_only) {
@@ -126,7 +127,7 @@ fn main() {
             let ctx = GpuContext::new(&GpuOptions {
                 adapter: adapter.clone(),
                 precision,
-                problem_numbering,
+                layout,
                 ..Default::default()
             })
             .map_err(|e| eprintln!("no {precision:?} context: {e}"))
@@ -135,15 +136,7 @@ fn main() {
         })
         .collect();
     if let Some((_, ctx)) = gpus.first() {
-        println!(
-            "GPU: {}, {}",
-            ctx.adapter_name(),
-            if problem_numbering {
-                "problem numbering on the device"
-            } else {
-                "colour-by-colour layout on the device"
-            }
-        );
+        println!("GPU: {}, device layout {layout:?}", ctx.adapter_name());
     }
     println!("CPU threads: {}\n", rayon::current_num_threads());
     let mut header = String::from("| mesh | elements | colours |");

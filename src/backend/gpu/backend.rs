@@ -6,7 +6,7 @@
 //! line-search trial.
 
 use super::buffers::{BindingLimits, check_bindings};
-use super::context::GpuContext;
+use super::context::{DeviceLayout, GpuContext};
 use super::layout::{CORNER_STRIDE, ELEM_STRIDE, ModelUniform, Op, corner_tables};
 use super::shader::{Access, Form, Kernel, Variant};
 use super::sweep_layout::SweepLayout;
@@ -100,10 +100,10 @@ impl<'c> GpuBackend<'c> {
             )));
         }
         let r = ctx.real_size();
-        let layout = if ctx.problem_numbering {
-            SweepLayout::identity(p)
-        } else {
-            SweepLayout::colour_by_colour(p)
+        let layout = match ctx.layout {
+            DeviceLayout::Problem => SweepLayout::identity(p),
+            DeviceLayout::ByColour => SweepLayout::colour_by_colour(p, false),
+            DeviceLayout::ByValence => SweepLayout::colour_by_colour(p, true),
         };
         let (slide_real, slide_idx) = slide_tables(p, &layout);
         check_bindings(
@@ -160,10 +160,7 @@ impl<'c> GpuBackend<'c> {
             Buf::Free,
             ctx.storage_u32("free vertices", &layout.vertex_ids(&p.free_vertices)),
         );
-        single.insert(
-            Buf::Colors,
-            ctx.storage_u32("colours", &layout.vertex_ids(&p.colors.items)),
-        );
+        single.insert(Buf::Colors, ctx.storage_u32("colours", &layout.colours));
         single.insert(Buf::Moves, ctx.zeros_real("moves", 3 * nv));
         single.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
         single.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));

@@ -27,9 +27,22 @@ pub struct GpuOptions {
     /// offers, so that tests reach split arrays (`Binding::split`) with
     /// small meshes.
     pub max_binding_bytes: Option<u64>,
-    /// Keep the problem's vertex and corner numbering on the device instead
-    /// of storing them colour by colour (`sweep_layout`): for comparing the two.
-    pub problem_numbering: bool,
+    /// How vertices and corners are numbered on the device.
+    pub layout: DeviceLayout,
+}
+
+/// The device numbering of vertices and corners (`sweep_layout.rs`); what
+/// the backend hands back is in the problem's numbering whichever is chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum DeviceLayout {
+    /// Each colour's vertices together in sweep order, each colour sorted by
+    /// the vertices' number of corners; corners by the same order.
+    #[default]
+    ByValence,
+    /// Each colour's vertices together in sweep order; corners by the same order.
+    ByColour,
+    /// The problem's numbering (the layout before issue #14): for comparisons.
+    Problem,
 }
 
 /// One adapter as `meshsmooth devices` lists it.
@@ -110,8 +123,8 @@ pub struct GpuContext {
     pub(crate) queue: wgpu::Queue,
     pub(crate) real: Real,
     pub(crate) limits: wgpu::Limits,
-    /// `GpuOptions::problem_numbering`.
-    pub(crate) problem_numbering: bool,
+    /// `GpuOptions::layout`.
+    pub(crate) layout: DeviceLayout,
     info: wgpu::AdapterInfo,
     /// Built on first use: a run needs the instances of one metric only, and
     /// compiling all of them costs seconds on a software adapter.
@@ -215,7 +228,7 @@ impl GpuContext {
             queue,
             real,
             limits,
-            problem_numbering: opts.problem_numbering,
+            layout: opts.layout,
             info: adapter.get_info(),
             pipelines: Mutex::new(HashMap::new()),
             errors,

@@ -20,6 +20,8 @@ pub(crate) struct SweepLayout {
     pub corner: Vec<u32>,
     /// Problem corner at each device index.
     pub corner_of: Vec<u32>,
+    /// The colour lists as device ids (offsets those of `Problem::colors`).
+    pub colours: Vec<u32>,
 }
 
 fn inverse(perm: &[u32]) -> Vec<u32> {
@@ -40,20 +42,31 @@ impl SweepLayout {
             vertex_of: v,
             corner: c.clone(),
             corner_of: c,
+            colours: p.colors.items.clone(),
         }
     }
 
     /// Colour 0's vertices in sweep order, then colour 1's, ..., then the
     /// vertices in no colour (fixed) in problem order; corners by their
-    /// smallest device vertex, ties in problem order.
-    pub fn colour_by_colour(p: &Problem) -> SweepLayout {
+    /// smallest device vertex, ties in problem order. With `by_valence`,
+    /// each colour's vertices are stably sorted by their number of corners,
+    /// so that the threads run in SIMD lanes together have loops of the
+    /// same length (the vertices of a colour move independently: the order
+    /// within a colour does not change the sweep's result).
+    pub fn colour_by_colour(p: &Problem, by_valence: bool) -> SweepLayout {
         let nv = p.num_vertices();
         let mut vertex_of = Vec::with_capacity(nv);
         let mut placed = vec![false; nv];
-        for &v in &p.colors.items {
-            if !placed[v as usize] {
-                placed[v as usize] = true;
-                vertex_of.push(v);
+        for c in 0..p.colors.len() {
+            let start = vertex_of.len();
+            for &v in p.colors.of(c) {
+                if !placed[v as usize] {
+                    placed[v as usize] = true;
+                    vertex_of.push(v);
+                }
+            }
+            if by_valence {
+                vertex_of[start..].sort_by_key(|&v| p.incidence.of(v as usize).len());
             }
         }
         vertex_of.extend((0..nv as u32).filter(|&v| !placed[v as usize]));
@@ -66,11 +79,13 @@ impl SweepLayout {
         let mut corner_of: Vec<u32> = (0..p.num_corners() as u32).collect();
         corner_of.sort_by_key(|&c| first[c as usize]);
         let corner = inverse(&corner_of);
+        let colours = (0..p.colors.items.len() as u32).collect();
         SweepLayout {
             vertex,
             vertex_of,
             corner,
             corner_of,
+            colours,
         }
     }
 
@@ -133,10 +148,23 @@ mod tests {
     fn colours_are_contiguous_and_corners_follow() {
         let mesh = generate::tet_box(4, 3, 5, [1.0; 3]);
         let p = Problem::new(&mesh).unwrap();
-        let l = SweepLayout::colour_by_colour(&p);
+        let l = SweepLayout::colour_by_colour(&p, false);
         // each colour's vertices occupy its own range, in sweep order
         let colours = l.vertex_ids(&p.colors.items);
         assert_eq!(colours, (0..colours.len() as u32).collect::<Vec<_>>());
+        assert_eq!(l.colours, colours);
+        // by valence: the same ranges, each sorted by corner count
+        let lv = SweepLayout::colour_by_colour(&p, true);
+        for c in 0..p.colors.len() {
+            let range = p.colors.offsets[c] as usize..p.colors.offsets[c + 1] as usize;
+            let mut got: Vec<u32> = lv.vertex_of[range.clone()].to_vec();
+            let valence: Vec<usize> = got.iter().map(|&v| p.incidence.of(v as usize).len()).collect();
+            assert!(valence.windows(2).all(|w| w[0] <= w[1]));
+            got.sort();
+            let mut want = p.colors.of(c).to_vec();
+            want.sort();
+            assert_eq!(got, want);
+        }
         // both are permutations
         assert_eq!(inverse(&l.vertex), l.vertex_of);
         assert_eq!(inverse(&l.corner), l.corner_of);
