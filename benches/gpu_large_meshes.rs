@@ -4,7 +4,9 @@
 //! across several (`Binding::split`). Prints a Markdown table row per run as
 //! soon as it is measured, so a run stopped by memory keeps what it had.
 //!
-//! Run: `cargo bench --bench gpu_large_meshes [-- --sizes 20,55,80,100,120] [--iters 2] [--adapter NAME]`
+//! Run: `cargo bench --bench gpu_large_meshes [-- --sizes 20,55,80,100,120] [--iters 2]
+//! [--precision f32|f64] [--method bcd|newton] [--adapter NAME]` (both precisions and
+//! methods unless named)
 //!
 //! Time per iteration = (time at the last iterate - time at the start) /
 //! iterations, from the solver's history (setup and upload excluded, shown
@@ -32,7 +34,17 @@ fn main() {
         .collect();
     let iters: usize = arg("--iters").map_or(2, |s| s.parse().expect("--iters N"));
     let adapter = arg("--adapter");
-    let gpus: Vec<GpuContext> = [Precision::F32, Precision::F64]
+    let precisions = match arg("--precision").as_deref() {
+        Some("f32") => vec![Precision::F32],
+        Some("f64") => vec![Precision::F64],
+        _ => vec![Precision::F32, Precision::F64],
+    };
+    let methods = match arg("--method").as_deref() {
+        Some("bcd") => vec![Method::BcdColored],
+        Some("newton") => vec![Method::Newton],
+        _ => vec![Method::BcdColored, Method::Newton],
+    };
+    let gpus: Vec<GpuContext> = precisions
         .into_iter()
         .filter_map(|precision| {
             GpuContext::new(&GpuOptions {
@@ -66,7 +78,7 @@ fn main() {
         drop(mesh);
         let setup = t.elapsed().as_secs_f64();
         for ctx in &gpus {
-            for method in [Method::BcdColored, Method::Newton] {
+            for &method in &methods {
                 let params = Params {
                     max_iter: iters,
                     tol: 0.0,

@@ -357,13 +357,12 @@ impl Variant {
         for line in text.lines() {
             out.push_str(line);
             out.push('\n');
-            if line.contains("var<storage") {
-                if let Some(j) = splits
+            if line.contains("var<storage")
+                && let Some(j) = splits
                     .iter()
                     .position(|b| line.contains(&format!(" {}: array<", b.name)))
-                {
-                    out.push_str(&extra_decl[j]);
-                }
+            {
+                out.push_str(&extra_decl[j]);
             }
         }
         out.push_str(&accessors);
