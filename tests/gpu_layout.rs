@@ -5,9 +5,10 @@
 //! device's corner order), all handed back in the problem's numbering.
 
 mod common;
-use common::{context_with, max_abs_diff, perturbed_box, solve_on};
+use common::{context, context_with, max_abs_diff, perturbed_box, solve_on};
 
-use meshsmooth::backend::gpu::{DeviceLayout, GpuOptions, Precision};
+use meshsmooth::backend::gpu::{DeviceLayout, GpuBackend, GpuOptions, Precision};
+use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::problem::Problem;
 use meshsmooth::solve::{Device, Method, Params};
 
@@ -66,4 +67,26 @@ fn bcd_sweeps_are_the_same_in_every_layout_f32() {
 #[test]
 fn newton_iterates_agree_in_every_layout_f64() {
     layouts_agree(Method::Newton, Precision::F64, 1e-12);
+}
+
+#[test]
+fn a_whole_sweep_is_one_submission() {
+    let Some(ctx) = context(Precision::F32) else {
+        return;
+    };
+    let mesh = perturbed_box(6, 0.3, 1);
+    let p = Problem::new(&mesh).unwrap();
+    let x0 = p.gather(&mesh.points);
+    let mut g = GpuBackend::new(&ctx, &p, &x0, &Default::default()).unwrap();
+    assert!(g.num_colors() >= 8);
+    for _ in 0..2 {
+        let before = g.submissions();
+        for c in 0..g.num_colors() {
+            g.bcd_color(c).unwrap();
+        }
+        g.max_move(Slot(0)).unwrap();
+        let moved = g.flush().unwrap()[0];
+        assert!(moved > 0.0);
+        assert_eq!(g.submissions() - before, 1, "every colour in one command buffer");
+    }
 }

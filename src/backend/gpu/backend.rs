@@ -82,6 +82,8 @@ pub struct GpuBackend<'c> {
     problem: &'c Problem,
     /// The device numbering of vertices and corners.
     layout: SweepLayout,
+    /// Command buffers submitted so far.
+    submissions: usize,
 }
 
 fn groups_of(n: usize) -> usize {
@@ -201,6 +203,7 @@ impl<'c> GpuBackend<'c> {
             n_blocks: 0,
             problem: p,
             layout,
+            submissions: 0,
         })
     }
 
@@ -309,6 +312,7 @@ impl<'c> GpuBackend<'c> {
                 self.ops.clear();
             }
             self.ctx.queue.submit([enc.finish()]);
+            self.submissions += 1;
         }
         self.ctx.check()
     }
@@ -349,6 +353,12 @@ impl<'c> GpuBackend<'c> {
             Op::n(self.n_free),
             self.n_free,
         )
+    }
+
+    /// Command buffers submitted so far (read-backs of vectors and
+    /// positions submit their own copies besides).
+    pub fn submissions(&self) -> usize {
+        self.submissions
     }
 
     /// The most buffers any one array is split across (1: none is split).
