@@ -5,8 +5,8 @@
 //! soon as it is measured, so a run stopped by memory keeps what it had.
 //!
 //! Run: `cargo bench --bench gpu_large_meshes [-- --sizes 20,55,80,100,120] [--iters 2]
-//! [--precision f32|f64] [--method bcd|newton] [--adapter NAME]` (both precisions and
-//! methods unless named)
+//! [--precision f32|f64] [--method bcd|newton] [--alpha 0.3] [--adapter NAME]` (both
+//! precisions and methods unless named; `--alpha`: the random perturbation, in edge lengths)
 //!
 //! Time per iteration = (time at the last iterate - time at the start) /
 //! iterations, from the solver's history (setup and upload excluded, shown
@@ -34,6 +34,7 @@ fn main() {
         .collect();
     let iters: usize = arg("--iters").map_or(2, |s| s.parse().expect("--iters N"));
     let adapter = arg("--adapter");
+    let alpha: f64 = arg("--alpha").map_or(0.3, |s| s.parse().expect("--alpha A"));
     let precisions = match arg("--precision").as_deref() {
         Some("f32") => vec![Precision::F32],
         Some("f64") => vec![Precision::F64],
@@ -68,7 +69,7 @@ fn main() {
         let t = Instant::now();
         let mut mesh = generate::tet_box(n, n, n, [n as f64; 3]);
         let opts = PerturbOptions {
-            perturbation: Perturbation::Random { alpha: 0.3 },
+            perturbation: Perturbation::Random { alpha },
             fraction: 1.0,
             seed: 1,
         };
