@@ -5,8 +5,10 @@
 //! soon as it is measured, so a run stopped by memory keeps what it had.
 //!
 //! Run: `cargo bench --bench gpu_large_meshes [-- --sizes 20,55,80,100,120] [--iters 2]
-//! [--precision f32|f64] [--method bcd|newton] [--alpha 0.3] [--adapter NAME]` (both
-//! precisions and methods unless named; `--alpha`: the random perturbation, in edge lengths)
+//! [--precision f32|f64] [--method bcd|newton] [--alpha 0.3] [--max-binding-mib M]
+//! [--adapter NAME]` (both precisions and methods unless named; `--alpha`: the random
+//! perturbation, in edge lengths; `--max-binding-mib`: cap a binding, to see what
+//! splitting into more parts costs)
 //!
 //! Time per iteration = (time at the last iterate - time at the start) /
 //! iterations, from the solver's history (setup and upload excluded, shown
@@ -35,6 +37,7 @@ fn main() {
     let iters: usize = arg("--iters").map_or(2, |s| s.parse().expect("--iters N"));
     let adapter = arg("--adapter");
     let alpha: f64 = arg("--alpha").map_or(0.3, |s| s.parse().expect("--alpha A"));
+    let max_binding_bytes = arg("--max-binding-mib").map(|s| s.parse::<u64>().expect("--max-binding-mib M") << 20);
     let precisions = match arg("--precision").as_deref() {
         Some("f32") => vec![Precision::F32],
         Some("f64") => vec![Precision::F64],
@@ -51,6 +54,7 @@ fn main() {
             GpuContext::new(&GpuOptions {
                 adapter: adapter.clone(),
                 precision,
+                max_binding_bytes,
                 ..Default::default()
             })
             .map_err(|e| eprintln!("no {precision:?} context: {e}"))
