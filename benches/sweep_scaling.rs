@@ -8,7 +8,11 @@
 //! - `--gpu`: leave out the CPU sequential sweep and go up to 10.4M tets
 //!   (a 120^3 box), for hardware GPUs;
 //! - `--adapter NAME`: the adapter whose name contains NAME (else the best one);
-//! - `--max-tets N`: skip meshes with more elements.
+//! - `--max-tets N`: skip meshes with more elements;
+//! - `--tet-sizes N,N,...`: these tetrahedral boxes instead (N^3 cubes, 6 N^3 tets);
+//! - `--no-hex`: leave out the hexahedral boxes;
+//! - `--layout by-valence|by-colour|problem`: the device numbering
+//!   (`GpuOptions::layout`; `problem` is the layout before issue #14's item 2).
 //!
 //! Bytes moved per sweep are a model, not a counter: per free vertex its
 //! incidence offsets (8 B) and, for each incident corner, the incidence item
@@ -23,7 +27,7 @@
 //! b_k); both are estimates, quoted to compare devices, not kernels.
 
 use meshsmooth::backend::cpu::bcd;
-use meshsmooth::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::gpu::{DeviceLayout, GpuBackend, GpuContext, GpuOptions, Precision};
 use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::metric::corner_model::Template;
@@ -77,15 +81,22 @@ fn main() {
     let max_elems: usize = arg("--max-tets")
         .map(|s| s.parse().expect("--max-tets N"))
         .unwrap_or(usize::MAX);
-    let tet_sizes: &[usize] = match (quick, gpu_only) {
-        (true, _) => &[12, 20],
-        (false, false) => &[12, 20, 32, 55],
-        (false, true) => &[20, 32, 55, 80, 100, 120],
+    let layout = arg("--layout").map_or(DeviceLayout::default(), |s| {
+        <DeviceLayout as clap::ValueEnum>::from_str(&s, true).expect("--layout by-valence|by-colour|problem")
+    });
+    let listed: Option<Vec<usize>> =
+        arg("--tet-sizes").map(|s| s.split(',').map(|n| n.parse().expect("--tet-sizes N,N")).collect());
+    let tet_sizes: &[usize] = match (&listed, quick, gpu_only) {
+        (Some(l), _, _) => l,
+        (None, true, _) => &[12, 20],
+        (None, false, false) => &[12, 20, 32, 55],
+        (None, false, true) => &[20, 32, 55, 80, 100, 120],
     };
-    let hex_sizes: &[usize] = match (quick, gpu_only) {
-        (true, _) => &[6],
-        (false, false) => &[10, 20],
-        (false, true) => &[10, 20, 40, 64],
+    let hex_sizes: &[usize] = match (std::env::args().any(|a| a == "--no-hex"), quick, gpu_only) {
+        (true, _, _) => &[],
+        (false, true, _) => &[6],
+        (false, false, false) => &[10, 20],
+        (false, false, true) => &[10, 20, 40, 64],
     };
     let mut cases: Vec<Case> = Vec::new();
     for &n in tet_sizes.iter().filter(|&&n| 6 * n * n * n <= max_elems) {
@@ -116,6 +127,8 @@ fn main() {
             let ctx = GpuContext::new(&GpuOptions {
                 adapter: adapter.clone(),
                 precision,
+                layout,
+                ..Default::default()
             })
             .map_err(|e| eprintln!("no {precision:?} context: {e}"))
             .ok()?;
@@ -123,7 +136,7 @@ fn main() {
         })
         .collect();
     if let Some((_, ctx)) = gpus.first() {
-        println!("GPU: {}", ctx.adapter_name());
+        println!("GPU: {}, device layout {layout:?}", ctx.adapter_name());
     }
     println!("CPU threads: {}\n", rayon::current_num_threads());
     let mut header = String::from("| mesh | elements | colours |");

@@ -51,8 +51,8 @@ fn main() {
 
     for precision in [Precision::F32, Precision::F64] {
         let ctx = match GpuContext::new(&GpuOptions {
-            adapter: None,
             precision,
+            ..Default::default()
         }) {
             Ok(c) => c,
             Err(e) => {

@@ -38,7 +38,7 @@ fn patch_value(v: u32, at: vec3<real>) -> Eta {
     let first = inc_offsets[v];
     let cached = inc_offsets[v + 1u] - first <= CACHE;
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
-        let packed = inc_items[it];
+        let packed = inc_items_get(it);
         let k = packed & 3u;
         let cr = corner_ref(packed >> 2u);
         var rest: mat3x3<real>;
@@ -78,7 +78,7 @@ fn main(
     var h = mat3x3<real>();
     let first = inc_offsets[v];
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
-        let packed = inc_items[it];
+        let packed = inc_items_get(it);
         let k = packed & 3u;
         let cr = corner_ref(packed >> 2u);
         let rest = s_rest(corner_points(packed >> 2u), cr.b, k);

@@ -13,12 +13,12 @@
 
 fn factor(i: u32) {
     let h = 9u * diag[i];
-    let d0 = blocks[h];
-    let l10 = blocks[h + 3u] / d0;
-    let l20 = blocks[h + 6u] / d0;
-    let d1 = blocks[h + 4u] - l10 * l10 * d0;
-    let l21 = (blocks[h + 7u] - l20 * l10 * d0) / d1;
-    let d2 = blocks[h + 8u] - l20 * l20 * d0 - l21 * l21 * d1;
+    let d0 = blocks_get(h);
+    let l10 = blocks_get(h + 3u) / d0;
+    let l20 = blocks_get(h + 6u) / d0;
+    let d1 = blocks_get(h + 4u) - l10 * l10 * d0;
+    let l21 = (blocks_get(h + 7u) - l20 * l10 * d0) / d1;
+    let d2 = blocks_get(h + 8u) - l20 * l20 * d0 - l21 * l21 * d1;
     let f = 6u * i;
     if d0 > real(0.0) && d1 > real(0.0) && d2 > real(0.0) && abs(l21) <= REAL_MAX {
         factors[f] = l10;
@@ -28,7 +28,7 @@ fn factor(i: u32) {
         factors[f + 4u] = real(1.0) / d1;
         factors[f + 5u] = real(1.0) / d2;
     } else {
-        let s = (abs(blocks[h]) + abs(blocks[h + 4u]) + abs(blocks[h + 8u])) / real(3.0);
+        let s = (abs(blocks_get(h)) + abs(blocks_get(h + 4u)) + abs(blocks_get(h + 8u))) / real(3.0);
         var inv = real(1.0);
         if s > real(0.0) {
             inv = real(1.0) / s;

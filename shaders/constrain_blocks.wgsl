@@ -28,11 +28,11 @@ fn main(
     }
     let pi = projector(free_vertices[i]);
     for (var s = row_offsets[i]; s < row_offsets[i + 1u]; s++) {
-        let pj = projector(free_vertices[cols[s]]);
+        let pj = projector(free_vertices[cols_get(s)]);
         var b = mat3x3<real>();
         for (var r = 0u; r < 3u; r++) {
             for (var q = 0u; q < 3u; q++) {
-                b[r][q] = blocks[9u * s + 3u * r + q];
+                b[r][q] = blocks_get(9u * s + 3u * r + q);
             }
         }
         var c = mul3x3(pi, mul3x3(b, pj));
@@ -49,7 +49,7 @@ fn main(
         }
         for (var r = 0u; r < 3u; r++) {
             for (var q = 0u; q < 3u; q++) {
-                blocks[9u * s + 3u * r + q] = c[r][q];
+                blocks_set(9u * s + 3u * r + q, c[r][q]);
             }
         }
     }

@@ -27,10 +27,10 @@ fn main(
     let v = free_vertices[i];
     var acc = vec3<real>(real(0.0));
     for (var it = inc_offsets[v]; it < inc_offsets[v + 1u]; it++) {
-        let packed = inc_items[it];
+        let packed = inc_items_get(it);
         let at = op.aux * (packed >> 2u) + 3u * (packed & 3u);
         for (var c = 0u; c < 3u; c++) {
-            acc[c] += elem[at + c];
+            acc[c] += elem_get(at + c);
         }
     }
     for (var c = 0u; c < 3u; c++) {

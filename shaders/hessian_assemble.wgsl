@@ -21,7 +21,7 @@ fn store_block(base: u32, k: u32, l: u32, blk: mat3x3<real>, w: real) {
     let at = base + 12u + 9u * upper_block(k, l);
     for (var i = 0u; i < 3u; i++) {
         for (var q = 0u; q < 3u; q++) {
-            elem[at + 3u * i + q] = blk[i][q] * w;
+            elem_set(at + 3u * i + q, blk[i][q] * w);
         }
     }
 }
@@ -38,9 +38,9 @@ fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) 
     for (var l = 0u; l < nv; l++) {
         rows[l] = shess_row(m.h, b[l]);
         let g = mul_vec(m.g, b[l]);
-        elem[base + 3u * l] = g[0] * w;
-        elem[base + 3u * l + 1u] = g[1] * w;
-        elem[base + 3u * l + 2u] = g[2] * w;
+        elem_set(base + 3u * l, g[0] * w);
+        elem_set(base + 3u * l + 1u, g[1] * w);
+        elem_set(base + 3u * l + 2u, g[2] * w);
     }
     for (var k = 0u; k < 4u; k++) {
         for (var l = k; l < 4u; l++) {
@@ -86,7 +86,7 @@ fn main(
     if !p.ok || !ok {
         // assembly runs at accepted (feasible) points only; zeros keep the sums finite
         for (var i = 0u; i < ELEM_STRIDE; i++) {
-            elem[base + i] = real(0.0);
+            elem_set(base + i, real(0.0));
         }
         return;
     }
@@ -105,7 +105,7 @@ fn main(
     for (var k = 0u; k < 4u; k++) {
         let g = mul_vec(p.grad_s, b[k]);
         for (var i = 0u; i < 3u; i++) {
-            elem[base + 3u * k + i] = g[i] * w;
+            elem_set(base + 3u * k + i, g[i] * w);
         }
         let sk = mul_vec(p.s, b[k]);
         cv[k] = mul_vec(p.cof, b[k]);

@@ -27,8 +27,8 @@ fn main(
     for (var i = 0u; i < 9u; i++) {
         acc[i] = real(0.0);
     }
-    for (var it = contrib_offsets[s]; it < contrib_offsets[s + 1u]; it++) {
-        let item = contrib_items[it];
+    for (var it = contrib_offsets_get(s); it < contrib_offsets_get(s + 1u); it++) {
+        let item = contrib_items_get(it);
         let e = item >> 4u;
         let a = (item >> 2u) & 3u;
         let b = item & 3u;
@@ -36,18 +36,18 @@ fn main(
         if a <= b {
             let at = base + 9u * upper_block(a, b);
             for (var i = 0u; i < 9u; i++) {
-                acc[i] += elem[at + i];
+                acc[i] += elem_get(at + i);
             }
         } else {
             let at = base + 9u * upper_block(b, a);
             for (var i = 0u; i < 3u; i++) {
                 for (var q = 0u; q < 3u; q++) {
-                    acc[3u * i + q] += elem[at + 3u * q + i];
+                    acc[3u * i + q] += elem_get(at + 3u * q + i);
                 }
             }
         }
     }
     for (var i = 0u; i < 9u; i++) {
-        blocks[9u * s + i] = acc[i];
+        blocks_set(9u * s + i, acc[i]);
     }
 }

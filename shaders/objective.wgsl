@@ -60,7 +60,7 @@ fn main(
 #endif
             }
             for (var i = 0u; i < 3u; i++) {
-                grad[12u * c + 3u * k + i] = g[i] * cr.w;
+                grad_set(12u * c + 3u * k + i, g[i] * cr.w);
             }
         }
     }

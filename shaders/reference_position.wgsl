@@ -27,7 +27,7 @@
 // S without the vertex's term of incidence item `it` (recomputed: the
 // corners a vertex has under the paper's measure outnumber any private cache).
 fn rest_of(it: u32, first: u32) -> mat3x3<real> {
-    let packed = inc_items[it];
+    let packed = inc_items_get(it);
     return s_rest(corner_points(packed >> 2u), corner_ref(packed >> 2u).b, packed & 3u);
 }
 
@@ -36,7 +36,7 @@ fn patch_value(v: u32, at: vec3<real>) -> Eta {
     var sum = real(0.0);
     let first = inc_offsets[v];
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
-        let packed = inc_items[it];
+        let packed = inc_items_get(it);
         let cr = corner_ref(packed >> 2u);
         let r = model_value_of_s(model, s_with(rest_of(it, first), cr.b[packed & 3u], at), model_rjm(model, cr.b));
         if !r.ok {
@@ -60,7 +60,7 @@ fn patch_step(v: u32, xv: vec3<real>, min_step_sq: real) -> Step {
     var h = mat3x3<real>();
     let first = inc_offsets[v];
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
-        let packed = inc_items[it];
+        let packed = inc_items_get(it);
         let k = packed & 3u;
         let cr = corner_ref(packed >> 2u);
         let r = model_vertex_gh(model, s_with(rest_of(it, first), cr.b[k], xv), cr.b[k], model_rjm(model, cr.b));
@@ -105,7 +105,7 @@ fn main(
     // `reference_position::local_size_sq`
     var h = real(0.0);
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
-        let pts = corner_points(inc_items[it] >> 2u);
+        let pts = corner_points(inc_items_get(it) >> 2u);
         for (var q = 0u; q < 4u; q++) {
             let e = vec3<real>(pts[q][0] - y[0], pts[q][1] - y[1], pts[q][2] - y[2]);
             h = max(h, e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);

@@ -266,6 +266,7 @@ fn unknown_adapter_name_is_an_error_listing_what_was_found() {
     let e = GpuContext::new(&GpuOptions {
         adapter: Some("no-such-adapter-xyz".into()),
         precision: Precision::Auto,
+        ..Default::default()
     })
     .err()
     .expect("no adapter is called that");

@@ -185,6 +185,7 @@ fn smooth<'py>(
     let gpu_options = GpuOptions {
         adapter,
         precision: self::precision(precision)?,
+        ..Default::default()
     };
     let use_gpu = match device {
         "cpu" if gpu_options.precision == Precision::F32 => {

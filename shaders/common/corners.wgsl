@@ -11,7 +11,7 @@ struct CornerRef {
 }
 
 fn corner_ref(c: u32) -> CornerRef {
-    let t = 4u * corners[CORNER_STRIDE * c + 4u];
+    let t = 4u * corners_get(CORNER_STRIDE * c + 4u);
     let r0 = shapes[t];
     return CornerRef(array<vec3<real>, 4>(r0.xyz, shapes[t + 1u].xyz, shapes[t + 2u].xyz, shapes[t + 3u].xyz), r0.w);
 }
@@ -23,9 +23,9 @@ fn corner_point(v: u32) -> vec3<real> {
 fn corner_points(c: u32) -> array<vec3<real>, 4> {
     let at = CORNER_STRIDE * c;
     return array<vec3<real>, 4>(
-        corner_point(corners[at]),
-        corner_point(corners[at + 1u]),
-        corner_point(corners[at + 2u]),
-        corner_point(corners[at + 3u]),
+        corner_point(corners_get(at)),
+        corner_point(corners_get(at + 1u)),
+        corner_point(corners_get(at + 2u)),
+        corner_point(corners_get(at + 3u)),
     );
 }

@@ -28,6 +28,7 @@ pub fn choose(device: DeviceArg, gpu: &GpuArgs, methods: &[Method]) -> Result<Ch
     let opts = GpuOptions {
         adapter: gpu.adapter.clone(),
         precision: gpu.precision,
+        ..Default::default()
     };
     match device {
         DeviceArg::Cpu => {

@@ -22,10 +22,15 @@ pub type Tet = [Vec3; 4];
 /// without an adapter, so the tests skip there — except under `CI`, where a
 /// missing adapter fails them: CI installs lavapipe and must run them.
 pub fn context(precision: Precision) -> Option<GpuContext> {
-    match GpuContext::new(&GpuOptions {
-        adapter: None,
+    context_with(GpuOptions {
         precision,
-    }) {
+        ..Default::default()
+    })
+}
+
+/// `context` with the given options.
+pub fn context_with(opts: GpuOptions) -> Option<GpuContext> {
+    match GpuContext::new(&opts) {
         Ok(ctx) => {
             eprintln!("GPU tests on {}", ctx.adapter_name());
             Some(ctx)

@@ -6,9 +6,10 @@
 //! line-search trial.
 
 use super::buffers::{BindingLimits, check_bindings};
-use super::context::GpuContext;
-use super::layout::{ELEM_STRIDE, ModelUniform, Op, corner_tables};
-use super::shader::{Form, Kernel, Variant};
+use super::context::{DeviceLayout, GpuContext};
+use super::layout::{CORNER_STRIDE, ELEM_STRIDE, ModelUniform, Op, corner_tables};
+use super::shader::{Access, Form, Kernel, Variant};
+use super::sweep_layout::SweepLayout;
 use crate::backend::cpu::hessian_assemble::HessianPattern;
 use crate::backend::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::{Error, Result};
@@ -68,7 +69,9 @@ pub struct GpuBackend<'c> {
     /// The instance of the corner kernels this problem's model compiles to.
     form: Form,
     max_backtracks: u32,
-    bufs: HashMap<Buf, wgpu::Buffer>,
+    /// Each array as its buffers: one, or the parts of an array split
+    /// across bindings (`Binding::split`).
+    bufs: HashMap<Buf, Vec<wgpu::Buffer>>,
     vectors: Vec<wgpu::Buffer>,
     staging: wgpu::Buffer,
     groups: HashMap<(Variant, Vec<Buf>), wgpu::BindGroup>,
@@ -77,6 +80,10 @@ pub struct GpuBackend<'c> {
     ops: Vec<u8>,
     n_blocks: usize,
     problem: &'c Problem,
+    /// The device numbering of vertices and corners.
+    layout: SweepLayout,
+    /// Command buffers submitted so far.
+    submissions: usize,
 }
 
 fn groups_of(n: usize) -> usize {
@@ -95,7 +102,12 @@ impl<'c> GpuBackend<'c> {
             )));
         }
         let r = ctx.real_size();
-        let (slide_real, slide_idx) = slide_tables(p);
+        let layout = match ctx.layout {
+            DeviceLayout::Problem => SweepLayout::identity(p),
+            DeviceLayout::ByColour => SweepLayout::colour_by_colour(p, false),
+            DeviceLayout::ByValence => SweepLayout::colour_by_colour(p, true),
+        };
+        let (slide_real, slide_idx) = slide_tables(p, &layout);
         check_bindings(
             &BindingLimits::of(&ctx.limits),
             &[
@@ -105,23 +117,32 @@ impl<'c> GpuBackend<'c> {
                 ),
                 ("sliding-boundary candidates", 4 * slide_idx.len() as u64),
                 ("positions", 3 * nv as u64 * r),
-                ("corners", 20 * nc as u64),
-                ("incidence", 4 * p.incidence.items.len() as u64),
-                ("corner gradients", 12 * nc as u64 * r),
+                ("incidence offsets", 4 * (nv as u64 + 1)),
             ],
         )?;
         super::buffers::grid(nc)?;
         let model = ModelUniform::of(p);
-        let (corner_items, table) = corner_tables(p);
-        let flat: Vec<f64> = x.iter().flatten().copied().collect();
+        let (problem_corners, table) = corner_tables(p);
+        let stride = CORNER_STRIDE as usize;
+        let corner_items: Vec<u32> = layout
+            .corner_of
+            .iter()
+            .flat_map(|&c| {
+                let rec = &problem_corners[stride * c as usize..stride * (c as usize + 1)];
+                rec[..4].iter().map(|&v| layout.vertex[v as usize]).chain([rec[4]])
+            })
+            .collect();
+        drop(problem_corners);
+        let incidence = layout.incidence(&p.incidence);
+        let flat: Vec<f64> = layout.to_device(x.as_flattened(), 3);
         let partials = groups_of(nc.max(nv).max(nf));
-        let mut bufs = HashMap::new();
-        bufs.insert(Buf::Model, ctx.uniform_bytes("model", model.bytes(ctx.real)));
-        bufs.insert(
+        let mut single = HashMap::new();
+        single.insert(Buf::Model, ctx.uniform_bytes("model", model.bytes(ctx.real)));
+        single.insert(
             Buf::LineSearch,
             ctx.uniform_real("line search", &[ls.beta, ls.sigma, 0.0, 0.0]),
         );
-        bufs.insert(
+        single.insert(
             Buf::Ops,
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("operations"),
@@ -130,27 +151,31 @@ impl<'c> GpuBackend<'c> {
                 mapped_at_creation: false,
             }),
         );
-        bufs.insert(Buf::X, ctx.storage_real("positions", &flat));
-        bufs.insert(Buf::Trial, ctx.storage_real("trial positions", &flat));
-        bufs.insert(Buf::Corners, ctx.storage_u32("corners", &corner_items));
-        bufs.insert(Buf::Shapes, ctx.storage_real("corner shapes", &table));
-        bufs.insert(
+        single.insert(Buf::X, ctx.storage_real("positions", &flat));
+        single.insert(Buf::Trial, ctx.storage_real("trial positions", &flat));
+        single.insert(Buf::Shapes, ctx.storage_real("corner shapes", &table));
+        single.insert(
             Buf::IncOffsets,
-            ctx.storage_u32("incidence offsets", &p.incidence.offsets),
+            ctx.storage_u32("incidence offsets", &incidence.offsets),
         );
-        bufs.insert(Buf::Inc, ctx.storage_u32("incidence", &p.incidence.items));
-        bufs.insert(Buf::Free, ctx.storage_u32("free vertices", &p.free_vertices));
-        bufs.insert(Buf::Colors, ctx.storage_u32("colours", &p.colors.items));
-        bufs.insert(Buf::Moves, ctx.zeros_real("moves", 3 * nv));
-        bufs.insert(Buf::CornerGrad, ctx.zeros_real("corner gradients", 12 * nc));
-        bufs.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
-        bufs.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
-        bufs.insert(Buf::Dummy, ctx.zeros_real("unused", 4));
-        bufs.insert(
+        single.insert(
+            Buf::Free,
+            ctx.storage_u32("free vertices", &layout.vertex_ids(&p.free_vertices)),
+        );
+        single.insert(Buf::Colors, ctx.storage_u32("colours", &layout.colours));
+        single.insert(Buf::Moves, ctx.zeros_real("moves", 3 * nv));
+        single.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
+        single.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
+        single.insert(Buf::Dummy, ctx.zeros_real("unused", 4));
+        single.insert(
             Buf::SlideReal,
             ctx.storage_real("sliding projectors and primitives", &slide_real),
         );
-        bufs.insert(Buf::SlideIdx, ctx.storage_u32("sliding candidates", &slide_idx));
+        single.insert(Buf::SlideIdx, ctx.storage_u32("sliding candidates", &slide_idx));
+        let mut bufs: HashMap<Buf, Vec<wgpu::Buffer>> = single.into_iter().map(|(k, b)| (k, vec![b])).collect();
+        bufs.insert(Buf::Corners, ctx.split_u32("corners", &corner_items));
+        bufs.insert(Buf::Inc, ctx.split_u32("incidence", &incidence.items));
+        bufs.insert(Buf::CornerGrad, ctx.split_zeros_real("corner gradients", 12 * nc));
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scalar slots read back"),
             size: N_SLOTS as u64 * r,
@@ -177,19 +202,54 @@ impl<'c> GpuBackend<'c> {
             ops: Vec::new(),
             n_blocks: 0,
             problem: p,
+            layout,
+            submissions: 0,
         })
     }
 
-    fn buf(&self, b: Buf) -> &wgpu::Buffer {
+    /// The buffers of array `b` (one unless it is split).
+    fn buf(&self, b: Buf) -> &[wgpu::Buffer] {
         match b {
-            Buf::Vector(i) => &self.vectors[i as usize],
+            Buf::Vector(i) => std::slice::from_ref(&self.vectors[i as usize]),
             other => &self.bufs[&other],
         }
+    }
+
+    /// `v` with its split bindings spanning the parts of the arrays in
+    /// `bufs`; an error with the numbers where the kernel would need more
+    /// storage bindings than the device has.
+    fn split_variant(&self, mut v: Variant, bufs: &[Buf]) -> Result<Variant> {
+        let def = v.kernel.def();
+        let (mut j, mut storage) = (0, 0);
+        for (b, binding) in bufs.iter().zip(def.bindings) {
+            let n = self.buf(*b).len();
+            if binding.split {
+                v.extra[j] = u8::try_from(n - 1).unwrap_or(u8::MAX);
+                j += 1;
+            } else {
+                debug_assert_eq!(n, 1, "{}: '{}' is not split", def.stem, binding.name);
+            }
+            if matches!(binding.access, Access::Read | Access::ReadWrite) {
+                storage += n;
+            }
+        }
+        let max = self.ctx.limits.max_storage_buffers_per_shader_stage as usize;
+        if storage > max || v.extra.contains(&u8::MAX) {
+            return Err(Error::Gpu(format!(
+                "mesh too large for this device: the kernel '{}' would bind {storage} storage \
+                 buffers (its large arrays split into parts of {:.1} MiB, the largest one \
+                 binding holds) but the device allows {max} per shader stage",
+                def.stem,
+                self.ctx.part_bytes() as f64 / 1048576.0
+            )));
+        }
+        Ok(v)
     }
 
     /// Records one dispatch of `v` over `threads` with `bufs` bound in table
     /// order and `op` as its `Op` record.
     fn record(&mut self, v: Variant, bufs: &[Buf], op: Op, threads: usize) -> Result<()> {
+        let v = self.split_variant(v, bufs)?;
         let stride = self.ctx.op_stride() as usize;
         if self.ops.len() / stride >= OPS_PER_BATCH {
             self.submit()?;
@@ -199,7 +259,7 @@ impl<'c> GpuBackend<'c> {
         self.ops.resize(offset + stride, 0);
         let key = (v, bufs.to_vec());
         if !self.groups.contains_key(&key) {
-            let buffers: Vec<&wgpu::Buffer> = bufs.iter().map(|b| self.buf(*b)).collect();
+            let buffers: Vec<&[wgpu::Buffer]> = bufs.iter().map(|b| self.buf(*b)).collect();
             let group = self.ctx.bind(v, &buffers);
             self.groups.insert(key.clone(), group);
         }
@@ -216,9 +276,10 @@ impl<'c> GpuBackend<'c> {
             .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()))
     }
 
+    /// Copies between arrays of one buffer each (positions).
     fn copy(&mut self, src: Buf, dst: Buf) {
-        let size = self.buf(src).size().min(self.buf(dst).size());
-        let (src, dst) = (self.bufs[&src].clone(), self.bufs[&dst].clone());
+        let size = self.buf(src)[0].size().min(self.buf(dst)[0].size());
+        let (src, dst) = (self.bufs[&src][0].clone(), self.bufs[&dst][0].clone());
         self.encoder().copy_buffer_to_buffer(&src, 0, &dst, 0, size);
     }
 
@@ -226,10 +287,11 @@ impl<'c> GpuBackend<'c> {
     fn submit(&mut self) -> Result<()> {
         if let Some(enc) = self.encoder.take() {
             if !self.ops.is_empty() {
-                self.ctx.queue.write_buffer(&self.bufs[&Buf::Ops], 0, &self.ops);
+                self.ctx.queue.write_buffer(&self.bufs[&Buf::Ops][0], 0, &self.ops);
                 self.ops.clear();
             }
             self.ctx.queue.submit([enc.finish()]);
+            self.submissions += 1;
         }
         self.ctx.check()
     }
@@ -255,7 +317,7 @@ impl<'c> GpuBackend<'c> {
 
     fn read_vec3(&mut self, b: Buf, n: usize) -> Result<Vec<Vec3>> {
         self.submit()?;
-        let flat = self.ctx.read_real(self.buf(b), 3 * n)?;
+        let flat = self.ctx.read_real(&self.buf(b)[0], 3 * n)?;
         Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
@@ -272,10 +334,21 @@ impl<'c> GpuBackend<'c> {
         )
     }
 
+    /// Command buffers submitted so far (read-backs of vectors and
+    /// positions submit their own copies besides).
+    pub fn submissions(&self) -> usize {
+        self.submissions
+    }
+
+    /// The most buffers any one array is split across (1: none is split).
+    pub fn max_parts(&self) -> usize {
+        self.bufs.values().map(Vec::len).max().unwrap_or(1)
+    }
+
     /// The block-Jacobi factors (after `factor_precond`), as `BlockJacobi::factors`.
     pub fn block_jacobi_factors(&mut self) -> Result<Vec<[f64; 6]>> {
         self.submit()?;
-        let flat = self.ctx.read_real(self.buf(Buf::Factors), 6 * self.n_free)?;
+        let flat = self.ctx.read_real(&self.buf(Buf::Factors)[0], 6 * self.n_free)?;
         Ok(flat
             .chunks_exact(6)
             .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
@@ -285,7 +358,7 @@ impl<'c> GpuBackend<'c> {
     /// The assembled Hessian blocks, in the order of `HessianPattern::matrix.blocks`.
     pub fn hessian_blocks(&mut self) -> Result<Vec<crate::metric::mat3::Mat3>> {
         self.submit()?;
-        let flat = self.ctx.read_real(self.buf(Buf::Blocks), 9 * self.n_blocks)?;
+        let flat = self.ctx.read_split_real(self.buf(Buf::Blocks), 9 * self.n_blocks)?;
         Ok(flat
             .chunks_exact(9)
             .map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]])
@@ -296,7 +369,7 @@ impl<'c> GpuBackend<'c> {
 /// `boundary.wgsl`'s tables: projectors then primitives (reals), and the
 /// vertex count, candidate offsets and candidates (u32s). Without sliding,
 /// all offsets are zero: no vertex slides.
-fn slide_tables(p: &Problem) -> (Vec<f64>, Vec<u32>) {
+fn slide_tables(p: &Problem, layout: &SweepLayout) -> (Vec<f64>, Vec<u32>) {
     let nv = p.num_vertices();
     match &p.sliding {
         None => (
@@ -304,27 +377,26 @@ fn slide_tables(p: &Problem) -> (Vec<f64>, Vec<u32>) {
             [nv as u32].into_iter().chain(std::iter::repeat_n(0, nv + 1)).collect(),
         ),
         Some(s) => {
-            let real = s
-                .projector
-                .iter()
-                .flatten()
-                .flatten()
-                .chain(s.primitives.iter().flatten().flatten())
-                .copied()
+            let projector: Vec<f64> = s.projector.iter().flatten().flatten().copied().collect();
+            let real = layout
+                .to_device(&projector, 9)
+                .into_iter()
+                .chain(s.primitives.iter().flatten().flatten().copied())
                 .collect();
+            let candidates = layout.lists(&s.candidates);
             let idx = [nv as u32]
                 .into_iter()
-                .chain(s.candidates.offsets.iter().copied())
-                .chain(s.candidates.items.iter().copied())
+                .chain(candidates.offsets)
+                .chain(candidates.items)
                 .collect();
             (real, idx)
         }
     }
 }
 
-/// Per block slot, its element contributions `corner * 16 + 4 a + b` in
-/// ascending corner order (the CPU assembly's sum order).
-fn contributions(pattern: &HessianPattern) -> (Vec<u32>, Vec<u32>) {
+/// Per block slot, its element contributions `corner * 16 + 4 a + b` (the
+/// device corner) in ascending problem corner order (the CPU assembly's sum order).
+fn contributions(pattern: &HessianPattern, layout: &SweepLayout) -> (Vec<u32>, Vec<u32>) {
     let nb = pattern.matrix.blocks.len();
     let mut offsets = vec![0u32; nb + 1];
     for s in pattern.slots.iter().flatten() {
@@ -340,7 +412,7 @@ fn contributions(pattern: &HessianPattern) -> (Vec<u32>, Vec<u32>) {
     for (e, slots) in pattern.slots.iter().enumerate() {
         for (ab, &s) in slots.iter().enumerate() {
             if s != u32::MAX {
-                items[fill[s as usize] as usize] = 16 * e as u32 + ab as u32;
+                items[fill[s as usize] as usize] = 16 * layout.corner[e] + ab as u32;
                 fill[s as usize] += 1;
             }
         }
@@ -394,7 +466,8 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn download(&mut self) -> Result<Vec<Vec3>> {
-        self.read_vec3(Buf::X, self.n_vertices)
+        let x = self.read_vec3(Buf::X, self.n_vertices)?;
+        Ok(self.layout.to_problem(&x))
     }
 
     fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
@@ -509,7 +582,7 @@ impl Backend for GpuBackend<'_> {
         )?;
         self.reduce(None, None, Some(out), None, groups_of(nv))?;
         // "since the last call": the next colours start from no move
-        let moves = self.bufs[&Buf::Moves].clone();
+        let moves = self.bufs[&Buf::Moves][0].clone();
         self.encoder().clear_buffer(&moves, 0, None);
         Ok(())
     }
@@ -517,7 +590,7 @@ impl Backend for GpuBackend<'_> {
     fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
         if !self.bufs.contains_key(&Buf::Reference) {
             let buf = self.ctx.zeros_real("reference positions", 3 * self.n_vertices);
-            self.bufs.insert(Buf::Reference, buf);
+            self.bufs.insert(Buf::Reference, vec![buf]);
         }
         // fixed vertices are their own reference
         self.copy(Buf::X, Buf::Reference);
@@ -547,42 +620,43 @@ impl Backend for GpuBackend<'_> {
                 self.n_free,
             )?;
         }
-        self.read_vec3(Buf::Reference, self.n_vertices)
+        let xr = self.read_vec3(Buf::Reference, self.n_vertices)?;
+        Ok(self.layout.to_problem(&xr))
     }
 
     fn prepare_hessian(&mut self) -> Result<usize> {
         let ctx = self.ctx;
         let pattern = HessianPattern::new(self.problem);
         let nb = pattern.matrix.blocks.len();
-        let (c_off, c_items) = contributions(&pattern);
+        let (c_off, c_items) = contributions(&pattern, &self.layout);
         let r = ctx.real_size();
         check_bindings(
             &BindingLimits::of(&ctx.limits),
             &[
-                (
-                    "corner gradients and Hessian blocks",
-                    ELEM_STRIDE as u64 * self.n_corners as u64 * r,
-                ),
-                ("Hessian blocks", 9 * nb as u64 * r),
-                ("Hessian contributions", 4 * c_items.len() as u64),
+                ("Hessian row offsets", 4 * (self.n_free as u64 + 1)),
+                ("diagonal blocks", 4 * self.n_free as u64),
+                ("block-Jacobi factors", 6 * self.n_free as u64 * r),
             ],
         )?;
         super::buffers::grid(nb)?;
         let m = &pattern.matrix;
         let new = [
-            (Buf::RowOffsets, ctx.storage_u32("row offsets", &m.row_offsets)),
-            (Buf::Cols, ctx.storage_u32("block columns", &m.cols)),
-            (Buf::Diag, ctx.storage_u32("diagonal blocks", &m.diag)),
-            (Buf::ContribOffsets, ctx.storage_u32("contribution offsets", &c_off)),
-            (Buf::ContribItems, ctx.storage_u32("contributions", &c_items)),
+            (Buf::RowOffsets, vec![ctx.storage_u32("row offsets", &m.row_offsets)]),
+            (Buf::Cols, ctx.split_u32("block columns", &m.cols)),
+            (Buf::Diag, vec![ctx.storage_u32("diagonal blocks", &m.diag)]),
+            (Buf::ContribOffsets, ctx.split_u32("contribution offsets", &c_off)),
+            (Buf::ContribItems, ctx.split_u32("contributions", &c_items)),
             (
                 Buf::Elem,
-                ctx.zeros_real("corner blocks", ELEM_STRIDE as usize * self.n_corners),
+                ctx.split_zeros_real("corner blocks", ELEM_STRIDE as usize * self.n_corners),
             ),
-            (Buf::Blocks, ctx.zeros_real("Hessian blocks", 9 * nb)),
-            (Buf::Factors, ctx.zeros_real("block-Jacobi factors", 6 * self.n_free)),
+            (Buf::Blocks, ctx.split_zeros_real("Hessian blocks", 9 * nb)),
+            (
+                Buf::Factors,
+                vec![ctx.zeros_real("block-Jacobi factors", 6 * self.n_free)],
+            ),
         ];
-        let bytes = new.iter().map(|(_, b)| b.size() as usize).sum();
+        let bytes = new.iter().flat_map(|(_, b)| b).map(|b| b.size() as usize).sum();
         self.bufs.extend(new);
         self.n_blocks = nb;
         ctx.check()?;
@@ -719,7 +793,7 @@ impl Backend for GpuBackend<'_> {
     fn flush(&mut self) -> Result<[f64; N_SLOTS]> {
         let ctx = self.ctx;
         let size = N_SLOTS as u64 * ctx.real_size();
-        let (scalars, staging) = (self.bufs[&Buf::Scalars].clone(), self.staging.clone());
+        let (scalars, staging) = (self.bufs[&Buf::Scalars][0].clone(), self.staging.clone());
         self.encoder().copy_buffer_to_buffer(&scalars, 0, &staging, 0, size);
         self.submit()?;
         let v = ctx.map_read(&self.staging, N_SLOTS)?;
@@ -733,6 +807,7 @@ impl Backend for GpuBackend<'_> {
             + self
                 .bufs
                 .values()
+                .flatten()
                 .chain(&self.vectors)
                 .chain([&self.staging])
                 .map(|b| b.size() as usize)

@@ -26,7 +26,9 @@ impl BindingLimits {
 }
 
 /// Refuses arrays (name, bytes) that one storage binding cannot hold, so a
-/// large mesh gets an error with the numbers instead of a wgpu panic.
+/// large mesh gets an error with the numbers instead of a wgpu panic. Only
+/// for arrays that scale with vertices; those that scale with corners and
+/// Hessian blocks are split across bindings (`GpuContext::split_real`).
 pub fn check_bindings(limits: &BindingLimits, arrays: &[(&str, u64)]) -> Result<()> {
     let cap = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
     for &(name, bytes) in arrays {
@@ -98,6 +100,53 @@ impl GpuContext {
 
     pub(crate) fn uniform<T: bytemuck::Pod>(&self, label: &str, v: &T) -> wgpu::Buffer {
         self.init(label, bytemuck::bytes_of(v).to_vec(), wgpu::BufferUsages::UNIFORM)
+    }
+
+    /// `bytes` in buffers of `part_bytes` each (the last shorter): the
+    /// parts of an array split across bindings.
+    fn init_split(&self, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> Vec<wgpu::Buffer> {
+        if bytes.is_empty() {
+            return vec![self.init(label, Vec::new(), usage)];
+        }
+        bytes
+            .chunks(self.part_bytes() as usize)
+            .map(|c| self.init(label, c.to_vec(), usage))
+            .collect()
+    }
+
+    /// A storage array of u32s split across bindings.
+    pub(crate) fn split_u32(&self, label: &str, v: &[u32]) -> Vec<wgpu::Buffer> {
+        self.init_split(label, bytemuck::cast_slice(v), wgpu::BufferUsages::STORAGE)
+    }
+
+    /// A zeroed array of `n` reals split across bindings; wgpu zeroes new
+    /// buffers, so nothing of that size is built on the host.
+    pub(crate) fn split_zeros_real(&self, label: &str, n: usize) -> Vec<wgpu::Buffer> {
+        let total = (n as u64 * self.real_size()).max(16);
+        let part = self.part_bytes();
+        (0..total.div_ceil(part))
+            .map(|k| {
+                self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: part.min(total - k * part),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            })
+            .collect()
+    }
+
+    /// The first `n` reals of an array split across bindings.
+    pub(crate) fn read_split_real(&self, parts: &[wgpu::Buffer], n: usize) -> Result<Vec<f64>> {
+        let per = (self.part_bytes() / self.real_size()) as usize;
+        let mut out = Vec::with_capacity(n);
+        for (k, part) in parts.iter().enumerate() {
+            let want = n.saturating_sub(k * per).min(per);
+            if want > 0 {
+                out.extend(self.read_real(part, want)?);
+            }
+        }
+        Ok(out)
     }
 
     /// Overwrites the start of `dst` with `v` (applied before the next submission).

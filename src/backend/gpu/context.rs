@@ -2,7 +2,7 @@
 //! device, queue and compiled pipelines.
 
 use super::layout::Op;
-use super::shader::{Access, Real, Variant};
+use super::shader::{Access, Binding, Real, Variant};
 use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -23,6 +23,26 @@ pub struct GpuOptions {
     /// variable `MESHSMOOTH_ADAPTER` is used when this is `None`.
     pub adapter: Option<String>,
     pub precision: Precision,
+    /// Caps the bytes one storage binding may hold below what the adapter
+    /// offers, so that tests reach split arrays (`Binding::split`) with
+    /// small meshes.
+    pub max_binding_bytes: Option<u64>,
+    /// How vertices and corners are numbered on the device.
+    pub layout: DeviceLayout,
+}
+
+/// The device numbering of vertices and corners (`sweep_layout.rs`); what
+/// the backend hands back is in the problem's numbering whichever is chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum DeviceLayout {
+    /// Each colour's vertices together in sweep order, each colour sorted by
+    /// the vertices' number of corners; corners by the same order.
+    #[default]
+    ByValence,
+    /// Each colour's vertices together in sweep order; corners by the same order.
+    ByColour,
+    /// The problem's numbering (the layout before issue #14): for comparisons.
+    Problem,
 }
 
 /// One adapter as `meshsmooth devices` lists it.
@@ -103,6 +123,8 @@ pub struct GpuContext {
     pub(crate) queue: wgpu::Queue,
     pub(crate) real: Real,
     pub(crate) limits: wgpu::Limits,
+    /// `GpuOptions::layout`.
+    pub(crate) layout: DeviceLayout,
     info: wgpu::AdapterInfo,
     /// Built on first use: a run needs the instances of one metric only, and
     /// compiling all of them costs seconds on a software adapter.
@@ -174,6 +196,8 @@ impl GpuContext {
             Precision::Auto if f64_ok => Real::F64,
             Precision::Auto => Real::F32,
         };
+        // all the adapter offers (binding and buffer sizes, storage buffers
+        // per stage), not WebGPU's defaults: large meshes need them
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("meshsmooth"),
@@ -195,11 +219,16 @@ impl GpuContext {
         device.set_device_lost_callback(move |reason, msg| {
             sink.lock().unwrap().push(format!("device lost ({reason:?}): {msg}"));
         });
+        let mut limits = limits;
+        if let Some(cap) = opts.max_binding_bytes {
+            limits.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size.min(cap.max(256));
+        }
         let ctx = GpuContext {
             device,
             queue,
             real,
             limits,
+            layout: opts.layout,
             info: adapter.get_info(),
             pipelines: Mutex::new(HashMap::new()),
             errors,
@@ -226,17 +255,32 @@ impl GpuContext {
         self.real == Real::F64
     }
 
+    /// log2 of the bytes in each buffer of a split array: the largest power
+    /// of two one binding (and one buffer) holds, so that a kernel finds an
+    /// element's buffer with a shift.
+    pub(crate) fn part_log2(&self) -> u32 {
+        let cap = self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
+            .min(1 << 31);
+        63 - cap.leading_zeros()
+    }
+
+    /// Bytes in each buffer of a split array.
+    pub(crate) fn part_bytes(&self) -> u64 {
+        1 << self.part_log2()
+    }
+
     /// The bind-group layout and pipeline of a kernel instance, both from
-    /// the kernel table (`shader::KERNELS`).
+    /// the kernel table (`shader::KERNELS`); the extra buffers of split
+    /// bindings follow the table's bindings (`Variant::compose_split`).
     fn build_pipeline(&self, v: Variant) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
         let label = v.label();
-        let entries: Vec<wgpu::BindGroupLayoutEntry> = v
-            .kernel
-            .def()
-            .bindings
-            .iter()
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = binding_order(v)
+            .into_iter()
             .enumerate()
-            .map(|(i, b)| wgpu::BindGroupLayoutEntry {
+            .map(|(i, (b, _))| wgpu::BindGroupLayoutEntry {
                 binding: i as u32,
                 visibility: wgpu::ShaderStages::COMPUTE,
                 ty: wgpu::BindingType::Buffer {
@@ -262,7 +306,7 @@ impl GpuContext {
         });
         let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(&label),
-            source: wgpu::ShaderSource::Wgsl(v.compose(self.real).into()),
+            source: wgpu::ShaderSource::Wgsl(v.compose_split(self.real, self.part_log2()).into()),
         });
         let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(&label),
@@ -290,9 +334,15 @@ impl GpuContext {
         (Op::size(self.real) as u64).div_ceil(align) * align
     }
 
-    /// A bind group for `v` with `buffers` at bindings 0, 1, ... in the
-    /// order of the kernel table; the `Op` binding sees one record.
-    pub(crate) fn bind(&self, v: Variant, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    /// `bind` with one buffer per binding.
+    pub(crate) fn bind_each(&self, v: Variant, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let parts: Vec<&[wgpu::Buffer]> = buffers.iter().map(|b| std::slice::from_ref(*b)).collect();
+        self.bind(v, &parts)
+    }
+
+    /// A bind group for `v` with `buffers[i]` (the parts of the i-th array)
+    /// for the i-th binding of the kernel table; the `Op` binding sees one record.
+    pub(crate) fn bind(&self, v: Variant, buffers: &[&[wgpu::Buffer]]) -> wgpu::BindGroup {
         let bindings = v.kernel.def().bindings;
         assert_eq!(
             buffers.len(),
@@ -300,20 +350,19 @@ impl GpuContext {
             "{}: buffers for every binding",
             v.label()
         );
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .zip(bindings)
+        let entries: Vec<wgpu::BindGroupEntry> = binding_order(v)
+            .into_iter()
             .enumerate()
-            .map(|(i, (buf, b))| wgpu::BindGroupEntry {
+            .map(|(i, (b, (index, part)))| wgpu::BindGroupEntry {
                 binding: i as u32,
                 resource: if b.access == Access::Op {
                     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: buf,
+                        buffer: &buffers[index][0],
                         offset: 0,
                         size: std::num::NonZeroU64::new(Op::size(self.real) as u64),
                     })
                 } else {
-                    buf.as_entire_binding()
+                    buffers[index][part].as_entire_binding()
                 },
             })
             .collect();
@@ -360,4 +409,18 @@ impl GpuContext {
             .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
         self.check()
     }
+}
+
+/// The bindings of `v` in binding-number order, each with (its index in the
+/// kernel table, which part of that array): the table's bindings, then the
+/// extra parts of its split bindings.
+fn binding_order(v: Variant) -> Vec<(Binding, (usize, usize))> {
+    let table = v.kernel.def().bindings;
+    let mut out: Vec<_> = table.iter().enumerate().map(|(i, b)| (*b, (i, 0))).collect();
+    for (j, (i, b)) in table.iter().enumerate().filter(|(_, b)| b.split).enumerate() {
+        for part in 1..=v.extra[j] as usize {
+            out.push((*b, (i, part)));
+        }
+    }
+    out
 }

@@ -43,7 +43,7 @@ pub fn mean_ratio_eval(ctx: &GpuContext, shape: &TetShape, tets: &[[u32; 4]], x:
     let grad = ctx.zeros_real("grad", 12 * n);
     let hess = ctx.zeros_real("hess", 144 * n);
     let k = Kernel::MeanRatioEval.plain();
-    let group = ctx.bind(k, &[&shape_buf, &sizes, &xb, &tb, &value, &grad, &hess]);
+    let group = ctx.bind_each(k, &[&shape_buf, &sizes, &xb, &tb, &value, &grad, &hess]);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
@@ -72,7 +72,7 @@ pub fn cbrt_eval(ctx: &GpuContext, values: &[f64]) -> Result<Vec<f64>> {
     );
     let buf = ctx.storage_real("values", values);
     let k = Kernel::CbrtEval.plain();
-    let group = ctx.bind(k, &[&sizes, &buf]);
+    let group = ctx.bind_each(k, &[&sizes, &buf]);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());

@@ -9,8 +9,9 @@ pub mod context;
 pub(crate) mod layout;
 pub mod mean_ratio_eval;
 pub mod shader;
+pub(crate) mod sweep_layout;
 
 pub use backend::GpuBackend;
 pub use buffers::{BindingLimits, check_bindings};
-pub use context::{AdapterSummary, GpuContext, GpuOptions, Precision, list_adapters};
+pub use context::{AdapterSummary, DeviceLayout, GpuContext, GpuOptions, Precision, list_adapters};
 pub use mean_ratio_eval::{ElementEval, cbrt_eval, mean_ratio_eval};

@@ -89,10 +89,29 @@ pub struct Binding {
     pub name: &'static str,
     pub access: Access,
     pub elem: Elem,
+    /// May be spread over several buffers (`Variant::parts`): the kernel
+    /// reaches it only through `NAME_get(i)` / `NAME_set(i, v)`, which
+    /// `compose` generates.
+    pub split: bool,
 }
 
 const fn b(name: &'static str, access: Access, elem: Elem) -> Binding {
-    Binding { name, access, elem }
+    Binding {
+        name,
+        access,
+        elem,
+        split: false,
+    }
+}
+
+/// A binding that grows with the mesh and may need several buffers.
+const fn s(name: &'static str, access: Access, elem: Elem) -> Binding {
+    Binding {
+        name,
+        access,
+        elem,
+        split: true,
+    }
 }
 
 use Access::{Op as OpU, Read as R, ReadWrite as RW, Uniform as U};
@@ -141,34 +160,34 @@ kernels! {
     ];
     CbrtEval = "cbrt_eval", variants: false, [b("sizes", U, St("Sizes")), b("values", RW, Re)];
     Objective = "objective", variants: true, [
-        MODEL, OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4), b("grad", RW, Re),
+        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("grad", RW, Re),
         b("partials", RW, V4),
     ];
     Reduce = "reduce", variants: false, [OP, b("partials", R, V4), SCALARS_RW];
     GradientGather = "gradient_gather", variants: false, [
-        OP, b("free_vertices", R, Ui), b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("elem", R, Re),
+        OP, b("free_vertices", R, Ui), b("inc_offsets", R, Ui), s("inc_items", R, Ui), s("elem", R, Re),
         b("grad", RW, Re),
     ];
     Bcd = "bcd", variants: true, [
-        MODEL, b("ls", U, V4), OP, b("x", RW, Re), b("corners", R, Ui), b("shapes", R, V4),
-        b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
+        MODEL, b("ls", U, V4), OP, b("x", RW, Re), s("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
         SLIDE_REAL, SLIDE_IDX,
     ];
     ReferencePosition = "reference_position", variants: true, [
-        MODEL, b("ls", U, V4), OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4),
-        b("inc_offsets", R, Ui), b("inc_items", R, Ui), b("free_vertices", R, Ui), b("xr", RW, Re),
+        MODEL, b("ls", U, V4), OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("free_vertices", R, Ui), b("xr", RW, Re),
     ];
     HessianAssemble = "hessian_assemble", variants: true, [
-        MODEL, OP, b("x", R, Re), b("corners", R, Ui), b("shapes", R, V4), b("elem", RW, Re),
+        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("elem", RW, Re),
     ];
     HessianGather = "hessian_gather", variants: false, [
-        OP, b("contrib_offsets", R, Ui), b("contrib_items", R, Ui), b("elem", R, Re), b("blocks", RW, Re),
+        OP, s("contrib_offsets", R, Ui), s("contrib_items", R, Ui), s("elem", R, Re), s("blocks", RW, Re),
     ];
     BsrSpmv = "bsr_spmv", variants: false, [
-        OP, b("row_offsets", R, Ui), b("cols", R, Ui), b("blocks", R, Re), b("x", R, Re), b("y", RW, Re),
+        OP, b("row_offsets", R, Ui), s("cols", R, Ui), s("blocks", R, Re), b("x", R, Re), b("y", RW, Re),
     ];
     BlockJacobiFactor = "block_jacobi_factor", variants: false, [
-        OP, b("blocks", R, Re), b("diag", R, Ui), b("factors", RW, Re),
+        OP, s("blocks", R, Re), b("diag", R, Ui), b("factors", RW, Re),
     ];
     BlockJacobi = "block_jacobi", variants: false, [OP, b("factors", R, Re), b("x", R, Re), b("y", RW, Re)];
     Axpby = "axpby", variants: false, [OP, SCALARS_R, b("x", R, Re), b("y", RW, Re)];
@@ -182,8 +201,8 @@ kernels! {
     ];
     Constrain = "constrain", variants: false, [OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("y", RW, Re)];
     ConstrainBlocks = "constrain_blocks", variants: false, [
-        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("row_offsets", R, Ui), b("cols", R, Ui),
-        b("diag", R, Ui), b("blocks", RW, Re),
+        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("row_offsets", R, Ui), s("cols", R, Ui),
+        b("diag", R, Ui), s("blocks", RW, Re),
     ];
 }
 
@@ -233,12 +252,18 @@ impl Form {
     }
 }
 
+/// Split bindings one kernel may have (`Binding::split`).
+pub const MAX_SPLIT: usize = 4;
+
 /// A kernel as compiled: kernels without variants have the one `Form::Fast`
-/// instance.
+/// instance; `extra[j]` is how many buffers beyond the first the kernel's
+/// j-th split binding spans (0 for a mesh whose arrays fit one binding each,
+/// which compiles to plain indexing).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Variant {
     pub kernel: Kernel,
     pub form: Form,
+    pub extra: [u8; MAX_SPLIT],
 }
 
 impl Kernel {
@@ -264,6 +289,7 @@ impl Kernel {
         Variant {
             kernel: self,
             form: if self.def().variants { form } else { Form::Fast },
+            extra: [0; MAX_SPLIT],
         }
     }
 
@@ -278,7 +304,7 @@ impl Variant {
     pub fn all() -> impl Iterator<Item = Variant> {
         Kernel::all().flat_map(|k| {
             let forms: &[Form] = if k.def().variants { &Form::ALL } else { &[Form::Fast] };
-            forms.iter().map(move |&form| Variant { kernel: k, form })
+            forms.iter().map(move |&form| k.with(form))
         })
     }
 
@@ -289,13 +315,91 @@ impl Variant {
         }
     }
 
-    /// The full WGSL source of this instance in precision `real`.
+    /// The full WGSL source of this instance in precision `real`, its split
+    /// bindings in one buffer each.
     pub fn compose(self, real: Real) -> String {
-        let mut out = real.prelude();
+        self.compose_split(real, 31)
+    }
+
+    /// The full WGSL source with each split binding spread over
+    /// `1 + extra[j]` buffers of `2^part_log2` bytes (all but the last full).
+    pub fn compose_split(self, real: Real, part_log2: u32) -> String {
+        let mut text = String::new();
         let mut seen = HashSet::new();
-        preprocess(self.kernel.def().source, self.form, &mut seen, &mut out);
+        preprocess(self.kernel.def().source, self.form, &mut seen, &mut text);
+        let def = self.kernel.def();
+        let mut out = real.prelude();
+        let mut next = def.bindings.len();
+        let mut accessors = String::new();
+        let splits: Vec<&Binding> = def.bindings.iter().filter(|b| b.split).collect();
+        assert!(splits.len() <= MAX_SPLIT, "{}: too many split bindings", def.stem);
+        let mut extra_decl: Vec<String> = vec![String::new(); splits.len()];
+        for (j, b) in splits.iter().enumerate() {
+            let parts = 1 + self.extra[j] as usize;
+            let (ty, size) = match b.elem {
+                Elem::Real => ("real", real.size()),
+                Elem::U32 => ("u32", 4),
+                e => panic!("{}: only array<real> and array<u32> split, not {e:?}", def.stem),
+            };
+            let access = if b.access == Access::ReadWrite {
+                "read_write"
+            } else {
+                "read"
+            };
+            for k in 1..parts {
+                extra_decl[j].push_str(&format!(
+                    "@group(0) @binding({next}) var<storage, {access}> {}_p{k}: array<{ty}>;\n",
+                    b.name
+                ));
+                next += 1;
+            }
+            accessors.push_str(&split_accessors(b, ty, parts, part_log2 - size.trailing_zeros()));
+        }
+        for line in text.lines() {
+            out.push_str(line);
+            out.push('\n');
+            if line.contains("var<storage")
+                && let Some(j) = splits
+                    .iter()
+                    .position(|b| line.contains(&format!(" {}: array<", b.name)))
+            {
+                out.push_str(&extra_decl[j]);
+            }
+        }
+        out.push_str(&accessors);
         out
     }
+}
+
+/// `NAME_get(i)` (and `NAME_set(i, v)` where writable) over the `parts`
+/// buffers of a split binding, `2^shift` elements each: part 0 is the
+/// declared `NAME`, part k is `NAME_pk`.
+fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32) -> String {
+    let n = b.name;
+    let part = |k: usize| if k == 0 { n.to_string() } else { format!("{n}_p{k}") };
+    let mut s = String::new();
+    if parts == 1 {
+        s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{ return {n}[i]; }}\n"));
+        if b.access == Access::ReadWrite {
+            s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{ {n}[i] = v; }}\n"));
+        }
+        return s;
+    }
+    let mask = (1u64 << shift) - 1;
+    let head = format!("    let p = i >> {shift}u;\n    let j = i & {mask}u;\n");
+    s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{\n{head}"));
+    for k in 0..parts - 1 {
+        s.push_str(&format!("    if p == {k}u {{ return {}[j]; }}\n", part(k)));
+    }
+    s.push_str(&format!("    return {}[j];\n}}\n", part(parts - 1)));
+    if b.access == Access::ReadWrite {
+        s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{\n{head}"));
+        for k in 0..parts - 1 {
+            s.push_str(&format!("    if p == {k}u {{ {}[j] = v; return; }}\n", part(k)));
+        }
+        s.push_str(&format!("    {}[j] = v;\n}}\n", part(parts - 1)));
+    }
+    s
 }
 
 /// Appends `src` to `out` with every `#import name` replaced by that shared
@@ -500,6 +604,38 @@ mod tests {
                     .unwrap_or_else(|e| panic!("{} ({real:?}): {e}", v.label()));
                 check_constants(&m, PRELUDE_CONSTANTS).unwrap_or_else(|e| panic!("{}: {e}", v.label()));
             }
+        }
+    }
+
+    #[test]
+    fn split_bindings_validate_with_their_extra_parts_after_the_table() {
+        for real in [Real::F32, Real::F64] {
+            let mut v = Kernel::HessianGather.plain();
+            v.extra = [1, 2, 3, 2];
+            let src = v.compose_split(real, 8);
+            let m = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+            let mut caps = naga::valid::Capabilities::default();
+            if real == Real::F64 {
+                caps |= naga::valid::Capabilities::FLOAT64;
+            }
+            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+                .validate(&m)
+                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+            let bound: Vec<(u32, String)> = m
+                .global_variables
+                .iter()
+                .filter_map(|(_, g)| Some((g.binding.as_ref()?.binding, g.name.clone()?)))
+                .collect();
+            // the table's 5, then 1 + 2 + 3 + 2 extra parts in table order
+            assert_eq!(bound.len(), 13);
+            assert!(bound.contains(&(5, "contrib_offsets_p1".into())), "{bound:?}");
+            assert!(bound.contains(&(12, "blocks_p2".into())), "{bound:?}");
+            // 256-byte parts: 64 u32s, 256 / size reals
+            let shift = 8 - real.size().trailing_zeros();
+            assert!(src.contains(&format!("let p = i >> {shift}u;")));
+            assert!(src.contains("let p = i >> 6u;"));
+            assert!(src.contains("fn blocks_set("));
+            assert!(!src.contains("fn elem_set("));
         }
     }
 
