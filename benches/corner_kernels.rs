@@ -9,28 +9,16 @@
 //! Run: `cargo bench --bench corner_kernels [-- --quick] [--adapter NAME]`
 
 use meshsmooth::backend::cpu::bcd;
-use meshsmooth::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::gpu::{GpuBackend, GpuOptions};
 use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation, VoronoiOptions};
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::{Problem, ProblemOptions};
 use meshsmooth::{ElementKind, Mesh};
-use std::time::Instant;
 
-/// Median seconds per call of `f` over `reps` calls after one warm-up call.
-fn time(reps: usize, mut f: impl FnMut()) -> f64 {
-    f();
-    let mut t: Vec<f64> = (0..reps)
-        .map(|_| {
-            let s = Instant::now();
-            f();
-            s.elapsed().as_secs_f64()
-        })
-        .collect();
-    t.sort_by(f64::total_cmp);
-    t[t.len() / 2]
-}
+mod common;
+use common::{gpu_contexts, time};
 
 fn perturbed(mut m: Mesh, alpha: f64) -> Mesh {
     let opts = PerturbOptions {
@@ -76,20 +64,12 @@ fn meshes(scale: usize) -> Vec<(ElementKind, Mesh, Mesh)> {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    let adapter = std::env::args().skip_while(|a| a != "--adapter").nth(1);
+    let adapter = common::arg("--adapter");
     let reps = if quick { 2 } else { 5 };
-    let gpus: Vec<(String, GpuContext)> = [Precision::F32, Precision::F64]
-        .into_iter()
-        .filter_map(|precision| {
-            let ctx = GpuContext::new(&GpuOptions {
-                adapter: adapter.clone(),
-                precision,
-            })
-            .map_err(|e| eprintln!("no {precision:?} context: {e}"))
-            .ok()?;
-            Some((format!("{precision:?}").to_lowercase(), ctx))
-        })
-        .collect();
+    let gpus = gpu_contexts(&GpuOptions {
+        adapter,
+        ..Default::default()
+    });
     if let Some((_, ctx)) = gpus.first() {
         println!("GPU: {}", ctx.adapter_name());
     }

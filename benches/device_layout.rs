@@ -14,19 +14,10 @@ use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::problem::Problem;
 use meshsmooth::{Mesh, io};
 use std::path::PathBuf;
+
+mod common;
+use common::{arg, median};
 use std::time::Instant;
-
-fn arg(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
-}
-
-fn median(mut t: Vec<f64>) -> f64 {
-    t.sort_by(f64::total_cmp);
-    t[t.len() / 2]
-}
 
 const LAYOUTS: [DeviceLayout; 3] = [DeviceLayout::Problem, DeviceLayout::ByColour, DeviceLayout::ByValence];
 

@@ -19,14 +19,10 @@ use meshsmooth::backend::gpu::{GpuContext, GpuOptions, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::problem::Problem;
 use meshsmooth::solve::{self, Device, Method, Options, Params};
-use std::time::Instant;
 
-fn arg(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
-}
+mod common;
+use common::arg;
+use std::time::Instant;
 
 fn main() {
     let sizes: Vec<usize> = arg("--sizes")

@@ -23,11 +23,12 @@
 //! GFLOP/s likewise counts a model of about 350 flops per incidence and
 //! sweep for the closed-form tetrahedral path (rest-S 54, S 18, determinant
 //! and Frobenius norm 34, gradient and 3x3 block about 150, one trial about
-//! 100) and 2500 for the general path (the 9x9 S-Hessian contracted with
-//! b_k); both are estimates, quoted to compare devices, not kernels.
+//! 100) and 800 for the general path (hexahedra with `cn`: the metric, its
+//! structured S-Hessian's products with b_k and the 3x3 block, one trial);
+//! both are estimates, quoted to compare devices, not kernels.
 
 use meshsmooth::backend::cpu::bcd;
-use meshsmooth::backend::gpu::{DeviceLayout, GpuBackend, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::gpu::{DeviceLayout, GpuBackend, GpuOptions};
 use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::metric::corner_model::Template;
@@ -35,6 +36,9 @@ use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::{Problem, ProblemOptions};
 use meshsmooth::{Mesh, io};
 use std::path::PathBuf;
+
+mod common;
+use common::{arg, gpu_contexts, time};
 use std::time::Instant;
 
 fn perturbed(mut m: Mesh) -> Mesh {
@@ -45,27 +49,6 @@ fn perturbed(mut m: Mesh) -> Mesh {
     };
     generate::perturb(&mut m, &opts).unwrap();
     m
-}
-
-/// Median seconds per call of `f` over `reps` calls after one warm-up call.
-fn time(reps: usize, mut f: impl FnMut()) -> f64 {
-    f();
-    let mut t: Vec<f64> = (0..reps)
-        .map(|_| {
-            let s = Instant::now();
-            f();
-            s.elapsed().as_secs_f64()
-        })
-        .collect();
-    t.sort_by(f64::total_cmp);
-    t[t.len() / 2]
-}
-
-fn arg(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
 }
 
 struct Case {
@@ -121,20 +104,11 @@ fn main() {
             general: true,
         });
     }
-    let gpus: Vec<(String, GpuContext)> = [Precision::F32, Precision::F64]
-        .into_iter()
-        .filter_map(|precision| {
-            let ctx = GpuContext::new(&GpuOptions {
-                adapter: adapter.clone(),
-                precision,
-                layout,
-                ..Default::default()
-            })
-            .map_err(|e| eprintln!("no {precision:?} context: {e}"))
-            .ok()?;
-            Some((format!("{precision:?}").to_lowercase(), ctx))
-        })
-        .collect();
+    let gpus = gpu_contexts(&GpuOptions {
+        adapter: adapter.clone(),
+        layout,
+        ..Default::default()
+    });
     if let Some((_, ctx)) = gpus.first() {
         println!("GPU: {}, device layout {layout:?}", ctx.adapter_name());
     }
@@ -189,7 +163,7 @@ fn main() {
         });
         row.push_str(&format!(" {} |", rate(col)));
         let incidences: usize = p.free_vertices.iter().map(|&v| p.incidence.of(v as usize).len()).sum();
-        let flops_per_incidence = if case.general { 2500.0 } else { 350.0 };
+        let flops_per_incidence = if case.general { 800.0 } else { 350.0 };
         for (_, ctx) in &gpus {
             let r = if ctx.is_f64() { 8.0 } else { 4.0 };
             let bytes = p.free_vertices.len() as f64 * (8.0 + 6.0 * r) + incidences as f64 * 2.0 * (24.0 + 12.0 * r);

@@ -95,50 +95,6 @@ fn frob_n(s: &Mat3, n: usize) -> f64 {
     f
 }
 
-/// Second derivative of det: 3D sum_{m,l} eps_ikm eps_jln S[m][l]; 2D eps_ik eps_jl.
-/// Only the dense reference of the tests builds it.
-#[cfg(test)]
-pub(crate) fn d2det(s: &Mat3, n: usize) -> [[f64; 9]; 9] {
-    let mut h = [[0.0; 9]; 9];
-    for i in 0..n {
-        for j in 0..n {
-            for k in 0..n {
-                for l in 0..n {
-                    if i == k || j == l {
-                        continue;
-                    }
-                    h[3 * i + j][3 * k + l] = if n == 2 {
-                        eps2(i, k) * eps2(j, l)
-                    } else {
-                        eps3(i, k, 3 - i - k) * eps3(j, l, 3 - j - l) * s[3 - i - k][3 - j - l]
-                    };
-                }
-            }
-        }
-    }
-    h
-}
-
-#[cfg(test)]
-fn eps2(i: usize, j: usize) -> f64 {
-    if i == j {
-        0.0
-    } else if i < j {
-        1.0
-    } else {
-        -1.0
-    }
-}
-
-#[cfg(test)]
-fn eps3(i: usize, j: usize, k: usize) -> f64 {
-    match (i, j, k) {
-        (0, 1, 2) | (1, 2, 0) | (2, 0, 1) => 1.0,
-        (0, 2, 1) | (2, 1, 0) | (1, 0, 2) => -1.0,
-        _ => 0.0,
-    }
-}
-
 /// The argument of the det-Hessian term for c D2(S): c S in 3D, c e3 e3^T in
 /// 2D (where D2 is constant); see `shess`.
 fn d2det_term(s: &Mat3, n: usize, c: f64) -> Mat3 {
