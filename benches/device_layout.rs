@@ -4,14 +4,19 @@
 //! that a shared machine's load falls on all of them alike, and the CPU
 //! coloured sweep beside them (the CPU path keeps the problem's numbering).
 //! Median of `--reps` (default 7) sweeps after one warm-up, elements per second.
+//! Each mesh runs under each problem numbering of `--orderings` (default
+//! `rbfs,cuthill-mckee,input`: issue #11's question of how the vertex
+//! renumbering changes coloured sweep throughput on the CPU and the device;
+//! the colouring follows the numbering, so colour counts may differ).
 //!
-//! Run: `cargo bench --bench device_layout [-- --reps N] [--tet-sizes 26,27] [--mesh PATH]`
+//! Run: `cargo bench --bench device_layout [-- --reps N] [--tet-sizes 26,27] [--mesh PATH] [--orderings rbfs,input]`
 
 use meshsmooth::backend::cpu::bcd;
 use meshsmooth::backend::gpu::{DeviceLayout, GpuBackend, GpuContext, GpuOptions, Precision};
 use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
-use meshsmooth::problem::Problem;
+use meshsmooth::mesh::order::Ordering;
+use meshsmooth::problem::{Problem, ProblemOptions};
 use meshsmooth::{Mesh, io};
 use std::path::PathBuf;
 
@@ -72,7 +77,18 @@ fn main() {
         println!("GPU: {}", c[0].adapter_name());
     }
     println!("CPU threads: {}\n", rayon::current_num_threads());
-    let mut header = String::from("| mesh | tets | colours | CPU coloured |");
+    let orderings: Vec<(String, Ordering)> = arg("--orderings")
+        .unwrap_or("rbfs,cuthill-mckee,input".into())
+        .split(',')
+        .map(|name| {
+            let o = match name {
+                "input" | "n" => Ordering::INPUT,
+                other => other.parse().unwrap_or_else(|e| panic!("--orderings: {e}")),
+            };
+            (name.to_string(), o)
+        })
+        .collect();
+    let mut header = String::from("| mesh | numbering | tets | colours | CPU coloured |");
     for (p, _) in &gpus {
         for l in LAYOUTS {
             header.push_str(&format!(" GPU {p:?} {l:?} |"));
@@ -81,8 +97,12 @@ fn main() {
     println!("{header}");
     println!("|{}", "---|".repeat(header.matches('|').count() - 1));
     let ls = Default::default();
-    for (name, mesh) in &meshes {
-        let p = Problem::new(mesh).unwrap();
+    for ((name, mesh), (order_name, ordering)) in meshes.iter().flat_map(|m| orderings.iter().map(move |o| (m, o))) {
+        let opts = ProblemOptions {
+            ordering: *ordering,
+            ..Default::default()
+        };
+        let p = Problem::with_options(mesh, &opts).unwrap();
         let x0 = p.gather(&mesh.points);
         let ne = p.num_elements() as f64;
         let mut x = x0.clone();
@@ -96,7 +116,12 @@ fn main() {
         cpu_sweep();
         let cpu = median((0..reps).map(|_| cpu_sweep()).collect());
         let rate = |s: f64| format!("{:.3} M/s ({:.0} ms)", ne / s / 1e6, s * 1e3);
-        let mut row = format!("| {name} | {} | {} | {} |", p.num_elements(), p.colors.len(), rate(cpu));
+        let mut row = format!(
+            "| {name} | {order_name} | {} | {} | {} |",
+            p.num_elements(),
+            p.colors.len(),
+            rate(cpu)
+        );
         for (_, ctxs) in &gpus {
             let mut backends: Vec<GpuBackend> = ctxs
                 .iter()

@@ -145,6 +145,10 @@ impl Model {
 
     #[inline]
     pub fn value(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<f64> {
+        if self.planar(shape.n) {
+            // the line searches' hot path: three points, the leading 2x2 block
+            return planar::value_of_s(&planar::s_of(&shape.tet, x));
+        }
         self.value_of_s(shape, &shape.tet.s_rest(x, usize::MAX))
     }
 

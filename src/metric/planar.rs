@@ -12,6 +12,7 @@
 //! diagonal, so that z never moves).
 
 use super::mat3::{Mat3, Vec3};
+use super::mean_ratio::TetShape;
 
 /// What the value, gradient and blocks share.
 pub struct Parts {
@@ -20,6 +21,15 @@ pub struct Parts {
     s: [[f64; 2]; 2],
     c: [[f64; 2]; 2],
     g: [[f64; 2]; 2],
+}
+
+/// The leading 2x2 block of S = sum_k x_k b_k^T over a planar corner's
+/// three vertices (the rest of S is never read in 2D).
+#[inline]
+pub fn s_of(tet: &TetShape, x: &[Vec3; 4]) -> Mat3 {
+    let (b0, b1, b2) = (tet.b(0), tet.b(1), tet.b(2));
+    let e = |i: usize, j: usize| x[0][i] * b0[j] + x[1][i] * b1[j] + x[2][i] * b2[j];
+    [[e(0, 0), e(0, 1), 0.0], [e(1, 0), e(1, 1), 0.0], [0.0; 3]]
 }
 
 #[inline]
@@ -110,6 +120,15 @@ mod tests {
                         want[i][q]
                     );
                 }
+            }
+        }
+        // the 2x2 block of S from three points is the general S's
+        let tet = TetShape::from_winv(&[[1.1, 0.2, 0.0], [-0.3, 0.9, 0.0], [0.0; 3]]);
+        let x = [[0.1, 0.2, 5.0], [1.3, -0.1, 5.0], [0.4, 1.2, 5.0], [0.0; 3]];
+        let (a, b) = (s_of(&tet, &x), tet.s_rest(&x, usize::MAX));
+        for i in 0..2 {
+            for j in 0..2 {
+                assert!((a[i][j] - b[i][j]).abs() <= 1e-15, "S[{i}][{j}]");
             }
         }
         let mut flip = s;
