@@ -500,6 +500,21 @@ mod tests {
     }
 
     #[test]
+    fn centroids_of_the_box_and_of_a_clipped_box() {
+        let close = |a: Vec3, b: Vec3| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-14);
+        assert!(close(Cell::unit_box().centroid(), [0.5; 3]));
+        // sites at x = 0.2 and 0.6 split the box at x = 0.4: slabs [0, 0.4] and [0.4, 1]
+        let sites = [[0.2, 0.5, 0.5], [0.6, 0.5, 0.5]];
+        assert!(close(voronoi_cell(&sites, 0).centroid(), [0.2, 0.5, 0.5]));
+        assert!(close(voronoi_cell(&sites, 1).centroid(), [0.7, 0.5, 0.5]));
+        // the corner x + y + z <= 1/2 of the box: a tetrahedron with legs
+        // 1/2, centroid at 1/8 on each axis
+        let mut cell = Cell::unit_box();
+        cell.clip([1.0; 3], 0.5, 1);
+        assert!(close(cell.centroid(), [0.125; 3]), "{:?}", cell.centroid());
+    }
+
+    #[test]
     fn two_cells_split_the_box_at_the_bisector() {
         let m = tessellate(&[[0.25, 0.5, 0.5], [0.75, 0.5, 0.5]]).unwrap();
         assert_eq!(m.num_elements(), 2);
