@@ -180,6 +180,10 @@ fn rj_gradient_and_hessian_match_finite_differences_on_polyhedra() {
         cells: [3, 3, 3],
         distorted: true,
         seed: 3,
+        // the jittered lattice as drawn, with the prism mesh's noise: the hard case
+        lloyd: 0,
+        smooth: 0,
+        noise: meshsmooth::generate::prism::NOISE_ALPHA,
         ..Default::default()
     };
     let voronoi = generate::voronoi_mesh(&opts).unwrap();
@@ -325,14 +329,13 @@ fn example_2_rj_removes_bad_polyhedra_with_little_motion() {
     let mesh = generate::voronoi_mesh(&opts).unwrap();
     let before = metric_summary(&mesh, &mesh.points, MetricKind::ConditionNumberPaper, None).unwrap();
     let mut rj = mesh.clone();
-    // Newton: the default NLCG stops at its iteration limit on this mesh (README)
+    // Newton, as for the README's table (the default NLCG is slower here)
     let mut newton = rezone::default_options(Device::Cpu);
     newton.solve.method = Method::Newton;
     let info = rezone::rezone_mesh(&mut rj, &newton, &mut |_| true).unwrap();
     let after_rj = metric_summary(&rj, &rj.points, MetricKind::ConditionNumberPaper, None).unwrap();
     let mut cn = mesh.clone();
-    // to 1e-6 of 11/9 on every prism: a gradient stop tighter than the default's
-    // (which left a few prisms 2e-6 off once Newton's product summed in another order)
+    // a gradient stop tighter than the default, so CN is CN's optimum
     let tight = Params {
         tol: 1e-9,
         ..Params::default()
@@ -346,46 +349,37 @@ fn example_2_rj_removes_bad_polyhedra_with_little_motion() {
         info.info.stop, info.info.iterations, cn_info.stop, cn_info.iterations
     );
     eprintln!("before {before:?}\nrj {after_rj:?}\ncn {after_cn:?}\nd_rj {d_rj:?}\nd_cn {d_cn:?}");
-    // every corner of every output cell positive
+    eprintln!(
+        "RJ {:.1} s + {:.1} s, CN {:.1} s",
+        info.reference_seconds, info.info.seconds, cn_info.seconds
+    );
+    // every corner of every output cell positive, the topology kept
     for (what, m) in [("RJ", &rj), ("CN", &cn)] {
         assert!(meshsmooth::metric::inverted_elements(m, &m.points).is_empty(), "{what}");
         assert_eq!(m.faces, mesh.faces);
     }
     assert_eq!(after_rj.inverted + after_cn.inverted, 0);
-    eprintln!(
-        "RJ {:.1} s + {:.1} s, CN {:.1} s",
-        info.reference_seconds, info.info.seconds, cn_info.seconds
-    );
-    // the start has very bad cells (ours worse than the paper's on average:
-    // worst 16490, average 145, against 6662.7 and 12.4)
+    // the start has very bad cells (the paper: worst 6662.7) in a mostly
+    // fair mesh (the paper: 77 % of cells between 1.5 and 3)
     assert!(before.max > 100.0, "{before:?}");
-    assert!(after_rj.max < 0.01 * before.max, "{before:?} {after_rj:?}");
+    let fair: f64 = before
+        .bands
+        .iter()
+        .filter(|b| b.0 >= 1.5 && b.0 < 3.0)
+        .map(|b| b.2)
+        .sum();
+    assert!(fair > 50.0, "{before:?}");
+    // the paper's finding over the whole mesh: RJ removes the bad cells,
+    // worst from hundreds to single digits (the paper 5.9), average down
+    assert!(after_rj.max < 9.0, "{before:?} {after_rj:?}");
     assert!(after_rj.avg < 0.5 * before.avg, "{before:?} {after_rj:?}");
-    // Not reproduced over the whole mesh: the paper's RJ worst of 5.9. Ours
-    // ends at ~65 (CN at ~46): the worst cells are the box's clipped slivers,
-    // whose vertices on the box are fixed, so no optimiser of the interior
-    // can repair them. RJ's worst is within reach of CN's there...
-    assert!(after_rj.max < 2.0 * after_cn.max, "{after_rj:?} {after_cn:?}");
-    // ...and on the cells that touch no fixed vertex the paper's finding
-    // holds: RJ's worst is single-digit (ours ~5.0, the paper 5.9), CN's
-    // near 2 (ours ~2.1, the paper 1.8 over its whole mesh)
-    let fixed = fixed_vertices(&mesh);
-    let values = |m: &Mesh| element_values(m, &m.points, MetricKind::ConditionNumberPaper, None).unwrap();
-    let (v_rj, v_cn) = (values(&rj), values(&cn));
-    let interior: Vec<usize> = (0..mesh.num_elements())
-        .filter(|&e| mesh.element(e).iter().all(|&v| !fixed[v as usize]))
-        .collect();
-    assert!(interior.len() > mesh.num_elements() / 3, "{}", interior.len());
-    let worst = |v: &[Option<f64>]| interior.iter().map(|&e| v[e].unwrap()).fold(0.0, f64::max);
-    let (worst_before, worst_rj, worst_cn) = (worst(&values(&mesh)), worst(&v_rj), worst(&v_cn));
-    eprintln!(
-        "interior cells {}: worst {worst_before} -> RJ {worst_rj}, CN {worst_cn}",
-        interior.len()
+    // CN is the better shape (the paper: worst 1.8, average 1.3) ...
+    assert!(
+        after_cn.max < 9.0 && after_cn.avg <= after_rj.avg,
+        "{after_rj:?} {after_cn:?}"
     );
-    assert!(worst_before > 10.0 * worst_rj && worst_rj < 9.0 && worst_cn < 3.0);
-    // CN is the better shape, RJ the much smaller motion (the paper: 7.1 %
-    // against 183.3 %, 26x; ours ~20 % against ~77 %, ~3.8x: not as far apart)
-    assert!(after_cn.avg < after_rj.avg && after_cn.max < after_rj.max);
+    // ... RJ the much smaller motion (the paper: 7.1 % against 183.3 %, 26x;
+    // ours ~3.5x: see the README)
     assert!(d_cn.avg > 3.0 * d_rj.avg, "displacement RJ {d_rj:?} vs CN {d_cn:?}");
 }
 

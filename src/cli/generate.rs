@@ -124,7 +124,11 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
                 cells,
                 bcc: a.bcc,
                 jitter: a.jitter,
+                lloyd: a.lloyd,
+                smooth: a.smooth,
                 distorted: a.distorted,
+                wave: a.wave,
+                noise: a.noise,
                 seed: a.seed,
             };
             save(&a.out, &generate::voronoi_mesh(&opts)?)

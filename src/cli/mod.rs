@@ -501,9 +501,21 @@ pub struct VoronoiArgs {
     /// Body-centred lattice (2 sites per lattice cell): truncated octahedra, no short edges.
     #[arg(long)]
     pub bcc: bool,
+    /// Lloyd steps (sites to their cells' centroids) after the jitter; 0 keeps the lattice as drawn.
+    #[arg(long, default_value_t = meshsmooth::generate::voronoi::VORONOI_LLOYD)]
+    pub lloyd: usize,
+    /// Laplacian sweeps on the cell vertices (box vertices slide on the box); 0 keeps the Voronoi vertices.
+    #[arg(long, default_value_t = meshsmooth::generate::voronoi::VORONOI_SMOOTH)]
+    pub smooth: usize,
     /// Add the prism mesh's long-wavelength distortion and short-wavelength noise.
     #[arg(long)]
     pub distorted: bool,
+    /// With --distorted: the long wave's amplitude on the unit cube.
+    #[arg(long, default_value_t = meshsmooth::generate::voronoi::VORONOI_WAVE)]
+    pub wave: f64,
+    /// With --distorted: the noise, relative to each node's mean edge length.
+    #[arg(long, default_value_t = meshsmooth::generate::voronoi::VORONOI_NOISE)]
+    pub noise: f64,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     #[command(flatten)]

@@ -184,6 +184,9 @@ pub fn voronoi_box(n: usize, side: f64, seed: u64) -> Mesh {
         cells: [n; 3],
         bcc: true,
         jitter: 0.02,
+        // the lattice's own truncated octahedra
+        lloyd: 0,
+        smooth: 0,
         seed,
         ..Default::default()
     };
