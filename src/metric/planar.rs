@@ -6,8 +6,12 @@
 //!
 //! With d = det S, C = cof S and eta as above, grad eta = (S - eta C) / d and
 //! the block of B rows u, v is
-//!   (u.v / d) I - ((S u)(C v)^T + (C u)(S v)^T) / d^2
-//!   + 2 eta (C u)(C v)^T / d^2 - (eta / d) (u x v)_z J,   J = [[0, 1], [-1, 0]],
+//!
+//! ```text
+//! (u.v / d) I - ((S u)(C v)^T + (C u)(S v)^T) / d^2
+//!     + 2 eta (C u)(C v)^T / d^2 - (eta / d) (u x v)_z J,   J = [[0, 1], [-1, 0]]
+//! ```
+//!
 //! with z rows and columns zero (the caller puts 1 on a vertex's own z
 //! diagonal, so that z never moves).
 
