@@ -76,7 +76,7 @@ fn grade(x: [f64; 3], p: f64) -> [f64; 3] {
 }
 
 /// ln(max volume / min volume) over the tets of `mesh`.
-fn volume_log_ratio(mesh: &Mesh) -> f64 {
+pub(crate) fn volume_log_ratio(mesh: &Mesh) -> f64 {
     let (mut min, mut max) = (f64::INFINITY, 0.0f64);
     for e in 0..mesh.num_elements() {
         let v = tet_volume(mesh, e);

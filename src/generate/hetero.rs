@@ -12,7 +12,7 @@
 
 use std::collections::HashMap;
 
-use super::graded::tet_volume;
+use super::graded::volume_log_ratio;
 use super::perturb::{PerturbOptions, Perturbation, perturb};
 use super::tet_box;
 use crate::mesh::{ElementKind, Mesh};
@@ -234,15 +234,4 @@ fn signed_volume(points: &[[f64; 3]], t: &[u32; 4]) -> f64 {
     };
     let (a, b, c) = (d(1), d(2), d(3));
     a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
-}
-
-/// ln(max volume / min volume) over the tets of `mesh`.
-fn volume_log_ratio(mesh: &Mesh) -> f64 {
-    let (mut min, mut max) = (f64::INFINITY, 0.0f64);
-    for e in 0..mesh.num_elements() {
-        let v = tet_volume(mesh, e);
-        min = min.min(v);
-        max = max.max(v);
-    }
-    (max / min).ln()
 }

@@ -311,34 +311,30 @@ fn concat_select(per_piece: &[Vec<DataArray>], rows: &[usize]) -> Vec<DataArray>
     (0..per_piece[0].len())
         .map(|k| {
             let first = &per_piece[0][k];
+            // every piece's array k has the first piece's type (checked on reading)
+            fn join<T: Clone>(
+                per_piece: &[Vec<DataArray>],
+                k: usize,
+                pick: impl Fn(&Values) -> Option<&Vec<T>>,
+            ) -> Vec<T> {
+                per_piece
+                    .iter()
+                    .flat_map(|a| pick(&a[k].values).cloned().unwrap_or_default())
+                    .collect()
+            }
             let values = match &first.values {
-                Values::Int(_) => Values::Int(
-                    per_piece
-                        .iter()
-                        .flat_map(|a| match &a[k].values {
-                            Values::Int(v) => v.clone(),
-                            _ => Vec::new(),
-                        })
-                        .collect(),
-                ),
-                Values::Float(_) => Values::Float(
-                    per_piece
-                        .iter()
-                        .flat_map(|a| match &a[k].values {
-                            Values::Float(v) => v.clone(),
-                            _ => Vec::new(),
-                        })
-                        .collect(),
-                ),
-                Values::Str(_) => Values::Str(
-                    per_piece
-                        .iter()
-                        .flat_map(|a| match &a[k].values {
-                            Values::Str(v) => v.clone(),
-                            _ => Vec::new(),
-                        })
-                        .collect(),
-                ),
+                Values::Int(_) => Values::Int(join(per_piece, k, |v| match v {
+                    Values::Int(x) => Some(x),
+                    _ => None,
+                })),
+                Values::Float(_) => Values::Float(join(per_piece, k, |v| match v {
+                    Values::Float(x) => Some(x),
+                    _ => None,
+                })),
+                Values::Str(_) => Values::Str(join(per_piece, k, |v| match v {
+                    Values::Str(x) => Some(x),
+                    _ => None,
+                })),
             };
             DataArray::new(first.name.clone(), first.ty, first.components, values).select(rows)
         })
