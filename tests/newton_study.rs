@@ -157,6 +157,23 @@ fn quick_study_numbers_are_consistent() {
     let count = |s: Suite| study.suite(s).count();
     assert_eq!(count(Suite::Ducts), paper::TABLE1.len());
     assert_eq!(count(Suite::Hetero), paper::TABLE3.len());
+    // each finding's count is the cases', and its verdict follows from it
+    for f in study.findings() {
+        assert!(f.of > 0 && f.holds <= f.of, "{}", f.claim);
+        let want = if f.holds == f.of {
+            "reproduced"
+        } else if f.holds == 0 {
+            "not reproduced"
+        } else {
+            "in part"
+        };
+        assert_eq!(f.verdict(), want, "{}", f.claim);
+    }
+    let hetero_t50 = study
+        .suite(Suite::Hetero)
+        .filter(|c| c.bcd.t50.unwrap_or(f64::INFINITY) < c.newton.t50.unwrap_or(f64::INFINITY))
+        .count();
+    assert_eq!(study.findings()[2].holds, hetero_t50);
     assert_eq!(count(Suite::Small), paper::TABLE5.len());
     assert_eq!(count(Suite::Subset), 3 * paper::SUBSET_FRACTIONS.len());
     assert_eq!(count(Suite::Large), paper::TABLE7.len());
@@ -235,6 +252,26 @@ fn quick_study_writes_every_table_and_figure() {
         }
     }
     let md = std::fs::read_to_string(out.join("newton-study.md")).unwrap();
+    // every finding is reported with a verdict, whichever way it went
+    let findings = md.split("## Findings").nth(1).expect("a Findings section");
+    for claim in [
+        "on the ducts",
+        "T100 first on the heterogeneous",
+        "T50 first on the heterogeneous",
+        "negative curvature",
+        "large NE shifts",
+    ] {
+        let line = findings
+            .lines()
+            .find(|l| l.contains(claim))
+            .unwrap_or_else(|| panic!("{claim}"));
+        assert!(
+            ["| reproduced |", "| in part |", "| not reproduced |"]
+                .iter()
+                .any(|v| line.ends_with(v)),
+            "{line}"
+        );
+    }
     for t in [
         "**Table 1**",
         "**Table 2**",

@@ -105,6 +105,26 @@ pub enum Crossing {
     Never,
 }
 
+/// One of the paper's findings, checked case by case.
+#[derive(Clone, Debug, Serialize)]
+pub struct Finding {
+    pub claim: &'static str,
+    /// Cases that bear it out, of how many.
+    pub holds: usize,
+    pub of: usize,
+}
+
+impl Finding {
+    /// "reproduced" (every case), "in part" (some) or "not reproduced" (none).
+    pub fn verdict(&self) -> &'static str {
+        match self.holds {
+            0 => "not reproduced",
+            h if h == self.of => "reproduced",
+            _ => "in part",
+        }
+    }
+}
+
 /// One mesh of one suite.
 #[derive(Clone, Debug, Serialize)]
 pub struct Case {
@@ -416,6 +436,42 @@ fn crossing(newton: &History, bcd: &History, newton_setup: f64, bcd_setup: f64, 
 impl NewtonStudy {
     pub fn suite(&self, suite: Suite) -> impl Iterator<Item = &Case> {
         self.cases.iter().filter(move |c| c.suite == suite)
+    }
+
+    /// The paper's qualitative findings that these meshes can test, each
+    /// with how many cases bear it out: what the issue asks the study to
+    /// report, reproduced or not.
+    pub fn findings(&self) -> Vec<Finding> {
+        let t = |r: &MethodRun, level: fn(&MethodRun) -> Option<f64>| level(r).unwrap_or(f64::INFINITY);
+        let count = |suite: Suite, holds: &dyn Fn(&Case) -> bool| {
+            let cases: Vec<&Case> = self.suite(suite).collect();
+            (cases.iter().filter(|c| holds(c)).count(), cases.len())
+        };
+        let t50 = |r: &MethodRun| r.t50;
+        let t100 = |r: &MethodRun| r.t100;
+        let make = |claim: &'static str, (holds, of): (usize, usize)| Finding { claim, holds, of };
+        vec![
+            make(
+                "Newton reaches T100 first on the ducts (Table 2)",
+                count(Suite::Ducts, &|c| t(&c.newton, t100) < t(&c.bcd, t100)),
+            ),
+            make(
+                "Newton reaches T100 first on the heterogeneous meshes (Table 4)",
+                count(Suite::Hetero, &|c| t(&c.newton, t100) < t(&c.bcd, t100)),
+            ),
+            make(
+                "BCD reaches T50 first on the heterogeneous meshes (Table 4)",
+                count(Suite::Hetero, &|c| t(&c.bcd, t50) < t(&c.newton, t50)),
+            ),
+            make(
+                "Newton meets negative curvature on the heterogeneous meshes (section 5.2)",
+                count(Suite::Hetero, &|c| c.newton.negative_curvature_steps.unwrap_or(0) > 0),
+            ),
+            make(
+                "BCD reaches T50 first after large NE shifts (Table 7)",
+                count(Suite::Large, &|c| t(&c.bcd, t50) < t(&c.newton, t50)),
+            ),
+        ]
     }
 
     /// One line per case: the tables' numbers, for scripts.
