@@ -6,6 +6,7 @@
 pub mod backend;
 pub mod compare;
 pub mod error;
+pub mod finding;
 pub mod generate;
 pub mod io;
 pub mod mesh;

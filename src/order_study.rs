@@ -9,6 +9,7 @@
 //! within one run, not numbers between runs.
 
 use crate::error::Result;
+use crate::finding::Finding;
 use crate::generate::{HorseshoeKind, horseshoe};
 use crate::mesh::sweep_order::SweepOrder;
 use crate::metric::smetric::MetricKind;
@@ -229,6 +230,57 @@ impl OrderStudy {
     }
 
     /// One table per strategy, rows by TT rank, as the paper's ranking tables.
+    /// The reordering paper's qualitative findings that one study can test
+    /// (TT, the paper's total time, throughout).
+    pub fn findings(&self) -> Vec<Finding> {
+        let tt = |scheme: &str, strategy: &str| {
+            self.rows
+                .iter()
+                .find(|r| r.scheme == scheme && r.strategy == strategy)
+                .map(|r| if r.reached { r.tt } else { f64::INFINITY })
+        };
+        let static_rows: Vec<&StudyRow> = self.rows.iter().filter(|r| r.strategy == "static").collect();
+        let mut dynamic = (0, 0);
+        for r in self.rows.iter().filter(|r| r.strategy != "static") {
+            if let Some(st) = tt(&r.scheme, "static") {
+                dynamic.1 += 1;
+                dynamic.0 += (st < if r.reached { r.tt } else { f64::INFINITY }) as usize;
+            }
+        }
+        let n_best = static_rows
+            .iter()
+            .filter(|r| r.scheme == "N" || r.scheme == "-N")
+            .any(|r| r.tt_rank <= 5);
+        let mut distance = (0, 0);
+        for base in ["WQP", "GAVM", "GRVM", "LNG", "-WQP", "-GAVM", "-GRVM", "-LNG"] {
+            let d = match base.strip_prefix('-') {
+                Some(b) => format!("-D-{b}"),
+                None => format!("D-{base}"),
+            };
+            if let (Some(b), Some(dd)) = (tt(base, "static"), tt(&d, "static")) {
+                distance.1 += 1;
+                distance.0 += (dd < b) as usize;
+            }
+        }
+        vec![
+            Finding {
+                claim: "The static strategy takes less total time than reordering every k sweeps (scheme by scheme)",
+                holds: dynamic.0,
+                of: dynamic.1,
+            },
+            Finding {
+                claim: "N or -N is among the five best schemes under the static strategy",
+                holds: n_best as usize,
+                of: 1,
+            },
+            Finding {
+                claim: "A distance scheme takes less total time than its base scheme (static)",
+                holds: distance.0,
+                of: distance.1,
+            },
+        ]
+    }
+
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
             "# Vertex-reordering study\n\n{} with {} free vertices, metric |T - I|^2 against the \
@@ -262,6 +314,11 @@ impl OrderStudy {
                 ));
             }
         }
+        s.push_str(&crate::finding::markdown(
+            "The reordering paper's qualitative findings, tested on this run (a finding that \
+             does not hold here is reported as such).",
+            &self.findings(),
+        ));
         s
     }
 }

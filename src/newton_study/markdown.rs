@@ -317,15 +317,11 @@ pub(super) fn markdown(st: &NewtonStudy) -> String {
     crossing_table(&mut s, &large);
     let _ = writeln!(s, "\n**Figure 7** (`fig7-ratio.svg`)");
     ratio_table(&mut s, &large);
-    let _ = writeln!(
-        s,
-        "## Findings\n\nThe paper's qualitative findings that these meshes test, case by case \
-         (times with setup counted; a finding that does not hold here is reported as such).\n\n\
-         | finding | cases that bear it out | verdict |\n|---|---:|---|"
-    );
-    for f in st.findings() {
-        let _ = writeln!(s, "| {} | {} of {} | {} |", f.claim, f.holds, f.of, f.verdict());
-    }
+    s.push_str(&crate::finding::markdown(
+        "The paper's qualitative findings that these meshes test, case by case (times with \
+         setup counted; a finding that does not hold here is reported as such).",
+        &st.findings(),
+    ));
     s
 }
 

@@ -13,6 +13,7 @@ pub mod paper;
 
 use crate::compare::{self, with_setup};
 use crate::error::Result;
+pub use crate::finding::Finding;
 use crate::generate::{self, HeteroOptions, PerturbOptions, PerturbStats, Perturbation, hetero_tet_box};
 use crate::mesh::Mesh;
 use crate::report::{Stats, quality_report};
@@ -103,26 +104,6 @@ pub enum Crossing {
     NewtonAhead,
     /// Newton ends behind BCD.
     Never,
-}
-
-/// One of the paper's findings, checked case by case.
-#[derive(Clone, Debug, Serialize)]
-pub struct Finding {
-    pub claim: &'static str,
-    /// Cases that bear it out, of how many.
-    pub holds: usize,
-    pub of: usize,
-}
-
-impl Finding {
-    /// "reproduced" (every case), "in part" (some) or "not reproduced" (none).
-    pub fn verdict(&self) -> &'static str {
-        match self.holds {
-            0 => "not reproduced",
-            h if h == self.of => "reproduced",
-            _ => "in part",
-        }
-    }
 }
 
 /// One mesh of one suite.
