@@ -253,7 +253,6 @@ fn quick_study_writes_every_table_and_figure() {
     }
     let md = std::fs::read_to_string(out.join("newton-study.md")).unwrap();
     // every finding is reported with a verdict, whichever way it went
-    let findings = md.split("## Findings").nth(1).expect("a Findings section");
     for claim in [
         "on the ducts",
         "T100 first on the heterogeneous",
@@ -261,16 +260,7 @@ fn quick_study_writes_every_table_and_figure() {
         "negative curvature",
         "large NE shifts",
     ] {
-        let line = findings
-            .lines()
-            .find(|l| l.contains(claim))
-            .unwrap_or_else(|| panic!("{claim}"));
-        assert!(
-            ["| reproduced |", "| in part |", "| not reproduced |"]
-                .iter()
-                .any(|v| line.ends_with(v)),
-            "{line}"
-        );
+        common::finding_line(&md, claim);
     }
     for t in [
         "**Table 1**",
