@@ -387,6 +387,17 @@ pub fn write_pieces(
             mesh.num_points()
         )));
     }
+    // a piece's cell arrays under the mesh's names
+    fn with_names<'a>(cell_data: &[CellData<'a>], data: &'a [Vec<f64>]) -> Vec<CellData<'a>> {
+        cell_data
+            .iter()
+            .zip(data)
+            .map(|(c, v)| CellData {
+                name: c.name,
+                values: v,
+            })
+            .collect()
+    }
     let mut elems: Vec<Vec<usize>> = vec![Vec::new(); parts];
     for e in 0..mesh.num_elements() {
         elems[owner[mesh.element(e)[0] as usize] as usize].push(e);
@@ -415,16 +426,8 @@ pub fn write_pieces(
             .iter()
             .map(|c| elems.iter().map(|&e| c.values[e]).collect())
             .collect();
-        let piece_data: Vec<CellData> = cell_data
-            .iter()
-            .zip(&data)
-            .map(|(c, v)| CellData {
-                name: c.name,
-                values: v,
-            })
-            .collect();
         let p = piece_path(path, r);
-        write(&p, &piece, format, &piece_data)?;
+        write(&p, &piece, format, &with_names(cell_data, &data))?;
         sources.push(
             p.file_name()
                 .map(|n| n.to_string_lossy().into_owned())
@@ -441,15 +444,9 @@ pub fn write_pieces(
             path.display()
         )));
     };
-    let piece_data: Vec<CellData> = cell_data
-        .iter()
-        .zip(&data)
-        .map(|(c, v)| CellData {
-            name: c.name,
-            values: v,
-        })
-        .collect();
-    write_atomic(path, |w| vtu::write_index(w, &piece, &piece_data, &sources))?;
+    write_atomic(path, |w| {
+        vtu::write_index(w, &piece, &with_names(cell_data, &data), &sources)
+    })?;
     Ok(paths)
 }
 
