@@ -9,7 +9,9 @@ use meshsmooth::generate::{self, VoronoiOptions, prism::PAPER_SEED};
 use meshsmooth::mesh::topology::fixed_vertices;
 use meshsmooth::metric::mat3::Vec3;
 use meshsmooth::metric::smetric::MetricKind;
-use meshsmooth::metric_report::{displacement_percent, element_values, metric_summary};
+use meshsmooth::metric_report::{
+    MetricSummary, SpacingDisplacement, displacement_percent, element_values, metric_summary,
+};
 use meshsmooth::problem::Problem;
 use meshsmooth::solve::rezone::{self, cn_paper_options, reference_positions, rj_problem};
 use meshsmooth::solve::{Device, Method, Options, Params};
@@ -270,30 +272,70 @@ fn prism_generator_moves_interior_vertices_only() {
     assert!(off < 12.0, "bands {bands:?} vs the paper's {paper:?}");
 }
 
-/// Example 1 of the paper, end to end on the CPU: RJ and CN from the same start.
-#[test]
-fn example_1_rj_removes_bad_prisms_with_little_motion_and_cn_restores_the_grid() {
-    let mesh = generate::prism_mesh(true, PAPER_SEED);
-    let before = metric_summary(&mesh, &mesh.points, MetricKind::ConditionNumberPaper, None).unwrap();
+/// RJ rezoning (`rj_options`) and the CN optimisation (Newton to a gradient
+/// stop tighter than the default, so CN is at CN's optimum) from the same
+/// start, as section 6 compares them.
+struct RjAndCn {
+    before: MetricSummary,
+    after_rj: MetricSummary,
+    after_cn: MetricSummary,
+    d_rj: SpacingDisplacement,
+    d_cn: SpacingDisplacement,
+    rj: Mesh,
+    cn: Mesh,
+}
+
+fn rj_and_cn(mesh: &Mesh, rj_options: &rezone::RezoneOptions) -> RjAndCn {
+    let summary = |m: &Mesh| metric_summary(m, &m.points, MetricKind::ConditionNumberPaper, None).unwrap();
     let mut rj = mesh.clone();
-    let info = rezone::rezone_mesh(&mut rj, &rezone::default_options(Device::Cpu), &mut |_| true).unwrap();
-    let after_rj = metric_summary(&rj, &rj.points, MetricKind::ConditionNumberPaper, None).unwrap();
+    let info = rezone::rezone_mesh(&mut rj, rj_options, &mut |_| true).unwrap();
     let mut cn = mesh.clone();
-    // to 1e-6 of 11/9 on every prism: a gradient stop tighter than the default's
-    // (which left a few prisms 2e-6 off once Newton's product summed in another order)
     let tight = Params {
         tol: 1e-9,
         ..Params::default()
     };
     let cn_info = rezone::cn_optimise_mesh(&mut cn, &Options::cpu(Method::Newton, &tight), &mut |_| true).unwrap();
-    let after_cn = metric_summary(&cn, &cn.points, MetricKind::ConditionNumberPaper, None).unwrap();
-    let d_rj = displacement_percent(&mesh, &mesh.points, &rj.points);
-    let d_cn = displacement_percent(&mesh, &mesh.points, &cn.points);
+    let out = RjAndCn {
+        before: summary(mesh),
+        after_rj: summary(&rj),
+        after_cn: summary(&cn),
+        d_rj: displacement_percent(mesh, &mesh.points, &rj.points),
+        d_cn: displacement_percent(mesh, &mesh.points, &cn.points),
+        rj,
+        cn,
+    };
     eprintln!(
-        "RJ {:?} {:?}\nCN {:?} {:?}",
-        info.info.stop, info.info.iterations, cn_info.stop, cn_info.iterations
+        "RJ {:?} {:?}, {:.1} s + {:.1} s\nCN {:?} {:?}, {:.1} s",
+        info.info.stop,
+        info.info.iterations,
+        info.reference_seconds,
+        info.info.seconds,
+        cn_info.stop,
+        cn_info.iterations,
+        cn_info.seconds
     );
-    eprintln!("before {before:?}\nrj {after_rj:?}\ncn {after_cn:?}\nd_rj {d_rj:?}\nd_cn {d_cn:?}");
+    eprintln!(
+        "before {:?}\nrj {:?}\ncn {:?}\nd_rj {:?}\nd_cn {:?}",
+        out.before, out.after_rj, out.after_cn, out.d_rj, out.d_cn
+    );
+    out
+}
+
+/// Example 1 of the paper, end to end on the CPU: RJ and CN from the same start.
+#[test]
+fn example_1_rj_removes_bad_prisms_with_little_motion_and_cn_restores_the_grid() {
+    let mesh = generate::prism_mesh(true, PAPER_SEED);
+    // CN to 1e-6 of 11/9 on every prism: a gradient stop tighter than the default's
+    // (which left a few prisms 2e-6 off once Newton's product summed in another order)
+    let RjAndCn {
+        before,
+        after_rj,
+        after_cn,
+        d_rj,
+        d_cn,
+        cn,
+        ..
+    } = rj_and_cn(&mesh, &rezone::default_options(Device::Cpu));
     assert!(before.max > 100.0, "{}", before.max);
     assert!(after_rj.max < 10.0, "RJ leaves a prism at {}", after_rj.max);
     assert!(after_rj.avg < before.avg);
@@ -327,32 +369,18 @@ fn example_2_rj_removes_bad_polyhedra_with_little_motion() {
         ..Default::default()
     };
     let mesh = generate::voronoi_mesh(&opts).unwrap();
-    let before = metric_summary(&mesh, &mesh.points, MetricKind::ConditionNumberPaper, None).unwrap();
-    let mut rj = mesh.clone();
     // Newton, as for the README's table (the default NLCG is slower here)
     let mut newton = rezone::default_options(Device::Cpu);
     newton.solve.method = Method::Newton;
-    let info = rezone::rezone_mesh(&mut rj, &newton, &mut |_| true).unwrap();
-    let after_rj = metric_summary(&rj, &rj.points, MetricKind::ConditionNumberPaper, None).unwrap();
-    let mut cn = mesh.clone();
-    // a gradient stop tighter than the default, so CN is CN's optimum
-    let tight = Params {
-        tol: 1e-9,
-        ..Params::default()
-    };
-    let cn_info = rezone::cn_optimise_mesh(&mut cn, &Options::cpu(Method::Newton, &tight), &mut |_| true).unwrap();
-    let after_cn = metric_summary(&cn, &cn.points, MetricKind::ConditionNumberPaper, None).unwrap();
-    let d_rj = displacement_percent(&mesh, &mesh.points, &rj.points);
-    let d_cn = displacement_percent(&mesh, &mesh.points, &cn.points);
-    eprintln!(
-        "RJ {:?} {:?}\nCN {:?} {:?}",
-        info.info.stop, info.info.iterations, cn_info.stop, cn_info.iterations
-    );
-    eprintln!("before {before:?}\nrj {after_rj:?}\ncn {after_cn:?}\nd_rj {d_rj:?}\nd_cn {d_cn:?}");
-    eprintln!(
-        "RJ {:.1} s + {:.1} s, CN {:.1} s",
-        info.reference_seconds, info.info.seconds, cn_info.seconds
-    );
+    let RjAndCn {
+        before,
+        after_rj,
+        after_cn,
+        d_rj,
+        d_cn,
+        rj,
+        cn,
+    } = rj_and_cn(&mesh, &newton);
     // every corner of every output cell positive, the topology kept
     for (what, m) in [("RJ", &rj), ("CN", &cn)] {
         assert!(meshsmooth::metric::inverted_elements(m, &m.points).is_empty(), "{what}");
