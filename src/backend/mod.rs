@@ -160,6 +160,13 @@ pub trait Backend {
     fn trial(&mut self, alpha: Coef, d: Vector) -> Result<()>;
     /// Current = Trial.
     fn accept_trial(&mut self) -> Result<()>;
+    /// slots[out] = the fraction of the way from Current to Trial at which a
+    /// corner first inverts: the smallest root on (0, 1] of the corners'
+    /// determinant polynomials, +inf if none inverts. A backend without it
+    /// writes NaN, and the line search then halves its steps blindly.
+    fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
+        self.set_slot(out, Coef::value(f64::NAN), None)
+    }
 
     /// One colour of a BCD sweep at the current positions: a safeguarded
     /// Newton step per vertex of the colour (they share no element).

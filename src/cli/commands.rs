@@ -25,6 +25,13 @@ impl SolverArgs {
         p.newton.negative_curvature = self.negative_curvature;
         self.objective.sweep_params(&mut p)?;
         p.newton.preconditioner = self.preconditioner;
+        if !(0.0..1.0).contains(&self.inversion_fraction) {
+            return Err(Error::InvalidArgument(format!(
+                "--inversion-fraction {} must be at least 0 and below 1",
+                self.inversion_fraction
+            )));
+        }
+        p.newton.inversion_fraction = self.inversion_fraction;
         Ok(p)
     }
 }
@@ -189,7 +196,22 @@ fn summary(info: &Info, f0: f64) -> String {
         info.objective,
         change,
         info.grad_norm
-    )
+    ) + &newton_counts(info)
+}
+
+/// Where a Newton run's time went, for users tuning it: CG iterations, line
+/// search trials and directions of negative curvature (empty for other methods).
+fn newton_counts(info: &Info) -> String {
+    match (
+        info.cg_iterations,
+        info.line_search_trials,
+        info.negative_curvature_steps,
+    ) {
+        (Some(cg), Some(ls), Some(nc)) => {
+            format!("; {cg} CG iterations, {ls} line-search trials, {nc} step(s) on negative curvature")
+        }
+        _ => String::new(),
+    }
 }
 
 /// Untangles a tangled `mesh` in place (a no-op for an untangled one) and

@@ -245,6 +245,11 @@ pub struct SolverArgs {
     /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer).
     #[arg(long, value_enum, default_value_t = NewtonParams::default().preconditioner)]
     pub preconditioner: Preconditioner,
+    /// Newton: after a trial step that inverts an element, try this fraction of the distance
+    /// at which the first corner inverts (from the corners' determinant polynomials); 0 halves
+    /// the step instead, as the paper's Armijo search does.
+    #[arg(long, value_name = "FRACTION", default_value_t = NewtonParams::default().inversion_fraction)]
+    pub inversion_fraction: f64,
 }
 
 /// Cells of a generated box.

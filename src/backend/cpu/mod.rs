@@ -243,6 +243,12 @@ impl Backend for CpuBackend<'_> {
         Ok(())
     }
 
+    fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
+        let t = objective::first_inversion(self.problem()?, &self.x, &self.trial);
+        self.set(out, t);
+        Ok(())
+    }
+
     fn trial(&mut self, alpha: Coef, d: Vector) -> Result<()> {
         let a = alpha.eval(&self.slots);
         line_search::trial(
@@ -384,7 +390,7 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
-        let (s, m) = dot::dot(&self.vectors[a.0 as usize], &self.vectors[b.0 as usize]);
+        let (s, m) = dot::dot(&self.vectors[a.0 as usize], &self.vectors[b.0 as usize], max.is_some());
         self.set(sum, s);
         if let Some(slot) = max {
             self.set(slot, m);

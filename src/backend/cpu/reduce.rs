@@ -17,18 +17,3 @@ pub fn sum<T: Sync>(items: &[T], f: impl Fn(&T) -> f64 + Sync) -> f64 {
     let partials: Vec<f64> = items.par_chunks(CHUNK).map(|c| c.iter().map(&f).sum()).collect();
     in_order(&partials)
 }
-
-/// (sum, max) of `f` over `items` in fixed chunks.
-pub fn sum_max<T: Sync>(items: &[T], f: impl Fn(&T) -> (f64, f64) + Sync) -> (f64, f64) {
-    let partials: Vec<(f64, f64)> = items
-        .par_chunks(CHUNK)
-        .map(|c| {
-            c.iter().fold((0.0, 0.0f64), |(s, m), t| {
-                let (a, b) = f(t);
-                (s + a, m.max(b))
-            })
-        })
-        .collect();
-    let sum = in_order(&partials.iter().map(|p| p.0).collect::<Vec<_>>());
-    (sum, partials.iter().fold(0.0f64, |m, p| m.max(p.1)))
-}

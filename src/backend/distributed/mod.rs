@@ -143,6 +143,24 @@ impl Backend for DistributedBackend<'_> {
         self.inner.accept_trial()
     }
 
+    fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
+        let p = &self.part.problem;
+        let (x, y) = (
+            self.inner.points_ref(Points::Current),
+            self.inner.points_ref(Points::Trial),
+        );
+        // a minimum: the same on any partition and in any order
+        let local = self
+            .part
+            .owned_corners
+            .par_iter()
+            .map(|&c| objective::corner_first_inversion(p, x, y, c as usize))
+            .reduce(|| f64::INFINITY, f64::min);
+        let global = self.comm.reduce(&[local], &[comm::min]);
+        self.inner.set(out, global[0]);
+        Ok(())
+    }
+
     fn reference_positions(&mut self, _iters: usize) -> Result<Vec<Vec3>> {
         // `rezone::reference_positions` runs step 1 on rank 0's whole problem
         Err(crate::error::Error::InvalidArgument(
