@@ -113,6 +113,11 @@ pub(crate) const METRIC_TMP: u32 = 2;
 pub(crate) const METRIC_RJ: u32 = 3;
 pub(crate) const TEMPLATE_HARMONIC: u32 = 0;
 pub(crate) const TEMPLATE_AVERAGE: u32 = 1;
+/// `ModelUniform::closed`: the structured general path, the tetrahedral
+/// inverse mean ratio (`Model::fast`), the planar 2x2 forms (`Model::planar`).
+pub(crate) const CLOSED_NONE: u32 = 0;
+pub(crate) const CLOSED_TET: u32 = 1;
+pub(crate) const CLOSED_PLANAR: u32 = 2;
 
 /// The constants Rust and WGSL share, generated into every kernel's prelude
 /// (`Real::prelude`); no WGSL file defines them.
@@ -137,7 +142,9 @@ pub(crate) struct ModelUniform {
     pub dim: u32,
     pub metric: u32,
     pub tmpl: u32,
-    pub fast: u32,
+    /// Which closed forms the CPU takes for this model (`CLOSED_*`): the
+    /// kernels never read it, `shader::Form::of` compiles them for it.
+    pub closed: u32,
     pub eps: f64,
 }
 const _: () = assert!(std::mem::size_of::<ModelUniform>() == 24);
@@ -178,7 +185,13 @@ impl ModelUniform {
                 Template::Average => TEMPLATE_AVERAGE,
             },
             // the closed forms `Model::blocks` and friends take on the CPU
-            fast: m.fast(p.dim) as u32,
+            closed: if m.fast(p.dim) {
+                CLOSED_TET
+            } else if m.planar(p.dim) {
+                CLOSED_PLANAR
+            } else {
+                CLOSED_NONE
+            },
         }
     }
 }

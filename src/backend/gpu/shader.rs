@@ -6,7 +6,7 @@
 //! once, with its bindings and variants: pipelines and bind-group layouts are
 //! built from it, and a test checks it against naga's reflection of the WGSL.
 
-use super::layout::{METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_TMP, ModelUniform};
+use super::layout::{CLOSED_PLANAR, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_TMP, ModelUniform};
 use std::collections::HashSet;
 
 /// Floating-point precision of the device arithmetic.
@@ -53,6 +53,7 @@ const SHARED: &[(&str, &str)] = &[
         "reference_jacobian",
         include_str!("../../../shaders/metric/reference_jacobian.wgsl"),
     ),
+    ("planar", include_str!("../../../shaders/metric/planar.wgsl")),
     ("shess", include_str!("../../../shaders/metric/shess.wgsl")),
     ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
     (
@@ -206,9 +207,10 @@ kernels! {
     ];
 }
 
-/// Which instance of a kernel with variants is compiled: the closed form
-/// (`#if FAST`, the tetrahedral inverse mean ratio) or the general corner
-/// path for one metric. Each general instance carries only its own metric's
+/// Which instance of a kernel with variants is compiled: a closed form
+/// (`#if FAST`, the tetrahedral inverse mean ratio; `#if PLANAR`, the planar
+/// inverse mean ratio and condition number under the harmonic template,
+/// `planar.wgsl`) or the general corner path for one metric. Each general instance carries only its own metric's
 /// code (`#if IMR`, `#if CN`, ...), not a runtime branch over all of them:
 /// less code per pipeline (llvmpipe gives all loops of one invocation a
 /// shared budget of 65535 iterations, so code that is never run still
@@ -216,6 +218,7 @@ kernels! {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Form {
     Fast,
+    Planar,
     Imr,
     Cn,
     Tmp,
@@ -223,12 +226,14 @@ pub enum Form {
 }
 
 impl Form {
-    pub const ALL: [Form; 5] = [Form::Fast, Form::Imr, Form::Cn, Form::Tmp, Form::Rj];
+    pub const ALL: [Form; 6] = [Form::Fast, Form::Planar, Form::Imr, Form::Cn, Form::Tmp, Form::Rj];
 
     /// The instance the model uniform asks for (`ModelUniform::of`).
     pub(crate) fn of(model: &ModelUniform) -> Form {
-        if model.fast != 0 {
-            return Form::Fast;
+        match model.closed {
+            CLOSED_TET => return Form::Fast,
+            CLOSED_PLANAR => return Form::Planar,
+            _ => {}
         }
         match model.metric {
             METRIC_IMR => Form::Imr,
@@ -239,11 +244,12 @@ impl Form {
         }
     }
 
-    /// The preprocessor flag that `#if NAME` tests; every general form also
-    /// satisfies `#if !FAST`.
+    /// The preprocessor flag that `#if NAME` tests; every other form
+    /// satisfies `#if !NAME`.
     fn flag(self) -> &'static str {
         match self {
             Form::Fast => "FAST",
+            Form::Planar => "PLANAR",
             Form::Imr => "IMR",
             Form::Cn => "CN",
             Form::Tmp => "TMP",
@@ -405,7 +411,7 @@ fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32) -> String {
 /// Appends `src` to `out` with every `#import name` replaced by that shared
 /// file (once per kernel, imports first), keeping `#if NAME` / `#if !NAME`
 /// ... `#else` ... `#endif` blocks according to `form` (NAME one of FAST,
-/// IMR, CN, TMP, RJ).
+/// PLANAR, IMR, CN, TMP, RJ).
 fn preprocess(src: &str, form: Form, seen: &mut HashSet<&'static str>, out: &mut String) {
     // one entry per open #if: is its current branch kept?
     let mut keep: Vec<bool> = Vec::new();
