@@ -340,6 +340,12 @@ impl<'c> GpuBackend<'c> {
         self.submissions
     }
 
+    /// The instance its kernels with variants are compiled as: the closed
+    /// forms wherever the CPU takes them (`Model::fast`, `Model::planar`).
+    pub fn form(&self) -> Form {
+        self.form
+    }
+
     /// The most buffers any one array is split across (1: none is split).
     pub fn max_parts(&self) -> usize {
         self.bufs.values().map(Vec::len).max().unwrap_or(1)
