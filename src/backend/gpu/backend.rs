@@ -192,7 +192,11 @@ impl<'c> GpuBackend<'c> {
             n_corners: nc,
             n_free: nf,
             colors,
-            form: Form::of(&model),
+            form: if ctx.general_only {
+                Form::general(&model)
+            } else {
+                Form::of(&model)
+            },
             max_backtracks: ls.max_backtracks as u32,
             bufs,
             vectors: Vec::new(),

@@ -235,6 +235,11 @@ impl Form {
             CLOSED_PLANAR => return Form::Planar,
             _ => {}
         }
+        Form::general(model)
+    }
+
+    /// The general instance of the model's metric, closed forms or not.
+    pub(crate) fn general(model: &ModelUniform) -> Form {
         match model.metric {
             METRIC_IMR => Form::Imr,
             METRIC_CN => Form::Cn,
