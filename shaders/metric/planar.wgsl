@@ -24,6 +24,20 @@ fn planar_det(s: mat3x3<real>) -> real {
     return s[0][0] * s[1][1] - s[0][1] * s[1][0];
 }
 
+// `s_rest` of a planar corner: S without vertex k's term, its leading 2x2
+// block only (all the planar forms read) and from the corner's three
+// vertices (b_3 is zero in 2D, so its term adds exact zeros), in the CPU's
+// order. What it leaves out is what llvmpipe need not load.
+fn planar_s_rest(x: array<vec3<real>, 4>, b: array<vec3<real>, 4>, k: u32) -> mat3x3<real> {
+    let zero = vec2<real>(real(0.0));
+    let x0 = select(x[0].xy, zero, k == 0u);
+    let x1 = select(x[1].xy, zero, k == 1u);
+    let x2 = select(x[2].xy, zero, k == 2u);
+    let r0 = x0[0] * b[0].xy + x1[0] * b[1].xy + x2[0] * b[2].xy;
+    let r1 = x0[1] * b[0].xy + x1[1] * b[1].xy + x2[1] * b[2].xy;
+    return mat3x3<real>(vec3<real>(r0, real(0.0)), vec3<real>(r1, real(0.0)), vec3<real>(real(0.0)));
+}
+
 // `planar::value_of_s`
 fn planar_value_of_s(s: mat3x3<real>) -> Eta {
     let d = planar_det(s);
