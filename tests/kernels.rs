@@ -551,16 +551,20 @@ fn run_planar(precision: Precision, tol: f64) {
     }
 }
 
+/// On lavapipe the f64 kernels agree with `planar.rs` to 1e-15 in every
+/// check (3e-16 relative in F); 1e-12 leaves room for another device's
+/// contractions.
 #[test]
 fn planar_matches_cpu_f64() {
     run_planar(Precision::F64, 1e-12);
 }
 
-/// f32 keeps about 7 digits; the Hessian blocks' cancellations (S C^T + C S^T
-/// less 2 eta C C^T) and one sweep's Newton solves cost up to two more.
+/// f32 keeps about 7 digits: on lavapipe every check here agrees to 1e-6
+/// relative (6e-7 in the gradient, the worst); 1e-5 is that with room for
+/// the Newton solves and Hessian cancellations of another device.
 #[test]
 fn planar_matches_cpu_f32() {
-    run_planar(Precision::F32, 1e-4);
+    run_planar(Precision::F32, 1e-5);
 }
 
 fn run_sliding(precision: Precision, tol: f64, check: Check) {

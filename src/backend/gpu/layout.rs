@@ -4,7 +4,7 @@
 use super::shader::Real;
 use crate::backend::{Coef, N_SLOTS, Slot};
 use crate::metric::TetShape;
-use crate::metric::corner_model::Template;
+use crate::metric::corner_model::{Model, Template};
 use crate::metric::smetric::MetricKind;
 use crate::problem::Problem;
 use bytemuck::{Pod, Zeroable};
@@ -170,10 +170,14 @@ impl ModelUniform {
     }
 
     pub fn of(p: &Problem) -> ModelUniform {
-        let m = p.model;
+        Self::from_model(&p.model, p.dim)
+    }
+
+    /// The uniform of `m` in dimension `dim`.
+    pub fn from_model(m: &Model, dim: usize) -> ModelUniform {
         ModelUniform {
             eps: m.eps,
-            dim: p.dim as u32,
+            dim: dim as u32,
             metric: match m.metric {
                 MetricKind::InverseMeanRatio => METRIC_IMR,
                 MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper => METRIC_CN,
@@ -185,9 +189,9 @@ impl ModelUniform {
                 Template::Average => TEMPLATE_AVERAGE,
             },
             // the closed forms `Model::blocks` and friends take on the CPU
-            closed: if m.fast(p.dim) {
+            closed: if m.fast(dim) {
                 CLOSED_TET
-            } else if m.planar(p.dim) {
+            } else if m.planar(dim) {
                 CLOSED_PLANAR
             } else {
                 CLOSED_NONE

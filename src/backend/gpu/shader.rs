@@ -724,6 +724,44 @@ mod tests {
     }
 
     #[test]
+    fn closed_form_instances_are_compiled_wherever_the_cpu_takes_closed_forms() {
+        use crate::metric::corner_model::{Model, Template};
+        use crate::metric::smetric::MetricKind;
+        let metrics = [
+            MetricKind::InverseMeanRatio,
+            MetricKind::ConditionNumber,
+            MetricKind::TargetShapeSize,
+            MetricKind::ConditionNumberPaper,
+            MetricKind::ReferenceJacobian,
+        ];
+        let mut planar = 0;
+        for metric in metrics {
+            for template in [Template::Harmonic, Template::Average] {
+                for eps in [0.0, 1e-3] {
+                    for dim in [2, 3] {
+                        let m = Model { metric, template, eps };
+                        let form = Form::of(&ModelUniform::from_model(&m, dim));
+                        assert_eq!(form == Form::Fast, m.fast(dim), "{m:?} in {dim}D: {form:?}");
+                        assert_eq!(form == Form::Planar, m.planar(dim), "{m:?} in {dim}D: {form:?}");
+                        planar += m.planar(dim) as usize;
+                    }
+                }
+            }
+        }
+        assert_eq!(planar, 3, "imr, cn and cn-paper under the harmonic template");
+        // only the planar instance carries the planar forms
+        for v in Variant::all() {
+            let src = v.compose(Real::F64);
+            assert_eq!(
+                src.contains("fn planar_parts("),
+                v.form == Form::Planar,
+                "{}",
+                v.label()
+            );
+        }
+    }
+
+    #[test]
     fn imports_are_included_once() {
         let src = Kernel::Bcd.with(Form::Fast).compose(Real::F32);
         assert_eq!(src.matches("fn det3(").count(), 1);
