@@ -126,8 +126,9 @@ const SLIDE_REAL: Binding = b("slide_real", R, Re);
 const SLIDE_IDX: Binding = b("slide_idx", R, Ui);
 
 /// One kernel: its WGSL stem (file, CPU twin and tests share it), source,
-/// bindings in order (group 0, binding i) and whether it has a closed-form
-/// (`#if FAST`, the tetrahedral inverse mean ratio) and a general variant.
+/// bindings in order (group 0, binding i) and whether it has variants: the
+/// closed forms (`#if FAST`, `#if PLANAR`) and a general instance per metric
+/// (`Form`).
 #[derive(Debug)]
 pub struct KernelDef {
     pub stem: &'static str,
