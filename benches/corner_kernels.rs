@@ -3,10 +3,16 @@
 //! the adapter has it), elements per second and the GPU:CPU ratio. Every
 //! general corner kernel goes through the structured S-Hessian
 //! (`shaders/metric/shess.wgsl`); the tetrahedral inverse mean ratio under the
-//! harmonic template through its own closed forms. Issue #14's target for
-//! lavapipe is a ratio of at least 1/3 in every row.
+//! harmonic template through its own closed forms, and the planar inverse
+//! mean ratio and condition number under it through `planar.wgsl`. Issue
+//! #14's target for lavapipe is a ratio of at least 1/3 in every row.
 //!
-//! Run: `cargo bench --bench corner_kernels [-- --quick] [--adapter NAME]`
+//! Run: `cargo bench --bench corner_kernels [-- --quick] [--adapter NAME]
+//! [--kinds triangle,tetrahedron,...] [--general]` (`--kinds`: only those
+//! rows; `--general`: also the general kernels where a closed form applies,
+//! `GpuOptions::general_only`, as "GPU f32 general" and so on). The CPU and
+//! the GPU sweeps of a row are timed in turn, rep by rep, so that a change
+//! of load hits all of them alike.
 
 use meshsmooth::backend::cpu::bcd;
 use meshsmooth::backend::gpu::{GpuBackend, GpuOptions};
@@ -18,7 +24,8 @@ use meshsmooth::problem::{Problem, ProblemOptions};
 use meshsmooth::{ElementKind, Mesh};
 
 mod common;
-use common::{gpu_contexts, time};
+use common::{gpu_contexts, median};
+use std::time::Instant;
 
 fn perturbed(mut m: Mesh, alpha: f64) -> Mesh {
     let opts = PerturbOptions {
@@ -66,10 +73,20 @@ fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let adapter = common::arg("--adapter");
     let reps = if quick { 2 } else { 5 };
-    let gpus = gpu_contexts(&GpuOptions {
-        adapter,
+    let kinds = common::arg("--kinds");
+    let wanted = |k: ElementKind| kinds.as_ref().is_none_or(|s| s.split(',').any(|n| n == k.to_string()));
+    let mut gpus = gpu_contexts(&GpuOptions {
+        adapter: adapter.clone(),
         ..Default::default()
     });
+    if common::flag("--general") {
+        let general = gpu_contexts(&GpuOptions {
+            adapter,
+            general_only: true,
+            ..Default::default()
+        });
+        gpus.extend(general.into_iter().map(|(p, c)| (format!("{p} general"), c)));
+    }
     if let Some((_, ctx)) = gpus.first() {
         println!("GPU: {}", ctx.adapter_name());
     }
@@ -89,6 +106,9 @@ fn main() {
         (MetricKind::ConditionNumberPaper, Template::Harmonic),
     ];
     for (kind, reference, mesh) in meshes(if quick { 2000 } else { 20000 }) {
+        if !wanted(kind) {
+            continue;
+        }
         for (metric, template) in models {
             if metric == MetricKind::ConditionNumberPaper && kind.dim() == 2 {
                 continue;
@@ -109,31 +129,72 @@ fn main() {
             let x0 = p.gather(&mesh.points);
             let ne = p.num_elements() as f64;
             let ls = Default::default();
+            let closed = p.model.fast(p.dim) || p.model.planar(p.dim);
             let mut x = x0.clone();
-            let cpu = time(reps, || {
+            let mut backends: Vec<Option<GpuBackend>> = Vec::new();
+            let mut cells: Vec<String> = Vec::new();
+            for (name, ctx) in &gpus {
+                if name.ends_with("general") && !closed {
+                    // the same kernels as the column without "general"
+                    backends.push(None);
+                    cells.push(" - | - |".into());
+                    continue;
+                }
+                match GpuBackend::new(ctx, &p, &x0, &ls) {
+                    Ok(g) => {
+                        backends.push(Some(g));
+                        cells.push(String::new());
+                    }
+                    Err(e) => {
+                        backends.push(None);
+                        cells.push(format!(" {e} | |"));
+                    }
+                }
+            }
+            let mut cpu_sweep = || {
                 for c in 0..p.colors.len() {
                     bcd::sweep_color(&p, &mut x, c, &ls);
                 }
-            });
+            };
+            let gpu_sweep = |g: &mut GpuBackend| {
+                for c in 0..g.num_colors() {
+                    g.bcd_color(c).unwrap();
+                }
+                g.max_move(Slot(0)).unwrap();
+                g.flush().unwrap();
+            };
+            // rep 0 warms up (pipelines, caches) and is not counted
+            let mut cpu_t = Vec::new();
+            let mut gpu_t: Vec<Vec<f64>> = vec![Vec::new(); backends.len()];
+            for rep in 0..=reps {
+                let s = Instant::now();
+                cpu_sweep();
+                if rep > 0 {
+                    cpu_t.push(s.elapsed().as_secs_f64());
+                }
+                for (g, t) in backends.iter_mut().zip(&mut gpu_t) {
+                    if let Some(g) = g {
+                        let s = Instant::now();
+                        gpu_sweep(g);
+                        if rep > 0 {
+                            t.push(s.elapsed().as_secs_f64());
+                        }
+                    }
+                }
+            }
+            let cpu = median(cpu_t);
             let rate = |s: f64| format!("{:.3} M/s ({:.1} ms)", ne / s / 1e6, s * 1e3);
             let mut row = format!(
                 "| {kind} | {metric} | {template:?} | {} | {} |",
                 p.num_elements(),
                 rate(cpu)
             );
-            for (_, ctx) in &gpus {
-                match GpuBackend::new(ctx, &p, &x0, &ls) {
-                    Ok(mut g) => {
-                        let s = time(reps, || {
-                            for c in 0..g.num_colors() {
-                                g.bcd_color(c).unwrap();
-                            }
-                            g.max_move(Slot(0)).unwrap();
-                            g.flush().unwrap();
-                        });
-                        row.push_str(&format!(" {} | {:.2} |", rate(s), cpu / s));
-                    }
-                    Err(e) => row.push_str(&format!(" {e} | |")),
+            for (cell, t) in cells.iter().zip(gpu_t) {
+                if t.is_empty() {
+                    row.push_str(cell);
+                } else {
+                    let s = median(t);
+                    row.push_str(&format!(" {} | {:.2} |", rate(s), cpu / s));
                 }
             }
             println!("{row}");

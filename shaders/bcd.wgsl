@@ -30,7 +30,40 @@
 // The vertex's S-without-its-term per corner, as the CPU's `Patch` keeps
 // them; vertices with more corners than this recompute them per trial.
 const CACHE: u32 = 32u;
+#if PLANAR
+// The planar forms read only the leading 2x2 block of S, so only it is
+// kept: llvmpipe holds this array on the stack, and the z row and column
+// would more than double the traffic (and keep their loads alive).
+var<private> rest_cache: array<vec4<real>, CACHE>;
+
+fn cache_put(i: u32, rest: mat3x3<real>) {
+    rest_cache[i] = vec4<real>(rest[0][0], rest[0][1], rest[1][0], rest[1][1]);
+}
+
+fn cache_get(i: u32) -> mat3x3<real> {
+    let r = rest_cache[i];
+    return mat3x3<real>(vec3<real>(r.x, r.y, real(0.0)), vec3<real>(r.z, r.w, real(0.0)), vec3<real>(real(0.0)));
+}
+#else
 var<private> rest_cache: array<mat3x3<real>, CACHE>;
+
+fn cache_put(i: u32, rest: mat3x3<real>) {
+    rest_cache[i] = rest;
+}
+
+fn cache_get(i: u32) -> mat3x3<real> {
+    return rest_cache[i];
+}
+#endif
+
+// S without vertex k's term of corner c (`TetShape::s_rest`).
+fn corner_rest(c: u32, b: array<vec3<real>, 4>, k: u32) -> mat3x3<real> {
+#if PLANAR
+    return planar_s_rest(corner_points(c), b, k);
+#else
+    return s_rest(corner_points(c), b, k);
+#endif
+}
 
 // `Patch::value`: the weighted terms of the vertex's corners with it at `at`.
 fn patch_value(v: u32, at: vec3<real>) -> Eta {
@@ -43,9 +76,9 @@ fn patch_value(v: u32, at: vec3<real>) -> Eta {
         let cr = corner_ref(packed >> 2u);
         var rest: mat3x3<real>;
         if cached {
-            rest = rest_cache[it - first];
+            rest = cache_get(it - first);
         } else {
-            rest = s_rest(corner_points(packed >> 2u), cr.b, k);
+            rest = corner_rest(packed >> 2u, cr.b, k);
         }
         let r = model_value_of_s(model, s_with(rest, cr.b[k], at), model_rjm(model, cr.b));
         if !r.ok {
@@ -81,9 +114,9 @@ fn main(
         let packed = inc_items_get(it);
         let k = packed & 3u;
         let cr = corner_ref(packed >> 2u);
-        let rest = s_rest(corner_points(packed >> 2u), cr.b, k);
+        let rest = corner_rest(packed >> 2u, cr.b, k);
         if it - first < CACHE {
-            rest_cache[it - first] = rest;
+            cache_put(it - first, rest);
         }
         let r = model_vertex_gh(model, s_with(rest, cr.b[k], xv), cr.b[k], model_rjm(model, cr.b));
         if !r.ok {

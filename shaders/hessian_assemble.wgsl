@@ -2,8 +2,9 @@
 // Hessian of its term, for `hessian_gather` and `gradient_gather` to sum
 // without float atomics; a lower block is the transpose of its upper one.
 // CPU twin: backend/cpu/hessian_assemble.rs (`Model::blocks`: the folded
-// closed form of `TetShape::hessian_blocks`, or the structured S-Hessian
-// contracted with B), each entry times the corner weight.
+// closed form of `TetShape::hessian_blocks`, the planar 2x2 forms of
+// `planar.rs`, or the structured S-Hessian contracted with B), each entry
+// times the corner weight.
 
 #import layout
 #import corners
@@ -57,6 +58,33 @@ fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) 
     return true;
 }
 
+#if PLANAR
+// `corner_model::planar_blocks`: three vertices, the fourth's blocks zero.
+fn planar_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) -> bool {
+    let p = planar_parts(s);
+    if !p.ok {
+        return false;
+    }
+    for (var k = 0u; k < 4u; k++) {
+        let g = planar_gradient(p, b[k]);
+        elem_set(base + 3u * k, g[0] * w);
+        elem_set(base + 3u * k + 1u, g[1] * w);
+        elem_set(base + 3u * k + 2u, g[2] * w);
+        for (var l = k; l < 4u; l++) {
+            var blk = mat3x3<real>();
+            if l < 3u {
+                blk = planar_block(p, b[k], b[l]);
+                if k == l {
+                    blk[2][2] = real(1.0);
+                }
+            }
+            store_block(base, k, l, blk, w);
+        }
+    }
+    return true;
+}
+#endif
+
 @compute @workgroup_size(64)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -76,8 +104,13 @@ fn main(
     let s = s_of(corner_points(e), b);
     let base = ELEM_STRIDE * e;
     var ok = true;
+#if PLANAR
+    ok = planar_blocks(base, s, b, w);
+#endif
 #if !FAST
+#if !PLANAR
     ok = general_blocks(base, s, b, w);
+#endif
     if ok {
         return;
     }

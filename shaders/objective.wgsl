@@ -38,11 +38,21 @@ fn main(
         ok = p.ok;
         term = p.eta;
         g_s = p.grad_s;
-#else
+#endif
+#if PLANAR
+        // b_k has no z entry in 2D, so the zero third column adds exact zeros
+        let p = planar_parts(s);
+        ok = p.ok;
+        term = p.eta;
+        g_s = mat3x3<real>(vec3<real>(p.g0, real(0.0)), vec3<real>(p.g1, real(0.0)), vec3<real>(real(0.0)));
+#endif
+#if !FAST
+#if !PLANAR
         let m = model_eval(model, s, model_rjm(model, cr.b), false);
         ok = m.ok;
         term = m.v;
         g_s = m.g;
+#endif
 #endif
         if ok {
             term = cr.w * term;
@@ -53,11 +63,7 @@ fn main(
         for (var k = 0u; k < 4u; k++) {
             var g = vec3<real>(real(0.0));
             if ok {
-#if FAST
                 g = mul_vec(g_s, cr.b[k]);
-#else
-                g = mul_vec(g_s, cr.b[k]);
-#endif
             }
             for (var i = 0u; i < 3u; i++) {
                 grad_set(12u * c + 3u * k + i, g[i] * cr.w);

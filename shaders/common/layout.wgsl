@@ -49,14 +49,16 @@ struct Op {
     coef: vec4<real>,
 }
 
-// Metric dimension and what turns a corner's S into its term; `fast` marks
-// the tetrahedral inverse mean ratio under the harmonic template, which takes
-// the closed forms of `mean_ratio.wgsl`. Rust mirror: `layout::ModelUniform`.
+// Metric dimension and what turns a corner's S into its term; `closed` names
+// the closed forms the CPU takes (the tetrahedral inverse mean ratio of
+// `mean_ratio.wgsl`, the planar ones of `planar.wgsl`), which the compiled
+// instance already is (`shader::Form`), so no kernel reads it. Rust mirror:
+// `layout::ModelUniform`.
 struct Model {
     dim: u32,
     metric: u32,
     tmpl: u32,
-    fast: u32,
+    closed: u32,
     // untangling's regularisation (`Model::eps`); 0 = the barrier metric
     eps: real,
 }

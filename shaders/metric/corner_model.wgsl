@@ -5,6 +5,9 @@
 #import layout
 #import mean_ratio
 #import smetric
+#if PLANAR
+#import planar
+#endif
 
 // `Model::templated`: Average is g(m) = 1 - 1/m, g' = 1/m^2, g'' = -2/m^3.
 fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
@@ -46,9 +49,15 @@ fn model_eval(model: Model, s: mat3x3<real>, rjm: mat3x3<real>, hess: bool) -> M
 fn model_value_of_s(model: Model, s: mat3x3<real>, rjm: mat3x3<real>) -> Eta {
 #if FAST
     return value_of_s(s);
-#else
+#endif
+#if PLANAR
+    return planar_value_of_s(s);
+#endif
+#if !FAST
+#if !PLANAR
     let m = model_eval(model, s, rjm, false);
     return Eta(m.v, m.ok);
+#endif
 #endif
 }
 
@@ -57,7 +66,22 @@ fn model_value_of_s(model: Model, s: mat3x3<real>, rjm: mat3x3<real>) -> Eta {
 fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<real>) -> VertexGH {
 #if FAST
     return vertex_gradient_hessian_of_s(s, b);
-#else
+#endif
+#if PLANAR
+    var out: VertexGH;
+    let p = planar_parts(s);
+    out.ok = p.ok;
+    if !p.ok {
+        return out;
+    }
+    out.eta = p.eta;
+    out.grad = planar_gradient(p, b);
+    out.hess = planar_block(p, b, b);
+    out.hess[2][2] = real(1.0);
+    return out;
+#endif
+#if !FAST
+#if !PLANAR
     var out: VertexGH;
     let m = model_eval(model, s, rjm, true);
     out.ok = m.ok;
@@ -72,5 +96,6 @@ fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<rea
         out.hess[2][2] = real(1.0);
     }
     return out;
+#endif
 #endif
 }

@@ -128,6 +128,10 @@ fn eval_metric(n: u32, s_in: mat3x3<real>, rjm: mat3x3<real>, hess: bool, eps: r
     // the closed forms are the inverse mean ratio's; this is their general twin
     out = imr(n, s, x, hess);
 #endif
+#if PLANAR
+    // as for FAST: the planar closed forms' general twin (cn is imr in 2D)
+    out = imr(n, s, x, hess);
+#endif
     out.ok = finite(out.v);
     return out;
 }

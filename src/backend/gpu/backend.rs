@@ -192,7 +192,11 @@ impl<'c> GpuBackend<'c> {
             n_corners: nc,
             n_free: nf,
             colors,
-            form: Form::of(&model),
+            form: if ctx.general_only {
+                Form::general(&model)
+            } else {
+                Form::of(&model)
+            },
             max_backtracks: ls.max_backtracks as u32,
             bufs,
             vectors: Vec::new(),
@@ -338,6 +342,12 @@ impl<'c> GpuBackend<'c> {
     /// positions submit their own copies besides).
     pub fn submissions(&self) -> usize {
         self.submissions
+    }
+
+    /// The instance its kernels with variants are compiled as: the closed
+    /// forms wherever the CPU takes them (`Model::fast`, `Model::planar`).
+    pub fn form(&self) -> Form {
+        self.form
     }
 
     /// The most buffers any one array is split across (1: none is split).

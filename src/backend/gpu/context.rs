@@ -29,6 +29,9 @@ pub struct GpuOptions {
     pub max_binding_bytes: Option<u64>,
     /// How vertices and corners are numbered on the device.
     pub layout: DeviceLayout,
+    /// Every model through the structured general kernels, the closed forms
+    /// (`shader::Form::Fast`, `Form::Planar`) unused: for comparisons.
+    pub general_only: bool,
 }
 
 /// The device numbering of vertices and corners (`sweep_layout.rs`); what
@@ -125,6 +128,8 @@ pub struct GpuContext {
     pub(crate) limits: wgpu::Limits,
     /// `GpuOptions::layout`.
     pub(crate) layout: DeviceLayout,
+    /// `GpuOptions::general_only`.
+    pub(crate) general_only: bool,
     info: wgpu::AdapterInfo,
     /// Built on first use: a run needs the instances of one metric only, and
     /// compiling all of them costs seconds on a software adapter.
@@ -229,6 +234,7 @@ impl GpuContext {
             real,
             limits,
             layout: opts.layout,
+            general_only: opts.general_only,
             info: adapter.get_info(),
             pipelines: Mutex::new(HashMap::new()),
             errors,

@@ -4,7 +4,7 @@
 use super::shader::Real;
 use crate::backend::{Coef, N_SLOTS, Slot};
 use crate::metric::TetShape;
-use crate::metric::corner_model::Template;
+use crate::metric::corner_model::{Model, Template};
 use crate::metric::smetric::MetricKind;
 use crate::problem::Problem;
 use bytemuck::{Pod, Zeroable};
@@ -113,6 +113,11 @@ pub(crate) const METRIC_TMP: u32 = 2;
 pub(crate) const METRIC_RJ: u32 = 3;
 pub(crate) const TEMPLATE_HARMONIC: u32 = 0;
 pub(crate) const TEMPLATE_AVERAGE: u32 = 1;
+/// `ModelUniform::closed`: the structured general path, the tetrahedral
+/// inverse mean ratio (`Model::fast`), the planar 2x2 forms (`Model::planar`).
+pub(crate) const CLOSED_NONE: u32 = 0;
+pub(crate) const CLOSED_TET: u32 = 1;
+pub(crate) const CLOSED_PLANAR: u32 = 2;
 
 /// The constants Rust and WGSL share, generated into every kernel's prelude
 /// (`Real::prelude`); no WGSL file defines them.
@@ -137,7 +142,9 @@ pub(crate) struct ModelUniform {
     pub dim: u32,
     pub metric: u32,
     pub tmpl: u32,
-    pub fast: u32,
+    /// Which closed forms the CPU takes for this model (`CLOSED_*`): the
+    /// kernels never read it, `shader::Form::of` compiles them for it.
+    pub closed: u32,
     pub eps: f64,
 }
 const _: () = assert!(std::mem::size_of::<ModelUniform>() == 24);
@@ -163,10 +170,14 @@ impl ModelUniform {
     }
 
     pub fn of(p: &Problem) -> ModelUniform {
-        let m = p.model;
+        Self::from_model(&p.model, p.dim)
+    }
+
+    /// The uniform of `m` in dimension `dim`.
+    pub fn from_model(m: &Model, dim: usize) -> ModelUniform {
         ModelUniform {
             eps: m.eps,
-            dim: p.dim as u32,
+            dim: dim as u32,
             metric: match m.metric {
                 MetricKind::InverseMeanRatio => METRIC_IMR,
                 MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper => METRIC_CN,
@@ -178,7 +189,13 @@ impl ModelUniform {
                 Template::Average => TEMPLATE_AVERAGE,
             },
             // the closed forms `Model::blocks` and friends take on the CPU
-            fast: m.fast(p.dim) as u32,
+            closed: if m.fast(dim) {
+                CLOSED_TET
+            } else if m.planar(dim) {
+                CLOSED_PLANAR
+            } else {
+                CLOSED_NONE
+            },
         }
     }
 }

@@ -6,7 +6,7 @@
 //! once, with its bindings and variants: pipelines and bind-group layouts are
 //! built from it, and a test checks it against naga's reflection of the WGSL.
 
-use super::layout::{METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_TMP, ModelUniform};
+use super::layout::{CLOSED_PLANAR, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_TMP, ModelUniform};
 use std::collections::HashSet;
 
 /// Floating-point precision of the device arithmetic.
@@ -53,6 +53,7 @@ const SHARED: &[(&str, &str)] = &[
         "reference_jacobian",
         include_str!("../../../shaders/metric/reference_jacobian.wgsl"),
     ),
+    ("planar", include_str!("../../../shaders/metric/planar.wgsl")),
     ("shess", include_str!("../../../shaders/metric/shess.wgsl")),
     ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
     (
@@ -125,8 +126,9 @@ const SLIDE_REAL: Binding = b("slide_real", R, Re);
 const SLIDE_IDX: Binding = b("slide_idx", R, Ui);
 
 /// One kernel: its WGSL stem (file, CPU twin and tests share it), source,
-/// bindings in order (group 0, binding i) and whether it has a closed-form
-/// (`#if FAST`, the tetrahedral inverse mean ratio) and a general variant.
+/// bindings in order (group 0, binding i) and whether it has variants: the
+/// closed forms (`#if FAST`, `#if PLANAR`) and a general instance per metric
+/// (`Form`).
 #[derive(Debug)]
 pub struct KernelDef {
     pub stem: &'static str,
@@ -206,9 +208,10 @@ kernels! {
     ];
 }
 
-/// Which instance of a kernel with variants is compiled: the closed form
-/// (`#if FAST`, the tetrahedral inverse mean ratio) or the general corner
-/// path for one metric. Each general instance carries only its own metric's
+/// Which instance of a kernel with variants is compiled: a closed form
+/// (`#if FAST`, the tetrahedral inverse mean ratio; `#if PLANAR`, the planar
+/// inverse mean ratio and condition number under the harmonic template,
+/// `planar.wgsl`) or the general corner path for one metric. Each general instance carries only its own metric's
 /// code (`#if IMR`, `#if CN`, ...), not a runtime branch over all of them:
 /// less code per pipeline (llvmpipe gives all loops of one invocation a
 /// shared budget of 65535 iterations, so code that is never run still
@@ -216,6 +219,7 @@ kernels! {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Form {
     Fast,
+    Planar,
     Imr,
     Cn,
     Tmp,
@@ -223,13 +227,20 @@ pub enum Form {
 }
 
 impl Form {
-    pub const ALL: [Form; 5] = [Form::Fast, Form::Imr, Form::Cn, Form::Tmp, Form::Rj];
+    pub const ALL: [Form; 6] = [Form::Fast, Form::Planar, Form::Imr, Form::Cn, Form::Tmp, Form::Rj];
 
     /// The instance the model uniform asks for (`ModelUniform::of`).
     pub(crate) fn of(model: &ModelUniform) -> Form {
-        if model.fast != 0 {
-            return Form::Fast;
+        match model.closed {
+            CLOSED_TET => return Form::Fast,
+            CLOSED_PLANAR => return Form::Planar,
+            _ => {}
         }
+        Form::general(model)
+    }
+
+    /// The general instance of the model's metric, closed forms or not.
+    pub(crate) fn general(model: &ModelUniform) -> Form {
         match model.metric {
             METRIC_IMR => Form::Imr,
             METRIC_CN => Form::Cn,
@@ -239,11 +250,12 @@ impl Form {
         }
     }
 
-    /// The preprocessor flag that `#if NAME` tests; every general form also
-    /// satisfies `#if !FAST`.
+    /// The preprocessor flag that `#if NAME` tests; every other form
+    /// satisfies `#if !NAME`.
     fn flag(self) -> &'static str {
         match self {
             Form::Fast => "FAST",
+            Form::Planar => "PLANAR",
             Form::Imr => "IMR",
             Form::Cn => "CN",
             Form::Tmp => "TMP",
@@ -405,7 +417,7 @@ fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32) -> String {
 /// Appends `src` to `out` with every `#import name` replaced by that shared
 /// file (once per kernel, imports first), keeping `#if NAME` / `#if !NAME`
 /// ... `#else` ... `#endif` blocks according to `form` (NAME one of FAST,
-/// IMR, CN, TMP, RJ).
+/// PLANAR, IMR, CN, TMP, RJ).
 fn preprocess(src: &str, form: Form, seen: &mut HashSet<&'static str>, out: &mut String) {
     // one entry per open #if: is its current branch kept?
     let mut keep: Vec<bool> = Vec::new();
@@ -709,6 +721,44 @@ mod tests {
             assert_eq!(eps.offset as usize, ModelUniform::HEADER_BYTES);
             let m2 = parse(Kernel::CbrtEval.plain(), real);
             assert_eq!(find(&m2, "Sizes").1, std::mem::size_of::<Sizes>());
+        }
+    }
+
+    #[test]
+    fn closed_form_instances_are_compiled_wherever_the_cpu_takes_closed_forms() {
+        use crate::metric::corner_model::{Model, Template};
+        use crate::metric::smetric::MetricKind;
+        let metrics = [
+            MetricKind::InverseMeanRatio,
+            MetricKind::ConditionNumber,
+            MetricKind::TargetShapeSize,
+            MetricKind::ConditionNumberPaper,
+            MetricKind::ReferenceJacobian,
+        ];
+        let mut planar = 0;
+        for metric in metrics {
+            for template in [Template::Harmonic, Template::Average] {
+                for eps in [0.0, 1e-3] {
+                    for dim in [2, 3] {
+                        let m = Model { metric, template, eps };
+                        let form = Form::of(&ModelUniform::from_model(&m, dim));
+                        assert_eq!(form == Form::Fast, m.fast(dim), "{m:?} in {dim}D: {form:?}");
+                        assert_eq!(form == Form::Planar, m.planar(dim), "{m:?} in {dim}D: {form:?}");
+                        planar += m.planar(dim) as usize;
+                    }
+                }
+            }
+        }
+        assert_eq!(planar, 3, "imr, cn and cn-paper under the harmonic template");
+        // only the planar instance carries the planar forms
+        for v in Variant::all() {
+            let src = v.compose(Real::F64);
+            assert_eq!(
+                src.contains("fn planar_parts("),
+                v.form == Form::Planar,
+                "{}",
+                v.label()
+            );
         }
     }
 
