@@ -362,7 +362,7 @@ fn restrict(
         free_vertices,
         colors,
         plane: p.plane,
-        sliding: None,
+        sliding: p.sliding.as_ref().map(|s| s.restrict(global)),
         // the sequential sweep it orders does not run on a part
         sweep_order: None,
         order_seed: p.order_seed,
