@@ -283,6 +283,18 @@ fn refusals_are_clean() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("under MPI"));
+    // the ranks solve on the CPU: a GPU asked for is refused, not ignored
+    let o = Command::new("mpirun")
+        .args(["--allow-run-as-root", "--oversubscribe", "-np", "2", BIN, "smooth"])
+        .arg(input)
+        .arg("-o")
+        .arg(dir.path().join("out.vtu"))
+        .args(["--device", "gpu"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--device gpu under MPI"), "{err}");
 }
 
 /// Ranks reading the pieces of an earlier run themselves (one piece each on
@@ -310,12 +322,26 @@ fn ranks_reading_their_own_pieces_give_the_single_process_objective() {
     assert!(one.objective.len() > 2, "the plain run did nothing");
     for ranks in [2, 3] {
         let many = smooth(Some(ranks), &pieces, dir.path(), "newton");
-        assert!(many.stdout.contains("were read by ranks"), "{ranks} ranks: {}", many.stdout);
-        assert_eq!(many.objective.len(), one.objective.len(), "{ranks} ranks: iteration count");
+        assert!(
+            many.stdout.contains("were read by ranks"),
+            "{ranks} ranks: {}",
+            many.stdout
+        );
+        assert_eq!(
+            many.objective.len(),
+            one.objective.len(),
+            "{ranks} ranks: iteration count"
+        );
         for (k, (a, b)) in one.objective.iter().zip(&many.objective).enumerate() {
-            assert!((a - b).abs() <= 1e-8 * a.abs(), "{ranks} ranks: F at iteration {k}: {a} vs {b}");
+            assert!(
+                (a - b).abs() <= 1e-8 * a.abs(),
+                "{ranks} ranks: F at iteration {k}: {a} vs {b}"
+            );
         }
-        assert!(max_rel(&one.points, &many.points) <= 1e-8, "{ranks} ranks: iterates differ");
+        assert!(
+            max_rel(&one.points, &many.points) <= 1e-8,
+            "{ranks} ranks: iterates differ"
+        );
     }
 }
 
@@ -368,7 +394,17 @@ fn a_time_limit_stops_every_rank_at_the_same_iteration() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("big.vtu");
     let o = Command::new(BIN)
-        .args(["generate", "box", "--cells", "16", "16", "16", "--perturb", "random:0.3", "-o"])
+        .args([
+            "generate",
+            "box",
+            "--cells",
+            "16",
+            "16",
+            "16",
+            "--perturb",
+            "random:0.3",
+            "-o",
+        ])
         .arg(&input)
         .output()
         .unwrap();
@@ -383,7 +419,10 @@ fn a_time_limit_stops_every_rank_at_the_same_iteration() {
             run.objective.last().unwrap() < &run.objective[0],
             "{method}: F did not decrease"
         );
-        assert!(inverted_elements(&mesh, &run.points).is_empty(), "{method}: inverted output");
+        assert!(
+            inverted_elements(&mesh, &run.points).is_empty(),
+            "{method}: inverted output"
+        );
         assert_fixed_unmoved(&mesh, &run.points, method);
     }
 }

@@ -463,6 +463,14 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     }
     #[cfg(feature = "mpi")]
     super::ranks::set_partitioner(a.partitioner);
+    // the ranks solve on the CPU backend: a GPU asked for would sit unused
+    #[cfg(feature = "mpi")]
+    if super::ranks::size() > 1 && a.solver.device == super::DeviceArg::Gpu {
+        return Err(Error::Unsupported(
+            "--device gpu under MPI (partitioned runs): each rank smooths its part on the CPU backend; use --device cpu"
+                .into(),
+        ));
+    }
     if let Some(h) = &a.history {
         refuse_overwrite(&a.input, h)?;
         for (other, what) in [(&a.output, "the output mesh (-o)"), (&a.input, "the input mesh")] {

@@ -31,8 +31,8 @@ mod vtu;
 
 pub use atomic::{same_file, same_target, write_atomic};
 pub use pvtu::{
-    GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, piece_path, piece_paths, read_piece as read_pvtu_piece,
-    write_pieces, write_pieces_with,
+    GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, piece_path, piece_paths,
+    read_piece as read_pvtu_piece, write_pieces, write_pieces_with,
 };
 pub use smoothed::{eta_field, write_mesh, write_mesh_pieces, write_mesh_pieces_with};
 
@@ -183,7 +183,10 @@ pub fn read(path: &Path) -> Result<Mesh> {
 /// their paths, it returns the meshes in that order; each piece read with
 /// [`read_pvtu_piece`]), merged and validated as [`read`] does: the pieces
 /// can be read by other processes. Any other file is read as [`read`] reads it.
-pub fn read_pvtu_with(path: &Path, read_pieces: &mut dyn FnMut(&[std::path::PathBuf]) -> Result<Vec<Mesh>>) -> Result<Mesh> {
+pub fn read_pvtu_with(
+    path: &Path,
+    read_pieces: &mut dyn FnMut(&[std::path::PathBuf]) -> Result<Vec<Mesh>>,
+) -> Result<Mesh> {
     let data = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if !pvtu::is_index(&data) {
         return read(path);

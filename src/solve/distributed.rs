@@ -321,11 +321,12 @@ pub fn follow(cluster: &Cluster) -> Result<()> {
             }
             Job::Read(index, pieces) => encode(&read_own(&index, &pieces)),
             Job::Write(path, piece, format, cells) => {
-                let cell_data: Vec<CellData> = cells
-                    .iter()
-                    .map(|(name, values)| CellData { name, values })
-                    .collect();
-                encode(&io::write(&path, &piece, format, &cell_data).err().map(|e| e.to_string()))
+                let cell_data: Vec<CellData> = cells.iter().map(|(name, values)| CellData { name, values }).collect();
+                encode(
+                    &io::write(&path, &piece, format, &cell_data)
+                        .err()
+                        .map(|e| e.to_string()),
+                )
             }
         };
         cluster.world.process_at_rank(0).send_with_tag(&answer[..], RESULT_TAG);
@@ -367,7 +368,10 @@ impl Cluster {
             read[*i] = Some(m);
         }
         for (r, pieces) in mine.iter().enumerate().skip(1).filter(|(_, p)| !p.is_empty()) {
-            let (bytes, _) = self.world.process_at_rank(r as i32).receive_vec_with_tag::<u8>(RESULT_TAG);
+            let (bytes, _) = self
+                .world
+                .process_at_rank(r as i32)
+                .receive_vec_with_tag::<u8>(RESULT_TAG);
             let got: Vec<std::result::Result<Mesh, String>> = decode(&bytes)?;
             for ((i, _), m) in pieces.iter().zip(got) {
                 read[*i] = Some(m);
