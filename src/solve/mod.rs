@@ -388,7 +388,7 @@ pub(crate) fn run_scaled<B: Backend + ?Sized>(
             params,
             begin,
             setup,
-            &mut || step(&mut **be.borrow_mut()),
+            &mut || step(&mut be.borrow_mut()),
             &mut |d| be.borrow_mut().past(d),
             progress,
         )
