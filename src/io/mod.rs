@@ -31,8 +31,8 @@ mod vtu;
 
 pub use atomic::{same_file, same_target, write_atomic};
 pub use pvtu::{
-    GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, piece_path, piece_paths,
-    read_piece as read_pvtu_piece, write_pieces, write_pieces_with,
+    GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, piece_error, piece_path, piece_paths, write_pieces,
+    write_pieces_with,
 };
 pub use smoothed::{eta_field, write_mesh, write_mesh_pieces, write_mesh_pieces_with};
 
@@ -181,7 +181,7 @@ pub fn read(path: &Path) -> Result<Mesh> {
 
 /// The `.pvtu` index at `path`, its pieces read by `read_pieces` (given
 /// their paths, it returns the meshes in that order; each piece read with
-/// [`read_pvtu_piece`]), merged and validated as [`read`] does: the pieces
+/// [`read_pvtu_piece`], its errors wrapped by [`piece_error`]), merged and validated as [`read`] does: the pieces
 /// can be read by other processes. Any other file is read as [`read`] reads it.
 pub fn read_pvtu_with(
     path: &Path,
@@ -194,6 +194,12 @@ pub fn read_pvtu_with(
     let mesh = pvtu::read_with(path, &data, read_pieces)?;
     mesh.validate().map_err(|e| in_file(path, e))?;
     Ok(mesh)
+}
+
+/// One piece of a `.pvtu` index, unmerged: any mesh file but another
+/// index (errors name the piece only: see [`piece_error`]).
+pub fn read_pvtu_piece(path: &Path) -> Result<Mesh> {
+    read_piece(path)
 }
 
 /// One piece of a `.pvtu` index: any mesh file but another index.

@@ -121,8 +121,13 @@ pub(crate) fn read_with(
 }
 
 /// Piece `i` (file `piece`) of the index `index`, unmerged; errors name both.
-pub fn read_piece(index: &Path, i: usize, piece: &Path) -> Result<Mesh> {
-    super::read_piece(piece).map_err(|e| Error::parse(index, None, format!("piece {i} ({}): {e}", piece.display())))
+fn read_piece(index: &Path, i: usize, piece: &Path) -> Result<Mesh> {
+    super::read_piece(piece).map_err(|e| piece_error(index, i, piece, e))
+}
+
+/// An error reading piece `i` (file `piece`) of `index`, naming both.
+pub fn piece_error(index: &Path, i: usize, piece: &Path, e: impl std::fmt::Display) -> Error {
+    Error::parse(index, None, format!("piece {i} ({}): {e}", piece.display()))
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]

@@ -169,9 +169,9 @@ impl fmt::Display for Report {
 enum Job {
     /// Solve this part; answered with an `Outcome`.
     Solve(Box<Part>, Method, Params),
-    /// Read these pieces (number, file) of the index; answered with each
+    /// Read these pieces (number, file) of an index; answered with each
     /// piece or the error reading it.
-    Read(PathBuf, Vec<(usize, PathBuf)>),
+    Read(Vec<(usize, PathBuf)>),
     /// Write this piece atomically, with these cell arrays; answered with
     /// the error, if any.
     Write(PathBuf, Box<Mesh>, Format, Vec<(String, Vec<f64>)>),
@@ -182,7 +182,7 @@ enum Job {
 #[serde(rename = "Job")]
 enum JobRef<'a> {
     Solve(&'a Part, Method, &'a Params),
-    Read(&'a Path, &'a [(usize, PathBuf)]),
+    Read(&'a [(usize, PathBuf)]),
     Write(&'a Path, &'a Mesh, Format, Vec<(&'a str, &'a [f64])>),
 }
 
@@ -203,7 +203,7 @@ fn encode<T: serde::Serialize>(value: &T) -> Vec<u8> {
 }
 
 fn decode<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T> {
-    ciborium::from_reader(bytes).map_err(|e| Error::InvalidArgument(format!("a malformed message from rank 0: {e}")))
+    ciborium::from_reader(bytes).map_err(|e| Error::InvalidArgument(format!("a malformed MPI message: {e}")))
 }
 
 /// Rank 0's side of `solve` on `Device::Mpi`: split, ship, solve, gather
@@ -319,7 +319,7 @@ pub fn follow(cluster: &Cluster) -> Result<()> {
             Job::Solve(part, method, params) => {
                 encode(&run_part(&cluster.world, &part, method, &params, &mut |_| true).1)
             }
-            Job::Read(index, pieces) => encode(&read_own(&index, &pieces)),
+            Job::Read(pieces) => encode(&read_own(&pieces)),
             Job::Write(path, piece, format, cells) => {
                 let cell_data: Vec<CellData> = cells.iter().map(|(name, values)| CellData { name, values }).collect();
                 encode(
@@ -333,11 +333,11 @@ pub fn follow(cluster: &Cluster) -> Result<()> {
     }
 }
 
-/// Pieces `pieces` of `index`, read here (in parallel), or why not.
-fn read_own(index: &Path, pieces: &[(usize, PathBuf)]) -> Vec<std::result::Result<Mesh, String>> {
+/// Pieces `pieces` (number, file), read here (in parallel), or why not.
+fn read_own(pieces: &[(usize, PathBuf)]) -> Vec<std::result::Result<Mesh, String>> {
     pieces
         .par_iter()
-        .map(|(i, file)| io::read_pvtu_piece(index, *i, file).map_err(|e| e.to_string()))
+        .map(|(_, file)| io::read_pvtu_piece(file).map_err(|e| e.to_string()))
         .collect()
 }
 
@@ -360,29 +360,34 @@ impl Cluster {
             mine[piece_reader(i, n, size)].push((i, s.clone()));
         }
         for (r, pieces) in mine.iter().enumerate().skip(1).filter(|(_, p)| !p.is_empty()) {
-            let job = encode(&JobRef::Read(index, pieces));
+            let job = encode(&JobRef::Read(pieces));
             self.world.process_at_rank(r as i32).send_with_tag(&job[..], JOB_TAG);
         }
-        let mut read: Vec<Option<std::result::Result<Mesh, String>>> = vec![None; n];
-        for ((i, _), m) in mine[0].iter().zip(read_own(index, &mine[0])) {
-            read[*i] = Some(m);
-        }
-        for (r, pieces) in mine.iter().enumerate().skip(1).filter(|(_, p)| !p.is_empty()) {
+        let mut read: Vec<Option<Result<Mesh>>> = (0..n).map(|_| None).collect();
+        let mut keep = |r: usize, got: Vec<std::result::Result<Mesh, String>>| {
+            for ((i, file), m) in mine[r].iter().zip(got) {
+                read[*i] = Some(m.map_err(|e| io::piece_error(index, *i, file, format!("{e} (read by rank {r})"))));
+            }
+        };
+        keep(0, read_own(&mine[0]));
+        // every answer is received, even after a bad one, so none is left for a later receive
+        let mut malformed = None;
+        for r in (1..size).filter(|&r| !mine[r].is_empty()) {
             let (bytes, _) = self
                 .world
                 .process_at_rank(r as i32)
                 .receive_vec_with_tag::<u8>(RESULT_TAG);
-            let got: Vec<std::result::Result<Mesh, String>> = decode(&bytes)?;
-            for ((i, _), m) in pieces.iter().zip(got) {
-                read[*i] = Some(m);
+            match decode(&bytes) {
+                Ok(got) => keep(r, got),
+                Err(e) => malformed = malformed.or(Some(e)),
             }
         }
+        if let Some(e) = malformed {
+            return Err(e);
+        }
         read.into_iter()
-            .map(|m| match m {
-                Some(Ok(mesh)) => Ok(mesh),
-                Some(Err(e)) => Err(Error::InvalidArgument(e)),
-                None => Err(Error::InvalidArgument("a rank did not return its piece".into())),
-            })
+            .enumerate()
+            .map(|(i, m)| m.unwrap_or_else(|| Err(io::piece_error(index, i, &sources[i], "no rank returned it"))))
             .collect()
     }
 
@@ -431,10 +436,11 @@ impl io::PieceWriter for RankPieces<'_> {
                 .world
                 .process_at_rank(rank as i32)
                 .receive_vec_with_tag::<u8>(RESULT_TAG);
-            let failed: Option<String> = decode(&bytes)?;
-            if let (Some(e), None) = (failed, &first) {
-                first = Some(Error::InvalidArgument(format!("rank {rank}: {e}")));
-            }
+            let failed = match decode::<Option<String>>(&bytes) {
+                Ok(failed) => failed.map(|e| Error::InvalidArgument(format!("rank {rank}: {e}"))),
+                Err(e) => Some(e),
+            };
+            first = first.or(failed);
         }
         first.map_or(Ok(()), Err)
     }
@@ -480,4 +486,35 @@ fn run_part(
         error: result.as_ref().err().map(|e| e.to_string()),
     };
     (result, outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::piece_reader;
+
+    #[test]
+    fn every_piece_has_one_reader_in_rank_order() {
+        for size in 1..=5 {
+            for n in 1..=12 {
+                let readers: Vec<usize> = (0..n).map(|i| piece_reader(i, n, size)).collect();
+                assert!(
+                    readers.windows(2).all(|w| w[0] <= w[1]),
+                    "{n} pieces on {size} ranks: {readers:?}"
+                );
+                assert!(readers.iter().all(|&r| r < size));
+                if n <= size {
+                    assert_eq!(readers, (0..n).collect::<Vec<_>>());
+                } else {
+                    // every rank reads, none more than one piece beyond its share
+                    for r in 0..size {
+                        let k = readers.iter().filter(|&&x| x == r).count();
+                        assert!(
+                            k >= n / size && k <= n.div_ceil(size),
+                            "{n} pieces on {size} ranks: {readers:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
