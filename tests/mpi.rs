@@ -343,6 +343,35 @@ fn ranks_reading_their_own_pieces_give_the_single_process_objective() {
             "{ranks} ranks: iterates differ"
         );
     }
+    // more pieces than ranks: written round the ranks, read in runs of consecutive pieces
+    let five = dir.path().join("five.pvtu");
+    let gathered = dir.path().join("five-gathered.vtu");
+    let run = |from: &Path, output: &Path, extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "smooth".as_ref(),
+            from.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+            "--device".as_ref(),
+            "cpu".as_ref(),
+        ];
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        mpirun(2, &args)
+    };
+    let log = run(&pieces, &five, &["--pieces", "5"]);
+    assert!(log.contains("were read by ranks 0, 0, 1 (in piece order)"), "{log}");
+    assert!(
+        log.contains("pieces written by ranks 0, 1, 0, 1, 0; the index by rank 0"),
+        "{log}"
+    );
+    run(&pieces, &gathered, &[]);
+    let whole = meshsmooth::io::read(&gathered).unwrap();
+    assert_eq!(meshsmooth::io::read(&five).unwrap(), whole);
+    let log = run(&five, &dir.path().join("five-again.vtu"), &["--max-iter", "0"]);
+    assert!(
+        log.contains("were read by ranks 0, 0, 0, 1, 1 (in piece order)"),
+        "{log}"
+    );
 }
 
 /// NLCG is written once over the backend contract, so it runs over the
