@@ -63,6 +63,17 @@ impl<'w> Comm<'w> {
             .collect()
     }
 
+    /// Rank 0's `local`, on every rank: for what one rank decides for all.
+    pub fn from_root(&mut self, local: f64) -> f64 {
+        let start = Instant::now();
+        let mut value = local;
+        self.world.process_at_rank(0).broadcast_into(&mut value);
+        self.stats.reductions += 1;
+        self.stats.reduction_bytes += 8;
+        self.stats.seconds += start.elapsed().as_secs_f64();
+        value
+    }
+
     /// Overwrites the ghost entries of `data` (indexed through `at`, from a
     /// free-vector index) with their owners' values.
     pub fn exchange(&mut self, halo: &[Exchange], data: &mut [Vec3], at: impl Fn(u32) -> usize) {
@@ -106,11 +117,6 @@ impl<'w> Comm<'w> {
         self.stats.halo_bytes += sends.iter().map(|(_, b)| 8 * b.len()).sum::<usize>();
         self.stats.seconds += start.elapsed().as_secs_f64();
     }
-}
-
-/// Rank 0's value: what one rank must decide for all (a clock reading).
-pub fn first(a: f64, _: f64) -> f64 {
-    a
 }
 
 pub fn sum(a: f64, b: f64) -> f64 {

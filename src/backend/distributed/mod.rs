@@ -222,6 +222,6 @@ impl Backend for DistributedBackend<'_> {
 
     fn past(&mut self, deadline: std::time::Instant) -> bool {
         let late = f64::from(u8::from(std::time::Instant::now() >= deadline));
-        self.comm.reduce(&[late], &[comm::first])[0] != 0.0
+        self.comm.from_root(late) != 0.0
     }
 }
