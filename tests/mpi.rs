@@ -30,7 +30,14 @@ fn smooth(ranks: Option<usize>, input: &Path, dir: &Path, method: &str) -> Run {
 }
 
 fn smooth_by(ranks: Option<usize>, input: &Path, dir: &Path, method: &str, partitioner: &str) -> Run {
+    smooth_with(ranks, input, dir, method, partitioner, &[])
+}
+
+/// `smooth_by` with more options (`extra`), which name its files too.
+fn smooth_with(ranks: Option<usize>, input: &Path, dir: &Path, method: &str, partitioner: &str, extra: &[&str]) -> Run {
+    let stem = input.file_stem().unwrap().to_string_lossy();
     let tag = ranks.map_or("plain".to_string(), |n| format!("np{n}-{partitioner}"));
+    let tag = format!("{stem}-{tag}{}", extra.join("").replace(['-', '.', '/'], "_"));
     let out = dir.join(format!("{tag}-{method}.vtu"));
     let history = dir.join(format!("{tag}-{method}.csv"));
     let mut cmd = match ranks {
@@ -55,6 +62,7 @@ fn smooth_by(ranks: Option<usize>, input: &Path, dir: &Path, method: &str, parti
             "--history",
         ])
         .arg(&history)
+        .args(extra)
         .env_remove("OMPI_COMM_WORLD_SIZE");
     let o = cmd.output().expect("mpirun runs (apt-get install openmpi-bin)");
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
@@ -232,6 +240,10 @@ fn pieces_of_a_three_rank_run_read_back_as_the_gathered_mesh() {
         smooth(3, input, &path("gathered.vtu"));
         let log = smooth(3, input, &path("pieces.pvtu"));
         assert!(log.contains("wrote 3 pieces"), "{name}: {log}");
+        assert!(
+            log.contains("pieces written by ranks 0, 1, 2; the index by rank 0"),
+            "{name}: {log}"
+        );
         for r in 0..3 {
             assert!(path(&format!("pieces_{r}.vtu")).exists(), "{name}: piece {r} missing");
         }
@@ -239,9 +251,12 @@ fn pieces_of_a_three_rank_run_read_back_as_the_gathered_mesh() {
         // without MPI: the library reads all pieces and merges them
         assert_eq!(meshsmooth::io::read(&path("pieces.pvtu")).unwrap(), gathered, "{name}");
         // under MPI, with as many ranks as pieces and with fewer: the same mesh, so the same run
-        for ranks in [3, 2] {
+        for (ranks, readers) in [(3, "0, 1, 2"), (2, "0, 0, 1")] {
             let log = smooth(ranks, &path("pieces.pvtu"), &path(&format!("again-pieces-{ranks}.vtu")));
-            assert!(log.contains("read and merged on rank 0"), "{name}: {log}");
+            assert!(
+                log.contains(&format!("were read by ranks {readers} (in piece order)")),
+                "{name}: {log}"
+            );
             smooth(
                 ranks,
                 &path("gathered.vtu"),
@@ -268,4 +283,175 @@ fn refusals_are_clean() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("under MPI"));
+    // the ranks solve on the CPU: a GPU asked for is refused, not ignored
+    let o = Command::new("mpirun")
+        .args(["--allow-run-as-root", "--oversubscribe", "-np", "2", BIN, "smooth"])
+        .arg(input)
+        .arg("-o")
+        .arg(dir.path().join("out.vtu"))
+        .args(["--device", "gpu"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--device gpu under MPI"), "{err}");
+}
+
+/// Ranks reading the pieces of an earlier run themselves (one piece each on
+/// 3 ranks; two and one on 2) solve the mesh one process solves from the
+/// same pieces: F to 1e-8 at every iteration.
+#[test]
+fn ranks_reading_their_own_pieces_give_the_single_process_objective() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = &meshes(dir.path())[0];
+    let pieces = dir.path().join("earlier.pvtu");
+    mpirun(
+        3,
+        &[
+            "smooth".as_ref(),
+            input.as_os_str(),
+            "-o".as_ref(),
+            pieces.as_os_str(),
+            "--device".as_ref(),
+            "cpu".as_ref(),
+            "--max-iter".as_ref(),
+            "2".as_ref(),
+        ],
+    );
+    let one = smooth(None, &pieces, dir.path(), "newton");
+    assert!(one.objective.len() > 2, "the plain run did nothing");
+    for ranks in [2, 3] {
+        let many = smooth(Some(ranks), &pieces, dir.path(), "newton");
+        assert!(
+            many.stdout.contains("were read by ranks"),
+            "{ranks} ranks: {}",
+            many.stdout
+        );
+        assert_eq!(
+            many.objective.len(),
+            one.objective.len(),
+            "{ranks} ranks: iteration count"
+        );
+        for (k, (a, b)) in one.objective.iter().zip(&many.objective).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-8 * a.abs(),
+                "{ranks} ranks: F at iteration {k}: {a} vs {b}"
+            );
+        }
+        assert!(
+            max_rel(&one.points, &many.points) <= 1e-8,
+            "{ranks} ranks: iterates differ"
+        );
+    }
+    // more pieces than ranks: written round the ranks, read in runs of consecutive pieces
+    let five = dir.path().join("five.pvtu");
+    let gathered = dir.path().join("five-gathered.vtu");
+    let run = |from: &Path, output: &Path, extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "smooth".as_ref(),
+            from.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+            "--device".as_ref(),
+            "cpu".as_ref(),
+        ];
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        mpirun(2, &args)
+    };
+    let log = run(&pieces, &five, &["--pieces", "5"]);
+    assert!(log.contains("were read by ranks 0, 0, 1 (in piece order)"), "{log}");
+    assert!(
+        log.contains("pieces written by ranks 0, 1, 0, 1, 0; the index by rank 0"),
+        "{log}"
+    );
+    run(&pieces, &gathered, &[]);
+    let whole = meshsmooth::io::read(&gathered).unwrap();
+    assert_eq!(meshsmooth::io::read(&five).unwrap(), whole);
+    let log = run(&five, &dir.path().join("five-again.vtu"), &["--max-iter", "0"]);
+    assert!(
+        log.contains("were read by ranks 0, 0, 0, 1, 1 (in piece order)"),
+        "{log}"
+    );
+}
+
+/// NLCG is written once over the backend contract, so it runs over the
+/// distributed backend unchanged.
+#[test]
+fn nlcg_on_ranks_matches_one_process() {
+    compare("nlcg", "metis", 1..=3, 1e-8, 1e-8);
+}
+
+/// Sliding vertices carry their constraints (projector, candidate boundary
+/// primitives) into the parts: 2 ranks give the single-process answer.
+#[test]
+fn sliding_boundary_on_two_ranks_matches_one_process() {
+    let dir = tempfile::tempdir().unwrap();
+    let all = meshes(dir.path());
+    let slide = ["--boundary", "slide"];
+    for input in [&all[0], &all[2], &all[3]] {
+        let mesh = meshsmooth::io::read(input).unwrap();
+        for method in ["newton", "bcd-colored", "nlcg"] {
+            let what = format!("{} {method}", input.display());
+            let one = smooth_with(None, input, dir.path(), method, "metis", &slide);
+            let two = smooth_with(Some(2), input, dir.path(), method, "metis", &slide);
+            assert!(two.stdout.contains("mpi (2 ranks)"), "{what}: not partitioned");
+            assert!(two.stdout.contains("--boundary slide"), "{what}: {}", two.stdout);
+            // the boundary slid: the fixed-boundary problem's fixed vertices moved
+            let p = Problem::new(&mesh).unwrap();
+            let slid = p
+                .order
+                .iter()
+                .enumerate()
+                .filter(|&(new, &old)| !p.free[new] && two.points[old as usize] != mesh.points[old as usize])
+                .count();
+            assert!(slid > 0, "{what}: no boundary vertex moved");
+            assert_eq!(two.objective.len(), one.objective.len(), "{what}: iteration count");
+            let (a, b) = (one.objective.last().unwrap(), two.objective.last().unwrap());
+            assert!((a - b).abs() <= 1e-8 * a.abs(), "{what}: F {a} vs {b}");
+            let dx = max_rel(&one.points, &two.points);
+            assert!(dx <= 1e-8, "{what}: iterates differ by {dx:e}");
+            assert!(inverted_elements(&mesh, &two.points).is_empty(), "{what}: infeasible");
+        }
+    }
+}
+
+/// A time limit is read from rank 0's clock and shared, so every rank stops
+/// at the same iteration (rank 0 checks the ranks' counts and fails the run
+/// if they differ) and the output is the last accepted, valid state.
+#[test]
+fn a_time_limit_stops_every_rank_at_the_same_iteration() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("big.vtu");
+    let o = Command::new(BIN)
+        .args([
+            "generate",
+            "box",
+            "--cells",
+            "16",
+            "16",
+            "16",
+            "--perturb",
+            "random:0.3",
+            "-o",
+        ])
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mesh = meshsmooth::io::read(&input).unwrap();
+    let limit = ["--time-limit", "1", "--tol", "0", "--max-iter", "1000000"];
+    for method in ["bcd-colored", "newton", "nlcg"] {
+        let run = smooth_with(Some(2), &input, dir.path(), method, "metis", &limit);
+        assert!(run.stdout.contains("time limit reached"), "{method}: {}", run.stdout);
+        assert!(run.objective.len() >= 2, "{method}: no iteration before the limit");
+        assert!(
+            run.objective.last().unwrap() < &run.objective[0],
+            "{method}: F did not decrease"
+        );
+        assert!(
+            inverted_elements(&mesh, &run.points).is_empty(),
+            "{method}: inverted output"
+        );
+        assert_fixed_unmoved(&mesh, &run.points, method);
+    }
 }

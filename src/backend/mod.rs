@@ -236,6 +236,13 @@ pub trait Backend {
     /// Bytes the backend holds for the problem and the solver's data.
     fn bytes(&self) -> usize;
 
+    /// Has `deadline` passed? Stopping is a decision every process of a
+    /// solve must take at the same point: a distributed backend answers with
+    /// rank 0's clock on every rank.
+    fn past(&mut self, deadline: Instant) -> bool {
+        Instant::now() >= deadline
+    }
+
     // conveniences over `axpby`
 
     /// y = x

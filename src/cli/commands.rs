@@ -485,6 +485,14 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     }
     #[cfg(feature = "mpi")]
     super::ranks::set_partitioner(a.partitioner);
+    // the ranks solve on the CPU backend: a GPU asked for would sit unused
+    #[cfg(feature = "mpi")]
+    if super::ranks::size() > 1 && a.solver.device == super::DeviceArg::Gpu {
+        return Err(Error::Unsupported(
+            "--device gpu under MPI (partitioned runs): each rank smooths its part on the CPU backend; use --device cpu"
+                .into(),
+        ));
+    }
     if let Some(h) = &a.history {
         refuse_overwrite(&a.input, h)?;
         for (other, what) in [(&a.output, "the output mesh (-o)"), (&a.input, "the input mesh")] {
@@ -496,9 +504,10 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
             }
         }
     }
-    let mut mesh = io::read(&a.input)?;
     #[cfg(feature = "mpi")]
-    note_pieces_read_on_rank_0(&a.input, a.quiet);
+    let mut mesh = read_on_ranks(&a.input, a.quiet)?;
+    #[cfg(not(feature = "mpi"))]
+    let mut mesh = io::read(&a.input)?;
     if a.drop_data {
         mesh.data = Default::default();
     }
@@ -524,7 +533,18 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     match pieces {
         Some(count) => {
             let (owner, count) = piece_owners(&mesh, count, a.partitioner)?;
-            let written = io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?;
+            #[cfg(feature = "mpi")]
+            let (written, by) = match super::ranks::cluster().filter(|c| c.size() > 1) {
+                Some(c) => {
+                    let mut writer = c.piece_writer();
+                    let written = io::write_mesh_pieces_with(&a.output, &mesh, &owner, count, format, &mut writer)?;
+                    (written, Some(writer.ranks))
+                }
+                None => (io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?, None),
+            };
+            #[cfg(not(feature = "mpi"))]
+            let (written, by): (_, Option<Vec<usize>>) =
+                (io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?, None);
             if !a.quiet {
                 println!(
                     "wrote {} pieces ({} to {})",
@@ -532,6 +552,9 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
                     written[0].display(),
                     written[written.len() - 1].display()
                 );
+                if let Some(by) = by {
+                    println!("pieces written by ranks {}; the index by rank 0", list(&by));
+                }
             }
         }
         None => io::write_mesh(&a.output, &mesh, format)?,
@@ -620,21 +643,35 @@ fn piece_owners(mesh: &Mesh, count: Option<usize>, partitioner: Partitioner) -> 
     Ok((partition::mesh_owners(mesh, count, partitioner)?, count))
 }
 
-/// A partitioned run reads a .pvtu's pieces on rank 0 and ships parts; say so.
+/// Numbers separated by commas.
+fn list(items: &[usize]) -> String {
+    items.iter().map(usize::to_string).collect::<Vec<_>>().join(", ")
+}
+
+/// The input; under mpirun a .pvtu's pieces are read by the ranks (see
+/// `Cluster::read_pieces`) and merged on rank 0, which says so.
 #[cfg(feature = "mpi")]
-fn note_pieces_read_on_rank_0(input: &Path, quiet: bool) {
-    if quiet || super::ranks::size() < 2 || !is_pvtu(input) {
-        return;
-    }
-    let Ok(data) = std::fs::read(input) else { return };
-    if let Ok(pieces) = io::piece_paths(input, &data) {
+fn read_on_ranks(input: &Path, quiet: bool) -> Result<Mesh> {
+    let Some(cluster) = super::ranks::cluster().filter(|c| c.size() > 1 && is_pvtu(input)) else {
+        return io::read(input);
+    };
+    let mut readers = Vec::new();
+    let mesh = io::read_pvtu_with(input, &mut |sources| {
+        readers = (0..sources.len())
+            .map(|i| solve::distributed::piece_reader(i, sources.len(), cluster.size()))
+            .collect();
+        cluster.read_pieces(input, sources)
+    })?;
+    if !quiet && !readers.is_empty() {
         println!(
-            "note: the {} pieces of {} were read and merged on rank 0; the {} ranks get their parts from the partitioner, not from the pieces",
-            pieces.len(),
+            "note: the {} pieces of {} were read by ranks {} (in piece order) and merged on rank 0 by their global ids; the {} ranks get their parts from the partitioner, not from the pieces",
+            readers.len(),
             input.display(),
-            super::ranks::size()
+            list(&readers),
+            cluster.size()
         );
     }
+    Ok(mesh)
 }
 
 pub fn quality(a: &QualityArgs) -> Result<()> {

@@ -60,6 +60,11 @@ pub fn device() -> Option<Device<'static>> {
     CLUSTER.with(|c| c.get()).map(Device::Mpi)
 }
 
+/// This MPI job, on rank 0 while a command runs.
+pub fn cluster() -> Option<&'static Cluster> {
+    CLUSTER.with(|c| c.get())
+}
+
 /// The ranks of this MPI job (1 outside one).
 pub fn size() -> usize {
     CLUSTER.with(|c| c.get()).map_or(1, |c| c.size())

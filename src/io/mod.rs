@@ -30,8 +30,11 @@ mod vtk;
 mod vtu;
 
 pub use atomic::{same_file, same_target, write_atomic};
-pub use pvtu::{GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, piece_path, piece_paths, write_pieces};
-pub use smoothed::{eta_field, write_mesh, write_mesh_pieces};
+pub use pvtu::{
+    GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, piece_error, piece_path, piece_paths, write_pieces,
+    write_pieces_with,
+};
+pub use smoothed::{eta_field, write_mesh, write_mesh_pieces, write_mesh_pieces_with};
 
 use std::fmt;
 use std::path::Path;
@@ -42,7 +45,7 @@ use crate::error::{Error, Result};
 use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
 
 /// File formats meshsmooth reads and writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Format {
     VtkAscii,
     VtkBinary,
@@ -174,6 +177,29 @@ fn sniff(data: &[u8]) -> Option<Family> {
 /// merged into one mesh (see `pvtu`).
 pub fn read(path: &Path) -> Result<Mesh> {
     read_file(path, true)
+}
+
+/// The `.pvtu` index at `path`, its pieces read by `read_pieces` (given
+/// their paths, it returns the meshes in that order; each piece read with
+/// [`read_pvtu_piece`], its errors wrapped by [`piece_error`]), merged and validated as [`read`] does: the pieces
+/// can be read by other processes. Any other file is read as [`read`] reads it.
+pub fn read_pvtu_with(
+    path: &Path,
+    read_pieces: &mut dyn FnMut(&[std::path::PathBuf]) -> Result<Vec<Mesh>>,
+) -> Result<Mesh> {
+    let data = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    if !pvtu::is_index(&data) {
+        return read(path);
+    }
+    let mesh = pvtu::read_with(path, &data, read_pieces)?;
+    mesh.validate().map_err(|e| in_file(path, e))?;
+    Ok(mesh)
+}
+
+/// One piece of a `.pvtu` index, unmerged: any mesh file but another
+/// index (errors name the piece only: see [`piece_error`]).
+pub fn read_pvtu_piece(path: &Path) -> Result<Mesh> {
+    read_piece(path)
 }
 
 /// One piece of a `.pvtu` index: any mesh file but another index.

@@ -92,15 +92,42 @@ pub fn piece_paths(path: &Path, data: &[u8]) -> Result<Vec<PathBuf>> {
 
 /// Reads every piece of the index at `path` (holding `data`) and merges them.
 pub(crate) fn read(path: &Path, data: &[u8]) -> Result<Mesh> {
+    read_with(path, data, &mut |sources| {
+        sources
+            .par_iter()
+            .enumerate()
+            .map(|(i, s)| read_piece(path, i, s))
+            .collect()
+    })
+}
+
+/// [`read`] with the pieces read by `read_pieces` (given the pieces' paths,
+/// it returns them in that order), so that other processes may read them.
+pub(crate) fn read_with(
+    path: &Path,
+    data: &[u8],
+    read_pieces: &mut dyn FnMut(&[PathBuf]) -> Result<Vec<Mesh>>,
+) -> Result<Mesh> {
     let sources = piece_paths(path, data)?;
-    let pieces = sources
-        .par_iter()
-        .enumerate()
-        .map(|(i, s)| {
-            super::read_piece(s).map_err(|e| Error::parse(path, None, format!("piece {i} ({}): {e}", s.display())))
-        })
-        .collect::<Result<Vec<Mesh>>>()?;
+    let pieces = read_pieces(&sources)?;
+    if pieces.len() != sources.len() {
+        return Err(Error::parse(
+            path,
+            None,
+            format!("{} pieces read of {}", pieces.len(), sources.len()),
+        ));
+    }
     merge(path, &pieces, &sources)
+}
+
+/// Piece `i` (file `piece`) of the index `index`, unmerged; errors name both.
+fn read_piece(index: &Path, i: usize, piece: &Path) -> Result<Mesh> {
+    super::read_piece(piece).map_err(|e| piece_error(index, i, piece, e))
+}
+
+/// An error reading piece `i` (file `piece`) of `index`, naming both.
+pub fn piece_error(index: &Path, i: usize, piece: &Path, e: impl std::fmt::Display) -> Error {
+    Error::parse(index, None, format!("piece {i} ({}): {e}", piece.display()))
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
@@ -373,6 +400,42 @@ pub fn write_pieces(
     format: Format,
     cell_data: &[CellData],
 ) -> Result<Vec<PathBuf>> {
+    write_pieces_with(path, mesh, owner, parts, format, cell_data, &mut LocalPieces)
+}
+
+/// Who writes the pieces of [`write_pieces_with`]: this process, or the
+/// ranks of an MPI job, each its own.
+pub trait PieceWriter {
+    /// Writes piece `r` to `path` atomically, or hands it to the process that
+    /// will (which may still be writing when this returns).
+    fn put(&mut self, r: usize, path: &Path, piece: &Mesh, format: Format, cell_data: &[CellData]) -> Result<()>;
+    /// Returns when every piece handed out is written (the first error if
+    /// one was not); the index is written after it, so it never names a
+    /// piece that is not there.
+    fn done(&mut self) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// Every piece written here, in turn.
+pub struct LocalPieces;
+
+impl PieceWriter for LocalPieces {
+    fn put(&mut self, _r: usize, path: &Path, piece: &Mesh, format: Format, cell_data: &[CellData]) -> Result<()> {
+        write(path, piece, format, cell_data)
+    }
+}
+
+/// [`write_pieces`], each piece written by `writer`.
+pub fn write_pieces_with(
+    path: &Path,
+    mesh: &Mesh,
+    owner: &[u32],
+    parts: usize,
+    format: Format,
+    cell_data: &[CellData],
+    writer: &mut dyn PieceWriter,
+) -> Result<Vec<PathBuf>> {
     if !matches!(format, Format::VtuAscii | Format::VtuBinary | Format::VtuZlib) {
         return Err(Error::InvalidArgument(format!(
             "{}: pieces are VTK XML files: the format must be vtu, vtu-binary or vtu-zlib, not {format}",
@@ -409,6 +472,7 @@ pub fn write_pieces(
     let mut sources = Vec::with_capacity(parts);
     let mut paths = Vec::with_capacity(parts);
     let mut first_piece = None;
+    let mut failed = None;
     for (r, elems) in elems.iter().enumerate() {
         let mut verts: Vec<usize> = elems
             .iter()
@@ -427,7 +491,11 @@ pub fn write_pieces(
             .map(|c| elems.iter().map(|&e| c.values[e]).collect())
             .collect();
         let p = piece_path(path, r);
-        write(&p, &piece, format, &with_names(cell_data, &data))?;
+        // pieces handed out before a failure are still waited for (`done`)
+        if let Err(e) = writer.put(r, &p, &piece, format, &with_names(cell_data, &data)) {
+            failed = Some(e);
+            break;
+        }
         sources.push(
             p.file_name()
                 .map(|n| n.to_string_lossy().into_owned())
@@ -438,6 +506,11 @@ pub fn write_pieces(
             first_piece = Some((piece, data));
         }
     }
+    let written = writer.done();
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    written?;
     let Some((piece, data)) = first_piece else {
         return Err(Error::InvalidArgument(format!(
             "{}: the mesh has no points to write",

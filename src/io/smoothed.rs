@@ -2,7 +2,7 @@
 //! element, and the per-element quality as cell data for ParaView. The CLI
 //! and Rust callers share it.
 
-use super::{CellData, Format, write, write_pieces};
+use super::{CellData, Format, LocalPieces, PieceWriter, write, write_pieces_with};
 use crate::error::{Error, Result};
 use crate::{Mesh, metric};
 use std::path::Path;
@@ -40,9 +40,21 @@ pub fn write_mesh_pieces(
     parts: usize,
     format: Format,
 ) -> Result<Vec<std::path::PathBuf>> {
+    write_mesh_pieces_with(path, mesh, owner, parts, format, &mut LocalPieces)
+}
+
+/// [`write_mesh_pieces`], each piece written by `writer` (the ranks of an MPI job).
+pub fn write_mesh_pieces_with(
+    path: &Path,
+    mesh: &Mesh,
+    owner: &[u32],
+    parts: usize,
+    format: Format,
+    writer: &mut dyn PieceWriter,
+) -> Result<Vec<std::path::PathBuf>> {
     refuse_inverted(mesh)?;
     let eta = eta_field(mesh);
-    write_pieces(
+    write_pieces_with(
         path,
         mesh,
         owner,
@@ -52,6 +64,7 @@ pub fn write_mesh_pieces(
             name: "inverse_mean_ratio",
             values: &eta,
         }],
+        writer,
     )
 }
 

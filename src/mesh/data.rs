@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 
 /// The value type an array had in its file; written back the same way where
 /// the output format has that type.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum ValueType {
     I8,
     U8,
@@ -41,7 +41,7 @@ impl ValueType {
 /// Values of an array, tuple after tuple. Integers are held as `i64`
 /// (`u64` values above `i64::MAX` wrap and wrap back on write), floats as
 /// `f64` (exact for `f32`).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Values {
     Int(Vec<i64>),
     Float(Vec<f64>),
@@ -77,7 +77,7 @@ impl Values {
 }
 
 /// One named array: `values.len() == tuples * components`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DataArray {
     pub name: String,
     pub ty: ValueType,
@@ -130,7 +130,7 @@ impl DataArray {
 }
 
 /// A Gmsh physical group name.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PhysicalName {
     pub dim: i32,
     pub tag: i32,
@@ -143,7 +143,7 @@ pub const GMSH_PHYSICAL: &str = "gmsh:physical";
 pub const GMSH_ELEMENTARY: &str = "gmsh:geometrical";
 
 /// Everything of a file beyond the geometry and the topology.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MeshData {
     /// One tuple per point.
     pub point: Vec<DataArray>,

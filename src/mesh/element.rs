@@ -13,7 +13,7 @@ use std::fmt;
 /// with the mesh ([`Mesh::faces`](super::Mesh)); its vertex count, corners,
 /// faces and edges are per element ([`Mesh::element_corners`](super::Mesh::element_corners)),
 /// so the static tables below are empty for it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub enum ElementKind {
     Triangle,
     Quadrilateral,

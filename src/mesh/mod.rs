@@ -21,7 +21,7 @@ use std::borrow::Cow;
 /// Cells of lower dimension than the mesh (Gmsh and Medit boundary lines,
 /// triangles, points). They are kept for round trips and their vertices are
 /// treated as fixed; they are never optimised.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum LowerKind {
     Vertex,
     Line,
@@ -42,7 +42,7 @@ impl LowerKind {
 
 /// An unstructured mesh: points, elements of mixed kinds (in file order), optional
 /// boundary cells, and user-fixed vertex flags.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
     /// Coordinates; planar meshes keep their (constant) z so files round-trip.
     pub points: Vec<[f64; 3]>,

@@ -13,7 +13,7 @@ use crate::metric::mat3::Vec3;
 /// are `elem[e]..elem[e + 1]` (an empty range for the other kinds), face `f`
 /// has the vertices `conn[offsets[f]..offsets[f + 1]]` (mesh vertex ids).
 /// `elem` stays empty while the mesh has no polyhedron.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Faces {
     pub elem: Vec<usize>,
     pub offsets: Vec<usize>,

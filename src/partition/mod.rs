@@ -362,7 +362,7 @@ fn restrict(
         free_vertices,
         colors,
         plane: p.plane,
-        sliding: None,
+        sliding: p.sliding.as_ref().map(|s| s.restrict(global)),
         // the sequential sweep it orders does not run on a part
         sweep_order: None,
         order_seed: p.order_seed,
@@ -476,6 +476,43 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Each part's sliding vertices project onto the same primitives, in the
+    /// same order, with the same projector, as in the whole problem.
+    #[test]
+    fn sliding_constraints_follow_their_vertices() {
+        use crate::problem::{Boundary, BoundaryMode, ProblemOptions};
+        let mesh = tet_box(5, 4, 3, [1.0, 1.0, 1.0]);
+        let opts = ProblemOptions {
+            boundary: Boundary {
+                mode: BoundaryMode::Slide,
+                ..Boundary::default()
+            },
+            ..ProblemOptions::default()
+        };
+        let p = Problem::with_options(&mesh, &opts).unwrap();
+        let whole = p.sliding.as_ref().unwrap();
+        let x = p.gather(&mesh.points);
+        let parts = split(&p, &x, &rcb(&x, 3), 3);
+        let mut slid = 0;
+        for q in &parts {
+            let s = q.problem.sliding.as_ref().unwrap();
+            assert!(s.primitives.len() < whole.primitives.len());
+            for (l, &g) in q.global.iter().enumerate() {
+                assert_eq!(s.projector[l], whole.projector[g as usize]);
+                let here: Vec<_> = s.candidates.of(l).iter().map(|&c| s.primitives[c as usize]).collect();
+                let there: Vec<_> = whole
+                    .candidates
+                    .of(g as usize)
+                    .iter()
+                    .map(|&c| whole.primitives[c as usize])
+                    .collect();
+                assert_eq!(here, there);
+                slid += s.slides(l) as usize;
+            }
+        }
+        assert!(slid > 0);
     }
 
     #[test]

@@ -89,7 +89,7 @@ pub enum VertexClass {
 }
 
 /// The sliding constraints in the problem's numbering.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sliding {
     /// Per vertex: the projector onto the directions it may move in (the
     /// identity off the boundary).
@@ -109,6 +109,30 @@ impl Sliding {
     #[inline]
     pub fn slides(&self, v: usize) -> bool {
         self.candidates.offsets[v] != self.candidates.offsets[v + 1]
+    }
+
+    /// The constraints of the vertices `global` (ascending), numbered by
+    /// their place in it, with only the primitives they are projected onto
+    /// (a part of a partitioned run carries its own, not the whole skin's).
+    pub fn restrict(&self, global: &[u32]) -> Sliding {
+        let mut kept = vec![u32::MAX; self.primitives.len()];
+        let mut primitives = Vec::new();
+        let mut pairs = Vec::new();
+        for (l, &g) in global.iter().enumerate() {
+            for &c in self.candidates.of(g as usize) {
+                if kept[c as usize] == u32::MAX {
+                    kept[c as usize] = primitives.len() as u32;
+                    primitives.push(self.primitives[c as usize]);
+                }
+                pairs.push((l as u32, kept[c as usize]));
+            }
+        }
+        Sliding {
+            projector: global.iter().map(|&g| self.projector[g as usize]).collect(),
+            candidates: Csr::from_pairs(global.len(), pairs.into_iter()),
+            primitives,
+            counts: self.counts,
+        }
     }
 
     /// Bytes held.

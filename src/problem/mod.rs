@@ -96,9 +96,7 @@ pub struct Problem {
     /// The plane of a planar mesh outside the planes z = constant: positions
     /// are in its coordinates (`gather` maps into them, `scatter` back).
     pub plane: Option<Plane>,
-    /// The constraints of the boundary vertices that slide (`--boundary slide`);
-    /// not sent to other ranks: a partitioned run refuses sliding.
-    #[serde(skip)]
+    /// The constraints of the boundary vertices that slide (`--boundary slide`).
     pub sliding: Option<Sliding>,
     /// The paper scheme that orders the sequential sweep's list (`None`:
     /// the sweep follows the numbering).

@@ -93,7 +93,7 @@ impl<'p> Bcd<'p> {
         let sequential = self.sequential && be.bcd_sequential(&visit, MOVED, deadline)?;
         if !sequential {
             for c in 0..be.num_colors() {
-                if deadline.is_some_and(|d| Instant::now() >= d) {
+                if deadline.is_some_and(|d| be.past(d)) {
                     break;
                 }
                 be.bcd_color(c)?;

@@ -5,24 +5,30 @@
 //! (`run_scaled`) over a `DistributedBackend`, whose reductions make every
 //! slot — and so every branch — the same on all ranks.
 //!
-//! Decisions that one rank could take alone would split the ranks, so a
-//! partitioned run refuses them: a time limit (clocks differ), cancelling
-//! from the progress callback (ignored), and the sequential sweeps (Laplace;
-//! `bcd` runs colour by colour, as on a GPU). Sliding boundaries are not
-//! distributed yet.
+//! Decisions that one rank could take alone would split the ranks: a time
+//! limit is read from rank 0's clock and shared (`Backend::past`), so all
+//! ranks stop at the same iteration (and the same colour of a sweep);
+//! cancelling from the progress callback is ignored; the sequential sweeps
+//! are refused (Laplace; `bcd` runs colour by colour, as on a GPU). Sliding
+//! vertices carry their constraints into the parts (`Sliding::restrict`):
+//! projecting is per vertex, so it gives the single-process bits.
 
 use super::{Info, Method, Options, Params, Record, Scale, run_scaled};
 use crate::backend::distributed::DistributedBackend;
 use crate::backend::distributed::comm::CommStats;
 use crate::error::{Error, Result};
+use crate::io::{self, CellData, Format};
+use crate::mesh::Mesh;
 use crate::metric::mat3::Vec3;
 use crate::partition::{self, Part, Partitioner, Quality};
 use crate::problem::Problem;
 use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use rayon::prelude::*;
 use std::cell::{Cell, RefCell};
 use std::fmt;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 const JOB_TAG: i32 = 3;
@@ -93,6 +99,9 @@ impl Cluster {
 pub struct RankReport {
     pub owned: usize,
     pub ghosts: usize,
+    /// Iterations this rank ran: the same on every rank, since every stop
+    /// decision is shared (checked by rank 0).
+    pub iterations: usize,
     /// Wall time of the solver loop on this rank.
     pub seconds: f64,
     pub comm: CommStats,
@@ -155,7 +164,29 @@ impl fmt::Display for Report {
     }
 }
 
-/// What a rank sends back.
+/// What rank 0 asks of another rank.
+#[derive(serde::Serialize, serde::Deserialize)]
+enum Job {
+    /// Solve this part; answered with an `Outcome`.
+    Solve(Box<Part>, Method, Params),
+    /// Read these pieces (number, file) of an index; answered with each
+    /// piece or the error reading it.
+    Read(Vec<(usize, PathBuf)>),
+    /// Write this piece atomically, with these cell arrays; answered with
+    /// the error, if any.
+    Write(PathBuf, Box<Mesh>, Format, Vec<(String, Vec<f64>)>),
+}
+
+/// `Job` as rank 0 sends it: borrowing what it sends (the same encoding).
+#[derive(serde::Serialize)]
+#[serde(rename = "Job")]
+enum JobRef<'a> {
+    Solve(&'a Part, Method, &'a Params),
+    Read(&'a [(usize, PathBuf)]),
+    Write(&'a Path, &'a Mesh, Format, Vec<(&'a str, &'a [f64])>),
+}
+
+/// What a rank sends back after a solve.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Outcome {
     /// Global ids and positions of the owned vertices.
@@ -172,7 +203,7 @@ fn encode<T: serde::Serialize>(value: &T) -> Vec<u8> {
 }
 
 fn decode<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T> {
-    ciborium::from_reader(bytes).map_err(|e| Error::InvalidArgument(format!("a malformed message from rank 0: {e}")))
+    ciborium::from_reader(bytes).map_err(|e| Error::InvalidArgument(format!("a malformed MPI message: {e}")))
 }
 
 /// Rank 0's side of `solve` on `Device::Mpi`: split, ship, solve, gather
@@ -184,13 +215,13 @@ pub fn lead(
     opts: &Options,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
-    refuse(p, opts)?;
+    refuse(opts)?;
     let size = cluster.size();
     let (partitioner, owner, fallback) = share_out(cluster.partitioner.get(), p, x, size)?;
     let parts = partition::split(p, x, &owner, size);
     let quality = Quality::of(p, &owner, &parts);
     for (r, part) in parts.iter().enumerate().skip(1) {
-        let job = encode(&(part, opts.method, &opts.params));
+        let job = encode(&JobRef::Solve(part, opts.method, &opts.params));
         cluster.world.process_at_rank(r as i32).send_with_tag(&job[..], JOB_TAG);
     }
     // cancelling on one rank would leave the others waiting for it
@@ -214,9 +245,15 @@ pub fn lead(
         outcomes.push(decode(&bytes)?);
     }
     let info = result?;
-    for o in &outcomes {
+    for (r, o) in outcomes.iter().enumerate() {
         if let Some(e) = &o.error {
             return Err(Error::InvalidArgument(format!("a rank failed: {e}")));
+        }
+        if o.rank.iterations != info.iterations {
+            return Err(Error::InvalidArgument(format!(
+                "rank {r} stopped after {} iterations, rank 0 after {} (a stop decision was not shared)",
+                o.rank.iterations, info.iterations
+            )));
         }
         for (&g, y) in o.global.iter().zip(&o.x) {
             x[g as usize] = *y;
@@ -262,33 +299,150 @@ fn share_out(
 }
 
 /// What a partitioned run cannot do (see the module documentation).
-fn refuse(p: &Problem, opts: &Options) -> Result<()> {
+fn refuse(opts: &Options) -> Result<()> {
     let no = |what: &str| Err(Error::Unsupported(format!("{what} under MPI (partitioned runs)")));
-    if p.sliding.is_some() {
-        return no("sliding boundaries are not supported");
-    }
     if opts.method == Method::Laplace {
         return no("method 'laplace' (sequential by nature) is not available");
-    }
-    if opts.params.time_limit.is_some() {
-        return no("a time limit (ranks' clocks would disagree) is not supported");
     }
     Ok(())
 }
 
-/// Every rank but 0: solves the parts rank 0 sends until it says stop.
+/// Every rank but 0: does what rank 0 asks (solve a part, read or write
+/// pieces) until it says stop.
 pub fn follow(cluster: &Cluster) -> Result<()> {
     loop {
         let (bytes, _) = cluster.world.process_at_rank(0).receive_vec_with_tag::<u8>(JOB_TAG);
         if bytes.is_empty() {
             return Ok(());
         }
-        let (part, method, params): (Part, Method, Params) = decode(&bytes)?;
-        let (_, outcome) = run_part(&cluster.world, &part, method, &params, &mut |_| true);
-        cluster
+        let answer = match decode(&bytes)? {
+            Job::Solve(part, method, params) => {
+                encode(&run_part(&cluster.world, &part, method, &params, &mut |_| true).1)
+            }
+            Job::Read(pieces) => encode(&read_own(&pieces)),
+            Job::Write(path, piece, format, cells) => {
+                let cell_data: Vec<CellData> = cells.iter().map(|(name, values)| CellData { name, values }).collect();
+                encode(
+                    &io::write(&path, &piece, format, &cell_data)
+                        .err()
+                        .map(|e| e.to_string()),
+                )
+            }
+        };
+        cluster.world.process_at_rank(0).send_with_tag(&answer[..], RESULT_TAG);
+    }
+}
+
+/// Pieces `pieces` (number, file), read here (in parallel), or why not.
+fn read_own(pieces: &[(usize, PathBuf)]) -> Vec<std::result::Result<Mesh, String>> {
+    pieces
+        .par_iter()
+        .map(|(_, file)| io::read_pvtu_piece(file).map_err(|e| e.to_string()))
+        .collect()
+}
+
+/// The rank that reads piece `i` of `n` on `size` ranks: piece i on rank i
+/// when there are as many pieces as ranks, else consecutive pieces to each
+/// rank (ranks beyond the pieces read none).
+pub fn piece_reader(i: usize, n: usize, size: usize) -> usize {
+    if n <= size { i } else { i * size / n }
+}
+
+impl Cluster {
+    /// The pieces `sources` of the `.pvtu` index `index`, each read (and
+    /// parsed) by the rank [`piece_reader`] names and sent to rank 0, which
+    /// gets them all, in order. Rank 0 then holds the whole mesh, as with a
+    /// read of its own: what the ranks share is the reading and parsing.
+    pub fn read_pieces(&self, index: &Path, sources: &[PathBuf]) -> Result<Vec<Mesh>> {
+        let (n, size) = (sources.len(), self.size());
+        let mut mine: Vec<Vec<(usize, PathBuf)>> = vec![Vec::new(); size];
+        for (i, s) in sources.iter().enumerate() {
+            mine[piece_reader(i, n, size)].push((i, s.clone()));
+        }
+        for (r, pieces) in mine.iter().enumerate().skip(1).filter(|(_, p)| !p.is_empty()) {
+            let job = encode(&JobRef::Read(pieces));
+            self.world.process_at_rank(r as i32).send_with_tag(&job[..], JOB_TAG);
+        }
+        let mut read: Vec<Option<Result<Mesh>>> = (0..n).map(|_| None).collect();
+        let mut keep = |r: usize, got: Vec<std::result::Result<Mesh, String>>| {
+            for ((i, file), m) in mine[r].iter().zip(got) {
+                read[*i] = Some(m.map_err(|e| io::piece_error(index, *i, file, format!("{e} (read by rank {r})"))));
+            }
+        };
+        keep(0, read_own(&mine[0]));
+        // every answer is received, even after a bad one, so none is left for a later receive
+        let mut malformed = None;
+        for r in (1..size).filter(|&r| !mine[r].is_empty()) {
+            let (bytes, _) = self
+                .world
+                .process_at_rank(r as i32)
+                .receive_vec_with_tag::<u8>(RESULT_TAG);
+            match decode(&bytes) {
+                Ok(got) => keep(r, got),
+                Err(e) => malformed = malformed.or(Some(e)),
+            }
+        }
+        if let Some(e) = malformed {
+            return Err(e);
+        }
+        read.into_iter()
+            .enumerate()
+            .map(|(i, m)| m.unwrap_or_else(|| Err(io::piece_error(index, i, &sources[i], "no rank returned it"))))
+            .collect()
+    }
+
+    /// Writes pieces on the ranks: piece r on rank r (r modulo the ranks
+    /// when there are more pieces than ranks), see [`io::PieceWriter`].
+    pub fn piece_writer(&self) -> RankPieces<'_> {
+        RankPieces {
+            cluster: self,
+            pending: Vec::new(),
+            ranks: Vec::new(),
+        }
+    }
+}
+
+/// Pieces written by the ranks, each its own (`Cluster::piece_writer`).
+pub struct RankPieces<'c> {
+    cluster: &'c Cluster,
+    /// Ranks with a piece in writing, in the order they were given one.
+    pending: Vec<usize>,
+    /// The rank that wrote each piece, in piece order.
+    pub ranks: Vec<usize>,
+}
+
+impl io::PieceWriter for RankPieces<'_> {
+    fn put(&mut self, r: usize, path: &Path, piece: &Mesh, format: Format, cell_data: &[CellData]) -> Result<()> {
+        let rank = r % self.cluster.size();
+        self.ranks.push(rank);
+        if rank == 0 {
+            return io::write(path, piece, format, cell_data);
+        }
+        let cells = cell_data.iter().map(|c| (c.name, c.values)).collect();
+        let job = encode(&JobRef::Write(path, piece, format, cells));
+        self.cluster
             .world
-            .process_at_rank(0)
-            .send_with_tag(&encode(&outcome)[..], RESULT_TAG);
+            .process_at_rank(rank as i32)
+            .send_with_tag(&job[..], JOB_TAG);
+        self.pending.push(rank);
+        Ok(())
+    }
+
+    fn done(&mut self) -> Result<()> {
+        let mut first = None;
+        for rank in std::mem::take(&mut self.pending) {
+            let (bytes, _) = self
+                .cluster
+                .world
+                .process_at_rank(rank as i32)
+                .receive_vec_with_tag::<u8>(RESULT_TAG);
+            let failed = match decode::<Option<String>>(&bytes) {
+                Ok(failed) => failed.map(|e| Error::InvalidArgument(format!("rank {rank}: {e}"))),
+                Err(e) => Some(e),
+            };
+            first = first.or(failed);
+        }
+        first.map_or(Ok(()), Err)
     }
 }
 
@@ -325,10 +479,42 @@ fn run_part(
         rank: RankReport {
             owned: owned.len(),
             ghosts: part.ghosts(),
+            iterations: result.as_ref().map_or(0, |i| i.iterations),
             seconds: start.elapsed().as_secs_f64(),
             comm,
         },
         error: result.as_ref().err().map(|e| e.to_string()),
     };
     (result, outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::piece_reader;
+
+    #[test]
+    fn every_piece_has_one_reader_in_rank_order() {
+        for size in 1..=5 {
+            for n in 1..=12 {
+                let readers: Vec<usize> = (0..n).map(|i| piece_reader(i, n, size)).collect();
+                assert!(
+                    readers.windows(2).all(|w| w[0] <= w[1]),
+                    "{n} pieces on {size} ranks: {readers:?}"
+                );
+                assert!(readers.iter().all(|&r| r < size));
+                if n <= size {
+                    assert_eq!(readers, (0..n).collect::<Vec<_>>());
+                } else {
+                    // every rank reads, none more than one piece beyond its share
+                    for r in 0..size {
+                        let k = readers.iter().filter(|&&x| x == r).count();
+                        assert!(
+                            k >= n / size && k <= n.div_ceil(size),
+                            "{n} pieces on {size} ranks: {readers:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

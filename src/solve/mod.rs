@@ -381,7 +381,17 @@ pub(crate) fn run_scaled<B: Backend + ?Sized>(
             first,
             first_reorder,
         };
-        iterate(method, params, begin, setup, &mut || step(be), progress)
+        // the loop asks the backend both for steps and for the clock (`Backend::past`)
+        let be = std::cell::RefCell::new(&mut *be);
+        iterate(
+            method,
+            params,
+            begin,
+            setup,
+            &mut || step(&mut be.borrow_mut()),
+            &mut |d| be.borrow_mut().past(d),
+            progress,
+        )
     };
     match result {
         Ok(info) => {
@@ -469,13 +479,15 @@ struct Start {
 }
 
 /// The iteration loop shared by every method and backend: history, progress
-/// and the stop rules; `step` runs one sweep or iteration.
+/// and the stop rules; `step` runs one sweep or iteration, `past` says
+/// whether a deadline has passed (the same answer on every rank).
 fn iterate(
     method: Method,
     params: &Params,
     begin: Start,
     setup: Setup,
     step: &mut dyn FnMut() -> Result<Sweep>,
+    past: &mut dyn FnMut(Instant) -> bool,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> Result<Info> {
     let start = begin.at;
@@ -512,7 +524,7 @@ fn iterate(
             stop = Some(StopReason::MaxIterations);
             break;
         }
-        if deadline.is_some_and(|d| Instant::now() >= d) {
+        if deadline.is_some_and(&mut *past) {
             stop = Some(StopReason::TimeLimit);
             break;
         }

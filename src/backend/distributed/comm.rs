@@ -63,6 +63,17 @@ impl<'w> Comm<'w> {
             .collect()
     }
 
+    /// Rank 0's `local`, on every rank: for what one rank decides for all.
+    pub fn from_root(&mut self, local: f64) -> f64 {
+        let start = Instant::now();
+        let mut value = local;
+        self.world.process_at_rank(0).broadcast_into(&mut value);
+        self.stats.reductions += 1;
+        self.stats.reduction_bytes += 8;
+        self.stats.seconds += start.elapsed().as_secs_f64();
+        value
+    }
+
     /// Overwrites the ghost entries of `data` (indexed through `at`, from a
     /// free-vector index) with their owners' values.
     pub fn exchange(&mut self, halo: &[Exchange], data: &mut [Vec3], at: impl Fn(u32) -> usize) {
