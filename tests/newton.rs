@@ -498,3 +498,55 @@ fn newton_with_symmetric_gauss_seidel_reaches_the_block_jacobi_optimum() {
         .fold(0.0, f64::max);
     assert!(worst <= 1e-8 * edge, "largest difference {worst} vs mean edge {edge}");
 }
+
+/// The line search's step to 0.7 of the first corner inversion against the
+/// paper's blind halving, on the biased horseshoe SQIV, where Newton's full
+/// steps invert elements: the same optimum, no inverted element, and fewer
+/// trial evaluations.
+#[test]
+fn inversion_fraction_saves_trials_and_keeps_the_optimum() {
+    use meshsmooth::generate::{self, HorseshoeKind};
+    let (mesh, _) = generate::horseshoe(HorseshoeKind::SqIV, 2000);
+    let run = |fraction: f64| {
+        let mut params = Params {
+            tol: 1e-9,
+            ..Params::default()
+        };
+        params.newton.inversion_fraction = fraction;
+        let mut m = mesh.clone();
+        let info = solve::smooth_mesh(
+            &mut m,
+            &Default::default(),
+            &solve::Options::cpu(Method::Newton, &params),
+            &mut |_| true,
+        )
+        .unwrap();
+        assert_eq!(info.stop, StopReason::Converged, "fraction {fraction}");
+        assert!(meshsmooth::metric::inverted_elements(&m, &m.points).is_empty());
+        for w in info.history.records.windows(2) {
+            assert!(w[1].objective <= w[0].objective);
+        }
+        info
+    };
+    let (blind, aimed) = (run(0.0), run(0.7));
+    assert!(
+        (blind.objective - aimed.objective).abs() <= 1e-10 * blind.objective,
+        "{} vs {}",
+        blind.objective,
+        aimed.objective
+    );
+    let trials = |i: &solve::Info| i.line_search_trials.unwrap();
+    // the blind search needs a trial per halving after each inverting step
+    assert!(
+        trials(&blind) > blind.iterations + 5,
+        "blind: {} trials in {} iterations",
+        trials(&blind),
+        blind.iterations
+    );
+    assert!(
+        2 * trials(&aimed) < trials(&blind),
+        "aimed {} vs blind {} trials",
+        trials(&aimed),
+        trials(&blind)
+    );
+}
