@@ -90,10 +90,74 @@ impl Csr {
     }
 }
 
+impl Csr {
+    /// The lists [`Csr::from_pairs`] builds from the pairs of sources
+    /// `0..sources` in turn, built in parallel: counted and scattered with
+    /// atomics, then each list sorted. Equal to `from_pairs` when every
+    /// entry's items come in ascending order (element or corner ids do), so
+    /// the result depends on neither the thread count nor the schedule.
+    pub fn from_sorted_pairs_par<I>(n: usize, sources: usize, pairs_of: impl Fn(usize) -> I + Sync) -> Csr
+    where
+        I: Iterator<Item = (u32, u32)>,
+    {
+        use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+        const GRAIN: usize = 1 << 12;
+        let counts: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(0)).collect();
+        (0..sources).into_par_iter().with_min_len(GRAIN).for_each(|s| {
+            for (i, _) in pairs_of(s) {
+                counts[i as usize].fetch_add(1, Relaxed);
+            }
+        });
+        let mut offsets = Vec::with_capacity(n + 1);
+        offsets.push(0u32);
+        let mut sum = 0u32;
+        for c in counts {
+            sum += c.into_inner();
+            offsets.push(sum);
+        }
+        let cursor: Vec<AtomicU32> = offsets[..n].iter().map(|&o| AtomicU32::new(o)).collect();
+        let slots: Vec<AtomicU32> = (0..sum).map(|_| AtomicU32::new(0)).collect();
+        (0..sources).into_par_iter().with_min_len(GRAIN).for_each(|s| {
+            for (i, item) in pairs_of(s) {
+                slots[cursor[i as usize].fetch_add(1, Relaxed) as usize].store(item, Relaxed);
+            }
+        });
+        drop(cursor);
+        let mut items: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
+        sort_lists_par(&offsets, &mut items);
+        Csr { offsets, items }
+    }
+}
+
+/// Sorts every list of a CSR in place, chunks of lists in parallel.
+fn sort_lists_par(offsets: &[u32], items: &mut [u32]) {
+    const CHUNK: usize = 1 << 12;
+    let n = offsets.len() - 1;
+    let mut parts = Vec::with_capacity(n.div_ceil(CHUNK));
+    let mut rest = items;
+    for c in 0..n.div_ceil(CHUNK) {
+        let (a, b) = (c * CHUNK, ((c + 1) * CHUNK).min(n));
+        let (part, tail) = rest.split_at_mut((offsets[b] - offsets[a]) as usize);
+        parts.push((a, b, part));
+        rest = tail;
+    }
+    parts.into_par_iter().for_each(|(a, b, part)| {
+        let base = offsets[a];
+        for i in a..b {
+            part[(offsets[i] - base) as usize..(offsets[i + 1] - base) as usize].sort_unstable();
+        }
+    });
+}
+
 /// Elements incident to each vertex, in increasing element order.
 pub fn vertex_elements(mesh: &Mesh) -> Csr {
-    let pairs = (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
-    Csr::from_pairs(mesh.num_points(), pairs)
+    if mesh.conn.iter().any(|&v| v as usize >= mesh.num_points()) {
+        let pairs = (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
+        return Csr::from_pairs(mesh.num_points(), pairs);
+    }
+    Csr::from_sorted_pairs_par(mesh.num_points(), mesh.num_elements(), |e| {
+        mesh.element(e).iter().map(move |&v| (v, e as u32))
+    })
 }
 
 /// Lists built in parallel, one entry at a time: `fill(i, out)` appends
@@ -128,9 +192,14 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
     if mesh.conn.iter().any(|&v| v as usize >= mesh.num_points()) {
         return vertex_neighbours_by_pairs(mesh);
     }
+    vertex_neighbours_with(mesh, &vertex_elements(mesh))
+}
+
+/// [`vertex_neighbours`] from the mesh's [`vertex_elements`], when the caller
+/// has them already (ids must be in range).
+pub fn vertex_neighbours_with(mesh: &Mesh, ve: &Csr) -> Csr {
     // each vertex gathers its own edges from its elements: linear, and no
     // sort of all (vertex, neighbour) pairs (1 GB for 10M tetrahedra)
-    let ve = vertex_elements(mesh);
     build_par(mesh.num_points(), |v, out| {
         let from = out.len();
         let v32 = v as u32;
@@ -210,10 +279,19 @@ pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
     if !mesh.faces.is_empty() || mesh.conn.iter().any(|&v| v as usize >= n) {
         return skin_vertices_hashed(mesh);
     }
+    skin_vertices_with(mesh, &vertex_elements(mesh))
+}
+
+/// [`skin_vertices`] from the mesh's [`vertex_elements`], when the caller has
+/// them already (ids must be in range).
+fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
+    let n = mesh.num_points();
+    if !mesh.faces.is_empty() {
+        return skin_vertices_hashed(mesh);
+    }
     // Copies of a facet share their lowest vertex: each vertex counts the
     // facets it is lowest on, among its own elements' facets. Linear,
     // parallel, and no hash map of every facet of the mesh.
-    let ve = vertex_elements(mesh);
     let key = |vs: &[u32], local: &[usize]| {
         let mut k = [u32::MAX; 4];
         for (slot, &l) in k.iter_mut().zip(local) {
@@ -311,7 +389,23 @@ fn skin_vertices_hashed(mesh: &Mesh) -> Vec<bool> {
 
 /// Vertices that must not move: the skin plus everything the user fixed.
 pub fn fixed_vertices(mesh: &Mesh) -> Vec<bool> {
-    let mut fixed = skin_vertices(mesh);
+    with_user_fixed(mesh, skin_vertices(mesh))
+}
+
+/// The vertex adjacency a problem starts from, with the mesh's
+/// [`vertex_elements`] built once for all three (ids in range, else as the
+/// separate functions do): (fixed vertices, edge neighbours, vertex elements).
+pub fn vertex_graph(mesh: &Mesh) -> (Vec<bool>, Csr, Csr) {
+    let n = mesh.num_points();
+    if mesh.conn.par_iter().any(|&v| v as usize >= n) {
+        return (fixed_vertices(mesh), vertex_neighbours(mesh), vertex_elements(mesh));
+    }
+    let ve = vertex_elements(mesh);
+    let (skin, nb) = rayon::join(|| skin_vertices_with(mesh, &ve), || vertex_neighbours_with(mesh, &ve));
+    (with_user_fixed(mesh, skin), nb, ve)
+}
+
+fn with_user_fixed(mesh: &Mesh, mut fixed: Vec<bool>) -> Vec<bool> {
     for (f, &u) in fixed.iter_mut().zip(&mesh.fixed) {
         *f |= u;
     }
