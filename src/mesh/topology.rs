@@ -90,74 +90,14 @@ impl Csr {
     }
 }
 
-impl Csr {
-    /// The lists [`Csr::from_pairs`] builds from the pairs of sources
-    /// `0..sources` in turn, built in parallel: counted and scattered with
-    /// atomics, then each list sorted. Equal to `from_pairs` when every
-    /// entry's items come in ascending order (element or corner ids do), so
-    /// the result depends on neither the thread count nor the schedule.
-    pub fn from_sorted_pairs_par<I>(n: usize, sources: usize, pairs_of: impl Fn(usize) -> I + Sync) -> Csr
-    where
-        I: Iterator<Item = (u32, u32)>,
-    {
-        use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
-        const GRAIN: usize = 1 << 12;
-        let counts: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(0)).collect();
-        (0..sources).into_par_iter().with_min_len(GRAIN).for_each(|s| {
-            for (i, _) in pairs_of(s) {
-                counts[i as usize].fetch_add(1, Relaxed);
-            }
-        });
-        let mut offsets = Vec::with_capacity(n + 1);
-        offsets.push(0u32);
-        let mut sum = 0u32;
-        for c in counts {
-            sum += c.into_inner();
-            offsets.push(sum);
-        }
-        let cursor: Vec<AtomicU32> = offsets[..n].iter().map(|&o| AtomicU32::new(o)).collect();
-        let slots: Vec<AtomicU32> = (0..sum).map(|_| AtomicU32::new(0)).collect();
-        (0..sources).into_par_iter().with_min_len(GRAIN).for_each(|s| {
-            for (i, item) in pairs_of(s) {
-                slots[cursor[i as usize].fetch_add(1, Relaxed) as usize].store(item, Relaxed);
-            }
-        });
-        drop(cursor);
-        let mut items: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
-        sort_lists_par(&offsets, &mut items);
-        Csr { offsets, items }
-    }
-}
-
-/// Sorts every list of a CSR in place, chunks of lists in parallel.
-fn sort_lists_par(offsets: &[u32], items: &mut [u32]) {
-    const CHUNK: usize = 1 << 12;
-    let n = offsets.len() - 1;
-    let mut parts = Vec::with_capacity(n.div_ceil(CHUNK));
-    let mut rest = items;
-    for c in 0..n.div_ceil(CHUNK) {
-        let (a, b) = (c * CHUNK, ((c + 1) * CHUNK).min(n));
-        let (part, tail) = rest.split_at_mut((offsets[b] - offsets[a]) as usize);
-        parts.push((a, b, part));
-        rest = tail;
-    }
-    parts.into_par_iter().for_each(|(a, b, part)| {
-        let base = offsets[a];
-        for i in a..b {
-            part[(offsets[i] - base) as usize..(offsets[i + 1] - base) as usize].sort_unstable();
-        }
-    });
-}
-
 /// Elements incident to each vertex, in increasing element order.
+///
+/// A sequential counting sort: a parallel one (atomic counts and cursors,
+/// then each list sorted) took 0.13 s against this one's 0.07 s on the
+/// 1.3M-tet box on the shared 2-core machine.
 pub fn vertex_elements(mesh: &Mesh) -> Csr {
-    if mesh.conn.iter().any(|&v| v as usize >= mesh.num_points()) {
-        let pairs = (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
-        return Csr::from_pairs(mesh.num_points(), pairs);
-    }
-    Csr::from_sorted_pairs_par(mesh.num_points(), mesh.num_elements(), |e| {
-        mesh.element(e).iter().map(move |&v| (v, e as u32))
-    })
+    let pairs = (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
+    Csr::from_pairs(mesh.num_points(), pairs)
 }
 
 /// Lists built in parallel, one entry at a time: `fill(i, out)` appends

@@ -107,26 +107,43 @@ impl HessianPattern {
                 s
             })
             .collect();
-        // a range's corners are those incident to its rows' vertices, in
-        // ascending order and each once: gathered per range, in parallel
         let nranges = rows.div_ceil(ROWS_PER_RANGE).max(1);
-        let ranges: Vec<RowRange> = (0..nranges)
-            .into_par_iter()
-            .map(|r| {
-                let (start, end) = (r * rows / nranges, (r + 1) * rows / nranges);
-                let mut elements: Vec<u32> = free_vertex[start..end]
-                    .iter()
-                    .flat_map(|&v| p.incidence.of(v as usize).iter().map(|&packed| packed >> 2))
-                    .collect();
-                elements.sort_unstable();
-                elements.dedup();
-                RowRange {
-                    start: start as u32,
-                    end: end as u32,
-                    elements,
-                }
+        let mut ranges: Vec<RowRange> = (0..nranges)
+            .map(|r| RowRange {
+                start: (r * rows / nranges) as u32,
+                end: ((r + 1) * rows / nranges) as u32,
+                elements: Vec::new(),
             })
             .collect();
+        // each corner's ranges found in parallel (fixed chunks), then handed
+        // to the ranges in corner order: a linear pass, lists ascending
+        const CHUNK: usize = 1 << 16;
+        let range_of = |i: u32| ranges.partition_point(|r| r.end <= i);
+        let touched: Vec<Vec<(u32, u32)>> = p
+            .corners
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(ci, cs)| {
+                let mut touched = Vec::with_capacity(cs.len() + cs.len() / 8);
+                for (j, t) in cs.iter().enumerate() {
+                    let mut seen = [usize::MAX; 4];
+                    for (k, &v) in t.iter().enumerate().take(nslots) {
+                        let i = free_index[v as usize];
+                        if i != u32::MAX {
+                            let r = range_of(i);
+                            if !seen.contains(&r) {
+                                seen[k] = r;
+                                touched.push((r as u32, (ci * CHUNK + j) as u32));
+                            }
+                        }
+                    }
+                }
+                touched
+            })
+            .collect();
+        for (r, e) in touched.into_iter().flatten() {
+            ranges[r as usize].elements.push(e);
+        }
         let nblocks = cols.len();
         HessianPattern {
             free_index,
