@@ -90,6 +90,7 @@ fn main() {
     let (t_skin, _) = best(reps, || topology::fixed_vertices(&mesh));
     let (t_nb, _) = best(reps, || topology::vertex_neighbours(&mesh));
     let (t_ve, _) = best(reps, || topology::vertex_elements(&mesh));
+    let (t_graph, _) = best(reps, || MeshGraph::of(&mesh));
     let graph = MeshGraph::of(&mesh);
     let (t_check, _) = best(reps, || problem::check(&mesh, &mesh.points, &opts).unwrap());
     let (t_order, num) = best(reps, || problem::order(&mesh, &graph, opts.ordering));
@@ -111,6 +112,7 @@ fn main() {
         ("skin + fixed", t_skin),
         ("vertex neighbours", t_nb),
         ("vertex elements", t_ve),
+        ("mesh graph (the three above, sharing vertex elements)", t_graph),
         ("check", t_check),
         ("order", t_order),
         ("corners", t_corners),
@@ -118,6 +120,7 @@ fn main() {
         ("colours", t_col),
         ("Problem::with_options (all of the above)", t_total),
         ("Newton Hessian pattern", t_hess),
+        ("setup with the Hessian pattern", t_total + t_hess),
         ("one coloured BCD sweep", t_sweep),
     ] {
         println!("| {name} | {s:.3} | {:.2} |", s / t_sweep);

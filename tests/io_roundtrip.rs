@@ -232,6 +232,65 @@ fn every_format_round_trips_every_mesh() {
     }
 }
 
+/// The binary writers encode large arrays in parallel chunks (16384 records):
+/// meshes of several chunks, with long runs of one type and with the types
+/// interleaved, and Gmsh tags on their cells, read back as written.
+#[test]
+fn parallel_binary_writers_round_trip_meshes_of_several_chunks() {
+    use ElementKind::*;
+    let dir = tempfile::tempdir().unwrap();
+    let grouped = mesh3d(26, 1.0, |c| [Hexahedron, Prism, Tetrahedron][c * 3 / (26 * 26 * 26)]);
+    let mut mixed = mesh3d(26, 0.5, |c| [Hexahedron, Prism, Tetrahedron][c % 3]);
+    mixed.fixed = (0..mixed.num_points()).map(|v| v % 7 == 0).collect();
+    for (name, mut m) in [("grouped", grouped), ("mixed", mixed)] {
+        assert!(m.num_points() > 16384 && m.num_elements() > 16384, "{name}");
+        let ne = m.num_elements();
+        // Gmsh 4.1 keeps physical tags per entity: one per elementary tag here
+        for (array, base) in [("gmsh:physical", 11i64), ("gmsh:geometrical", 1)] {
+            m.data.cell.push(meshsmooth::mesh::DataArray::new(
+                array,
+                meshsmooth::mesh::ValueType::I32,
+                1,
+                meshsmooth::mesh::Values::Int((0..ne).map(|e| base + (e / 5000 % 5) as i64).collect()),
+            ));
+        }
+        for f in [
+            Format::VtuBinary,
+            Format::VtuZlib,
+            Format::Msh41Binary,
+            Format::Msh22Binary,
+            Format::Msh41Ascii,
+        ] {
+            let path = dir.path().join(format!("{name}-{f}.{}", ext(f)));
+            io::write(&path, &m, f, &[]).unwrap_or_else(|e| panic!("{name} {f}: {e}"));
+            let got = io::read(&path).unwrap_or_else(|e| panic!("{name} {f}: {e}"));
+            let ctx = format!("{name} as {f}");
+            assert_eq!(bits(&got), bits(&m), "{ctx}: points");
+            assert_eq!(got.kinds, m.kinds, "{ctx}: kinds");
+            assert_eq!(got.offsets, m.offsets, "{ctx}: offsets");
+            assert_eq!(got.conn, m.conn, "{ctx}: conn");
+            assert_eq!(fixed(&got), fixed(&m), "{ctx}: fixed");
+            for array in ["gmsh:physical", "gmsh:geometrical"] {
+                let want = m.data.cell_array(array).unwrap();
+                let have = got
+                    .data
+                    .cell_array(array)
+                    .unwrap_or_else(|| panic!("{ctx}: no {array}"));
+                let bad = (0..ne).find(|&e| have.get_i64(e) != want.get_i64(e));
+                assert!(bad.is_none(), "{ctx}: {array} differs first at cell {bad:?}");
+            }
+        }
+        // binary and text Gmsh 4.1 files of one mesh read back equal
+        let (a, b) = (
+            dir.path().join(format!("{name}-a.msh")),
+            dir.path().join(format!("{name}-b.msh")),
+        );
+        io::write(&a, &m, Format::Msh41Binary, &[]).unwrap();
+        io::write(&b, &m, Format::Msh41Ascii, &[]).unwrap();
+        assert_eq!(io::read(&a).unwrap(), io::read(&b).unwrap(), "{name}");
+    }
+}
+
 #[test]
 fn medit_writes_2d_only_for_planar_z0_meshes() {
     let dir = tempfile::tempdir().unwrap();

@@ -653,10 +653,10 @@ impl Reader<'_> {
 }
 
 /// One cell to write: Gmsh type, dimension, vertices, physical and elementary tag.
-struct OutCell {
+struct OutCell<'a> {
     t: u32,
     dim: usize,
-    vs: Vec<u32>,
+    vs: std::borrow::Cow<'a, [u32]>,
     physical: i32,
     elementary: i32,
 }
@@ -665,7 +665,7 @@ struct OutCell {
 /// vertices that no lower cell covers. Tags come from the `gmsh:physical` /
 /// `gmsh:geometrical` arrays where the mesh has them (physical 0 = none,
 /// elementary 1 otherwise).
-fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
+fn output_cells(mesh: &Mesh) -> Vec<OutCell<'_>> {
     let tag = |a: Option<&DataArray>, i: usize, default: i32| a.map_or(default, |a| a.get_i64(i) as i32);
     let (ep, ee) = (
         mesh.data.cell_array(GMSH_PHYSICAL),
@@ -676,11 +676,13 @@ fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
         mesh.data.lower_array(GMSH_ELEMENTARY),
     );
     let mut cells: Vec<OutCell> = (0..mesh.num_elements())
+        .into_par_iter()
+        .with_min_len(1 << 12)
         .map(|e| OutCell {
             // polyhedra are refused before any writer runs (`io::write`)
             t: mesh.kinds[e].gmsh_id().unwrap_or(0),
             dim: mesh.kinds[e].dim(),
-            vs: mesh.element(e).to_vec(),
+            vs: mesh.element(e).into(),
             physical: tag(ep, e, 0),
             elementary: tag(ee, e, 1),
         })
@@ -699,7 +701,7 @@ fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
         cells.push(OutCell {
             t,
             dim,
-            vs: vs.clone(),
+            vs: vs.as_slice().into(),
             physical: tag(lp, i, 0),
             elementary: tag(le, i, 1),
         });
@@ -708,7 +710,7 @@ fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
         cells.push(OutCell {
             t: 15,
             dim: 0,
-            vs: vec![v as u32],
+            vs: vec![v as u32].into(),
             physical: 0,
             elementary: 1,
         });
@@ -718,7 +720,7 @@ fn output_cells(mesh: &Mesh) -> Vec<OutCell> {
 
 /// Runs of consecutive cells with the same type (and, for 4.1 blocks, the
 /// same elementary entity).
-fn runs(cells: &[OutCell], by_entity: bool) -> Vec<std::ops::Range<usize>> {
+fn runs(cells: &[OutCell<'_>], by_entity: bool) -> Vec<std::ops::Range<usize>> {
     let mut out = Vec::new();
     let mut start = 0;
     for i in 1..=cells.len() {
@@ -756,29 +758,72 @@ struct Entity {
     hi: [f64; 3],
 }
 
-fn entities(mesh: &Mesh, cells: &[OutCell]) -> Vec<Entity> {
+fn entities(mesh: &Mesh, cells: &[OutCell<'_>]) -> Vec<Entity> {
+    // each cell's entity, numbered in order of first appearance; runs of one
+    // entity (the usual case) skip the map
     let mut index: HashMap<(usize, i32), usize> = HashMap::new();
     let mut out: Vec<Entity> = Vec::new();
+    let mut of = Vec::with_capacity(cells.len());
+    let mut last: Option<((usize, i32), usize)> = None;
     for c in cells {
-        let i = *index.entry((c.dim, c.elementary)).or_insert_with(|| {
-            out.push(Entity {
-                dim: c.dim,
-                tag: c.elementary,
-                physical: Vec::new(),
-                lo: [f64::INFINITY; 3],
-                hi: [f64::NEG_INFINITY; 3],
-            });
-            out.len() - 1
-        });
-        let e = &mut out[i];
-        if c.physical != 0 && !e.physical.contains(&c.physical) {
-            e.physical.push(c.physical);
-        }
-        for &v in &c.vs {
-            let p = mesh.points[v as usize];
+        let key = (c.dim, c.elementary);
+        let i = match last {
+            Some((k, i)) if k == key => i,
+            _ => *index.entry(key).or_insert_with(|| {
+                out.push(Entity {
+                    dim: c.dim,
+                    tag: c.elementary,
+                    physical: Vec::new(),
+                    lo: [f64::INFINITY; 3],
+                    hi: [f64::NEG_INFINITY; 3],
+                });
+                out.len() - 1
+            }),
+        };
+        last = Some((key, i));
+        of.push(i as u32);
+    }
+    // physical tags in order of first appearance and bounding boxes, per
+    // fixed chunk in parallel, merged in chunk order (min and max are exact)
+    const CHUNK: usize = 1 << 14;
+    let blank = |e: &Entity| Entity {
+        dim: e.dim,
+        tag: e.tag,
+        physical: Vec::new(),
+        lo: [f64::INFINITY; 3],
+        hi: [f64::NEG_INFINITY; 3],
+    };
+    let parts: Vec<Vec<Entity>> = cells
+        .par_chunks(CHUNK)
+        .zip(of.par_chunks(CHUNK))
+        .map(|(cs, is)| {
+            let mut ents: Vec<Entity> = out.iter().map(blank).collect();
+            for (c, &i) in cs.iter().zip(is) {
+                let e = &mut ents[i as usize];
+                if c.physical != 0 && !e.physical.contains(&c.physical) {
+                    e.physical.push(c.physical);
+                }
+                for &v in c.vs.iter() {
+                    let p = mesh.points[v as usize];
+                    for k in 0..3 {
+                        e.lo[k] = e.lo[k].min(p[k]);
+                        e.hi[k] = e.hi[k].max(p[k]);
+                    }
+                }
+            }
+            ents
+        })
+        .collect();
+    for part in parts {
+        for (e, p) in out.iter_mut().zip(part) {
+            for ph in p.physical {
+                if !e.physical.contains(&ph) {
+                    e.physical.push(ph);
+                }
+            }
             for k in 0..3 {
-                e.lo[k] = e.lo[k].min(p[k]);
-                e.hi[k] = e.hi[k].max(p[k]);
+                e.lo[k] = e.lo[k].min(p.lo[k]);
+                e.hi[k] = e.hi[k].max(p.hi[k]);
             }
         }
     }
@@ -830,7 +875,7 @@ pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
                     .for_each(|&v| buf.extend_from_slice(&(v as i32 + 1).to_le_bytes()));
             } else {
                 write!(w, "{tag} {t} 2 {} {}", c.physical, c.elementary)?;
-                for v in &c.vs {
+                for v in c.vs.iter() {
                     write!(w, " {}", v + 1)?;
                 }
                 writeln!(w)?;
@@ -844,6 +889,19 @@ pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     check_cell_data(mesh, cell_data)?;
     writeln!(w, "$EndElements")?;
     Ok(())
+}
+
+/// `n` records of `size` bytes, record `i` filled by `fill(i, bytes)`, in
+/// parallel chunks.
+fn par_le_bytes(n: usize, size: usize, fill: impl Fn(usize, &mut [u8]) + Sync) -> Vec<u8> {
+    const CHUNK: usize = 1 << 14;
+    let mut out = vec![0u8; n * size];
+    out.par_chunks_mut(CHUNK * size).enumerate().for_each(|(c, part)| {
+        for (j, rec) in part.chunks_exact_mut(size).enumerate() {
+            fill(c * CHUNK + j, rec);
+        }
+    });
+    out
 }
 
 pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
@@ -931,13 +989,23 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     nums(w, &mut buf, &[], &[nblocks, n as u64, 1.min(n as u64), n as u64])?;
     if n > 0 {
         nums(w, &mut buf, &[ndim as i32, ntag, 0], &[n as u64])?;
-        for i in 1..=n as u64 {
-            nums(w, &mut buf, &[], &[i])?;
-        }
-        for p in &mesh.points {
-            if binary {
-                p.iter().for_each(|c| buf.extend_from_slice(&c.to_le_bytes()));
-            } else {
+        if binary {
+            // tags and coordinates encoded in parallel, written as two blocks
+            w.write_all(&buf)?;
+            buf.clear();
+            w.write_all(&par_le_bytes(n, 8, |i, out| {
+                out.copy_from_slice(&(i as u64 + 1).to_le_bytes())
+            }))?;
+            w.write_all(&par_le_bytes(n, 24, |i, out| {
+                for (k, c) in mesh.points[i].iter().enumerate() {
+                    out[8 * k..8 * k + 8].copy_from_slice(&c.to_le_bytes());
+                }
+            }))?;
+        } else {
+            for i in 1..=n as u64 {
+                nums(w, &mut buf, &[], &[i])?;
+            }
+            for p in &mesh.points {
                 writeln!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
             }
         }
@@ -956,6 +1024,22 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
             &[c0.dim as i32, c0.elementary, c0.t as i32],
             &[run.len() as u64],
         )?;
+        let nv = c0.vs.len();
+        let cs = &cells[run.clone()];
+        if binary && cs.par_iter().all(|c| c.vs.len() == nv) {
+            // a run's cells have one type, so rows of one length: encoded in
+            // parallel, each row at its own offset
+            w.write_all(&buf)?;
+            buf.clear();
+            w.write_all(&par_le_bytes(cs.len(), 8 * (nv + 1), |i, out| {
+                out[..8].copy_from_slice(&(tag + 1 + i as u64).to_le_bytes());
+                for (k, &v) in cs[i].vs.iter().enumerate() {
+                    out[8 * k + 8..8 * k + 16].copy_from_slice(&(v as u64 + 1).to_le_bytes());
+                }
+            }))?;
+            tag += cs.len() as u64;
+            continue;
+        }
         for c in &cells[run] {
             tag += 1;
             let mut row = vec![tag];

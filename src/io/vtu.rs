@@ -18,6 +18,7 @@ use base64::engine::general_purpose::STANDARD as B64;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::reader::Reader;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, zlib_blocks};
 use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
@@ -85,7 +86,7 @@ enum Storage {
 }
 
 /// An array as declared by its tag, with its inline text once read.
-struct Spec {
+struct Spec<'a> {
     section: Section,
     name: String,
     ty: Ty,
@@ -96,7 +97,9 @@ struct Spec {
     at: usize,
     /// File offset of the inline text.
     text_at: usize,
-    text: String,
+    /// Borrowed from the file when it comes in one piece (no copy of a
+    /// large array's text).
+    text: Cow<'a, str>,
 }
 
 /// A decoded array.
@@ -125,7 +128,7 @@ impl Ctx<'_> {
 
     /// Most values the array can hold: what its section implies, else what
     /// the file could encode.
-    fn max_values(&self, s: &Spec, file_len: usize) -> usize {
+    fn max_values(&self, s: &Spec<'_>, file_len: usize) -> usize {
         let k = s.components;
         let implied = match (s.section, self.counts) {
             (Section::Points | Section::PointData, Some((np, _))) => Some(np.saturating_mul(k)),
@@ -146,10 +149,33 @@ impl Ctx<'_> {
         }
     }
 
-    fn decode(&self, s: &Spec, file_len: usize) -> Result<Decoded> {
+    fn decode(&self, s: &Spec<'_>, file_len: usize) -> Result<Decoded> {
+        if s.storage == Storage::Ascii {
+            return self.decode_ascii(s);
+        }
+        let bytes = self.payload(s, file_len)?;
+        match s.ty {
+            Ty::Num(t) => Ok(Decoded::Num(t, t.decode_all(self.layout.endian, &bytes))),
+            Ty::Str => self.strings(s, &bytes),
+        }
+    }
+
+    /// A binary integer array's bytes as stored, not decoded (the
+    /// connectivity goes straight to u32 from them); `None` for other arrays.
+    fn raw_ints(&self, s: &Spec<'_>, file_len: usize) -> Result<Option<Ints>> {
+        match s.ty {
+            Ty::Num(t) if s.storage != Storage::Ascii && !t.is_float() => {
+                Ok(Some(Ints::Raw(t, self.layout.endian, self.payload(s, file_len)?)))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The bytes of a binary or appended array: a whole number of values.
+    fn payload(&self, s: &Spec<'_>, file_len: usize) -> Result<Vec<u8>> {
         let at_err = |(at, m): (usize, String)| self.err(at, format!("{} '{}': {m}", tag_name(s), clip(&s.name)));
         let bytes = match s.storage {
-            Storage::Ascii => return self.decode_ascii(s),
+            Storage::Ascii => unreachable!("ascii arrays are parsed as text"),
             Storage::Binary => {
                 let max = self.max_values(s, file_len).saturating_mul(elem_size(s.ty));
                 let mut src = B64Source::new(s.text.as_bytes(), 0, s.text_at);
@@ -192,26 +218,23 @@ impl Ctx<'_> {
                 self.layout.read(src.as_mut(), max).map_err(at_err)?
             }
         };
-        match s.ty {
-            Ty::Num(t) => {
-                if bytes.len() % t.size() != 0 {
-                    return Err(self.err(
-                        s.at,
-                        format!(
-                            "DataArray '{}': {} bytes is not a whole number of {}-byte values",
-                            clip(&s.name),
-                            bytes.len(),
-                            t.size()
-                        ),
-                    ));
-                }
-                Ok(Decoded::Num(t, t.decode_all(self.layout.endian, &bytes)))
-            }
-            Ty::Str => self.strings(s, &bytes),
+        if let Ty::Num(t) = s.ty
+            && bytes.len() % t.size() != 0
+        {
+            return Err(self.err(
+                s.at,
+                format!(
+                    "DataArray '{}': {} bytes is not a whole number of {}-byte values",
+                    clip(&s.name),
+                    bytes.len(),
+                    t.size()
+                ),
+            ));
         }
+        Ok(bytes)
     }
 
-    fn decode_ascii(&self, s: &Spec) -> Result<Decoded> {
+    fn decode_ascii(&self, s: &Spec<'_>) -> Result<Decoded> {
         let text = s.text.as_bytes();
         let mut i = 0;
         let mut tokens = std::iter::from_fn(|| {
@@ -268,7 +291,7 @@ impl Ctx<'_> {
     }
 
     /// VTK stores a string array as its strings, each followed by a NUL.
-    fn strings(&self, s: &Spec, bytes: &[u8]) -> Result<Decoded> {
+    fn strings(&self, s: &Spec<'_>, bytes: &[u8]) -> Result<Decoded> {
         let mut out = Vec::new();
         let mut rest = bytes;
         while !rest.is_empty() {
@@ -300,7 +323,7 @@ fn elem_size(t: Ty) -> usize {
     }
 }
 
-fn tag_name(s: &Spec) -> &'static str {
+fn tag_name(s: &Spec<'_>) -> &'static str {
     if s.ty == Ty::Str { "Array" } else { "DataArray" }
 }
 
@@ -485,17 +508,21 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                     && matches!(stack.last().map(String::as_str), Some("DataArray" | "Array"))
                 {
                     if p.text.trim().is_empty() {
-                        p.text.clear();
+                        p.text = Cow::Borrowed("");
                         p.text_at = tag_pos;
                     }
-                    p.text.push_str(&t);
+                    if p.text.is_empty() {
+                        p.text = t.into_inner();
+                    } else {
+                        p.text.to_mut().push_str(&t);
+                    }
                 }
             }
             Event::CData(t) => {
                 if let Some(p) = pending.as_mut()
                     && matches!(stack.last().map(String::as_str), Some("DataArray" | "Array"))
                 {
-                    p.text.push_str(&t);
+                    p.text.to_mut().push_str(&t);
                 }
             }
             Event::GeneralRef(_) if pending.is_some() => {
@@ -577,7 +604,7 @@ fn vtkfile(ctx: &mut Ctx, e: &BytesStart, at: usize) -> Result<()> {
     Ok(())
 }
 
-fn array_spec(ctx: &Ctx, e: &BytesStart, section: Section, at: usize) -> Result<Spec> {
+fn array_spec(ctx: &Ctx, e: &BytesStart, section: Section, at: usize) -> Result<Spec<'static>> {
     let name = attr(e, "Name").unwrap_or_default();
     let tyname = attr(e, "type").unwrap_or_default();
     let ty = xml_type(&tyname).ok_or_else(|| {
@@ -628,18 +655,18 @@ fn array_spec(ctx: &Ctx, e: &BytesStart, section: Section, at: usize) -> Result<
         storage,
         at,
         text_at: at,
-        text: String::new(),
+        text: Cow::Borrowed(""),
     })
 }
 
-fn data_array(s: &Spec, d: Decoded) -> DataArray {
+fn data_array(s: &Spec<'_>, d: Decoded) -> DataArray {
     match d {
         Decoded::Num(t, v) => DataArray::new(s.name.clone(), t.value_type(), s.components, v),
         Decoded::Str(v) => DataArray::new(s.name.clone(), ValueType::Str, s.components, Values::Str(v)),
     }
 }
 
-fn numbers(ctx: &Ctx, s: &Spec, d: Decoded) -> Result<Vec<f64>> {
+fn numbers(ctx: &Ctx, s: &Spec<'_>, d: Decoded) -> Result<Vec<f64>> {
     match d {
         Decoded::Num(_, Values::Int(v)) => Ok(v.into_iter().map(|x| x as f64).collect()),
         Decoded::Num(_, Values::Float(v)) => Ok(v),
@@ -647,7 +674,7 @@ fn numbers(ctx: &Ctx, s: &Spec, d: Decoded) -> Result<Vec<f64>> {
     }
 }
 
-fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
+fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh> {
     let missing = |what: &str| Error::parse(ctx.path, None, format!("missing {what}"));
     let (np, nc) = ctx
         .counts
@@ -659,6 +686,13 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
     for s in &specs {
         if s.section == Section::Other {
             continue; // arrays outside the grid: not ours
+        }
+        if s.section == Section::Cells
+            && s.name == "connectivity"
+            && let Some(raw_conn) = ctx.raw_ints(s, file_len)?
+        {
+            conn = Some((raw_conn, s.at));
+            continue;
         }
         let d = ctx.decode(s, file_len)?;
         match s.section {
@@ -746,7 +780,7 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
         }
     }
     let fast = match (&conn, &offs, &types) {
-        (Ints::I(c), Ints::I(o), Ints::I(t)) => fast_cells(c, o, t, np),
+        (c @ (Ints::I(_) | Ints::Raw(..)), Ints::I(o), Ints::I(t)) => fast_cells(c, o, t, np),
         _ => None,
     };
     if let Some((shapes, offsets, ids)) = fast {
@@ -781,6 +815,9 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec>, file_len: usize) -> Result<RawMesh> {
 enum Ints {
     I(Vec<i64>),
     F(Vec<f64>),
+    /// Binary integers as stored (a whole number of values): the
+    /// connectivity, converted once, straight to u32, by [`fast_cells`].
+    Raw(Scalar, Endian, Vec<u8>),
 }
 
 impl Ints {
@@ -788,6 +825,7 @@ impl Ints {
         match self {
             Ints::I(v) => v.len(),
             Ints::F(v) => v.len(),
+            Ints::Raw(t, _, b) => b.len() / t.size(),
         }
     }
 
@@ -795,6 +833,10 @@ impl Ints {
         match self {
             Ints::I(v) => v.into_par_iter().map(|x| x as f64).collect(),
             Ints::F(v) => v,
+            Ints::Raw(t, e, b) => {
+                let s = t.size();
+                b.par_chunks_exact(s).map(|c| t.get_i64(e, c) as f64).collect()
+            }
         }
     }
 }
@@ -803,7 +845,7 @@ impl Ints {
 /// converted in parallel: shapes, offsets (with the leading 0) and vertex
 /// ids. `None` for anything else; [`slow_cells`] then builds the cells, or
 /// names the first bad one, exactly as it always has.
-fn fast_cells(conn: &[i64], offs: &[i64], types: &[i64], np: usize) -> Option<(Vec<Shape>, Vec<usize>, Vec<u32>)> {
+fn fast_cells(conn: &Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Vec<Shape>, Vec<usize>, Vec<u32>)> {
     let mut table: [Option<(Shape, usize)>; 256] = [None; 256];
     for (t, slot) in table.iter_mut().enumerate() {
         *slot = vtk_shape(0, t as i64)
@@ -825,16 +867,25 @@ fn fast_cells(conn: &[i64], offs: &[i64], types: &[i64], np: usize) -> Option<(V
         return None;
     }
     let used = offs.last().map_or(0, |&o| o as usize);
-    let conn = &conn[..used];
-    if !conn.par_iter().all(|&v| v >= 0 && (v as u64) < np as u64) {
-        return None;
-    }
+    let id = |v: i64| (v >= 0 && (v as u64) < np as u64).then_some(v as u32);
+    // checked and narrowed in one pass; any id out of range: the slow path
+    let ids: Vec<u32> = match conn {
+        Ints::I(c) => c[..used].par_iter().map(|&v| id(v)).collect::<Option<_>>()?,
+        Ints::Raw(t, e, b) => {
+            let s = t.size();
+            b[..used * s]
+                .par_chunks_exact(s)
+                .with_min_len((1 << 16) / s)
+                .map(|c| id(t.get_i64(*e, c)))
+                .collect::<Option<_>>()?
+        }
+        Ints::F(_) => return None,
+    };
     let shapes = types
         .par_iter()
         .map(|&t| table[t as usize].map(|(s, _)| s).unwrap_or(Shape::Vertex))
         .collect();
     let offsets = std::iter::once(0).chain(offs.iter().map(|&o| o as usize)).collect();
-    let ids = conn.par_iter().map(|&v| v as u32).collect();
     Some((shapes, offsets, ids))
 }
 
@@ -1040,6 +1091,34 @@ pub(crate) enum Encoding {
 
 /// Little-endian bytes of an array in its own type (strings NUL-terminated).
 fn array_bytes(a: &DataArray) -> Vec<u8> {
+    // fixed-size values: encoded in parallel chunks, each at its own offset
+    const CHUNK: usize = 1 << 14;
+    let size = a.ty.size();
+    match &a.values {
+        Values::Int(v) if a.ty != ValueType::Str => {
+            let mut out = vec![0u8; v.len() * size];
+            out.par_chunks_mut(CHUNK * size)
+                .zip(v.par_chunks(CHUNK))
+                .for_each(|(o, v)| {
+                    let mut part = Vec::with_capacity(o.len());
+                    v.iter().for_each(|&x| push_int(&mut part, a.ty, x));
+                    o.copy_from_slice(&part);
+                });
+            return out;
+        }
+        Values::Float(v) if a.ty != ValueType::Str => {
+            let mut out = vec![0u8; v.len() * size];
+            out.par_chunks_mut(CHUNK * size)
+                .zip(v.par_chunks(CHUNK))
+                .for_each(|(o, v)| {
+                    let mut part = Vec::with_capacity(o.len());
+                    v.iter().for_each(|&x| push_float(&mut part, a.ty, x));
+                    o.copy_from_slice(&part);
+                });
+            return out;
+        }
+        _ => {}
+    }
     let mut out = Vec::with_capacity(a.values.len() * a.ty.size().max(1));
     match &a.values {
         Values::Str(v) => {
@@ -1055,15 +1134,19 @@ fn array_bytes(a: &DataArray) -> Vec<u8> {
         }
         Values::Float(v) => {
             for &x in v {
-                match a.ty {
-                    ValueType::F32 => out.extend_from_slice(&(x as f32).to_le_bytes()),
-                    ValueType::F64 => out.extend_from_slice(&x.to_le_bytes()),
-                    t => push_int(&mut out, t, x as i64),
-                }
+                push_float(&mut out, a.ty, x);
             }
         }
     }
     out
+}
+
+fn push_float(out: &mut Vec<u8>, t: ValueType, x: f64) {
+    match t {
+        ValueType::F32 => out.extend_from_slice(&(x as f32).to_le_bytes()),
+        ValueType::F64 => out.extend_from_slice(&x.to_le_bytes()),
+        t => push_int(out, t, x as i64),
+    }
 }
 
 fn push_int(out: &mut Vec<u8>, t: ValueType, x: i64) {
@@ -1162,17 +1245,48 @@ impl Out<'_> {
         )?;
         match self.enc {
             Encoding::Ascii => array_text(self.w, a, rows)?,
-            Encoding::Base64 => {
-                let data = array_bytes(a);
-                let header = (data.len() as u64).to_le_bytes();
-                writeln!(self.w, "{}{}", B64.encode(header), b64_encode(&data))?;
-            }
+            Encoding::Base64 => match &a.values {
+                Values::Int(v) if a.ty.size() > 0 => {
+                    self.b64_values(v.len(), a.ty.size(), |i, out| push_int(out, a.ty, v[i]))?
+                }
+                Values::Float(v) if a.ty.size() > 0 => {
+                    self.b64_values(v.len(), a.ty.size(), |i, out| push_float(out, a.ty, v[i]))?
+                }
+                _ => {
+                    let data = array_bytes(a);
+                    let header = (data.len() as u64).to_le_bytes();
+                    writeln!(self.w, "{}{}", B64.encode(header), b64_encode(&data))?;
+                }
+            },
             Encoding::Zlib => {
                 let (header, body) = zlib_blocks(&array_bytes(a));
                 writeln!(self.w, "{}{}", B64.encode(header), b64_encode(&body))?;
             }
         }
         writeln!(self.w, "{indent}</{tag}>")?;
+        Ok(())
+    }
+
+    /// A binary array's line: its byte-count header and `n` values of `size`
+    /// bytes (`push(i, out)` appends value `i`), as base64. The bytes are made
+    /// and encoded chunk by chunk in parallel, so the whole array never
+    /// exists as bytes: one pass over the values instead of three.
+    fn b64_values(&mut self, n: usize, size: usize, push: impl Fn(usize, &mut Vec<u8>) + Sync) -> WriteResult {
+        // values per chunk: a multiple of 3, so every chunk but the last is a
+        // whole number of base64 quanta and the chunks join with no padding
+        const CHUNK: usize = 3 << 14;
+        let total = n * size;
+        let mut out = vec![0u8; total.div_ceil(3) * 4];
+        out.par_chunks_mut(CHUNK * size / 3 * 4).enumerate().for_each(|(c, o)| {
+            let mut bytes = Vec::with_capacity(CHUNK * size);
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                push(i, &mut bytes);
+            }
+            B64.encode_slice(&bytes, o).expect("the output holds the encoding");
+        });
+        self.w.write_all(B64.encode((total as u64).to_le_bytes()).as_bytes())?;
+        self.w.write_all(&out)?;
+        writeln!(self.w)?;
         Ok(())
     }
 }
@@ -1222,17 +1336,28 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         "Points",
         ValueType::F64,
         3,
-        Values::Float(mesh.points.iter().flatten().copied().collect()),
+        Values::Float(mesh.points.par_iter().flatten_iter().copied().collect()),
     );
     o.array("        ", &pts)?;
     writeln!(o.w, "      </Points>")?;
     writeln!(o.w, "      <Cells>")?;
-    let conn: Vec<i64> = (0..ne)
-        .flat_map(|e| mesh.element(e).iter().copied())
-        .map(|v| v as i64)
-        .collect();
-    let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
-    o.array_rows("        ", &conn, Some(&mesh.offsets))?;
+    let ids = &mesh.conn[mesh.offsets[0]..mesh.offsets[ne]];
+    if enc == Encoding::Base64 {
+        // straight from the mesh's ids, with no i64 copy of them
+        writeln!(
+            o.w,
+            "        <DataArray type=\"Int64\" Name=\"connectivity\" NumberOfComponents=\"1\" NumberOfTuples=\"{}\" format=\"binary\">",
+            ids.len()
+        )?;
+        o.b64_values(ids.len(), 8, |i, out| {
+            out.extend_from_slice(&(ids[i] as i64).to_le_bytes())
+        })?;
+        writeln!(o.w, "        </DataArray>")?;
+    } else {
+        let conn = ids.par_iter().map(|&v| v as i64).collect();
+        let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
+        o.array_rows("        ", &conn, Some(&mesh.offsets))?;
+    }
     let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
     o.array(
         "        ",

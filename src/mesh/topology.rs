@@ -91,6 +91,10 @@ impl Csr {
 }
 
 /// Elements incident to each vertex, in increasing element order.
+///
+/// A sequential counting sort: a parallel one (atomic counts and cursors,
+/// then each list sorted) took 0.13 s against this one's 0.07 s on the
+/// 1.3M-tet box on the shared 2-core machine.
 pub fn vertex_elements(mesh: &Mesh) -> Csr {
     let pairs = (0..mesh.num_elements()).flat_map(|e| mesh.element(e).iter().map(move |&v| (v, e as u32)));
     Csr::from_pairs(mesh.num_points(), pairs)
@@ -128,9 +132,14 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
     if mesh.conn.iter().any(|&v| v as usize >= mesh.num_points()) {
         return vertex_neighbours_by_pairs(mesh);
     }
+    vertex_neighbours_with(mesh, &vertex_elements(mesh))
+}
+
+/// [`vertex_neighbours`] from the mesh's [`vertex_elements`], when the caller
+/// has them already (ids must be in range).
+pub fn vertex_neighbours_with(mesh: &Mesh, ve: &Csr) -> Csr {
     // each vertex gathers its own edges from its elements: linear, and no
     // sort of all (vertex, neighbour) pairs (1 GB for 10M tetrahedra)
-    let ve = vertex_elements(mesh);
     build_par(mesh.num_points(), |v, out| {
         let from = out.len();
         let v32 = v as u32;
@@ -210,10 +219,19 @@ pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
     if !mesh.faces.is_empty() || mesh.conn.iter().any(|&v| v as usize >= n) {
         return skin_vertices_hashed(mesh);
     }
+    skin_vertices_with(mesh, &vertex_elements(mesh))
+}
+
+/// [`skin_vertices`] from the mesh's [`vertex_elements`], when the caller has
+/// them already (ids must be in range).
+fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
+    let n = mesh.num_points();
+    if !mesh.faces.is_empty() {
+        return skin_vertices_hashed(mesh);
+    }
     // Copies of a facet share their lowest vertex: each vertex counts the
     // facets it is lowest on, among its own elements' facets. Linear,
     // parallel, and no hash map of every facet of the mesh.
-    let ve = vertex_elements(mesh);
     let key = |vs: &[u32], local: &[usize]| {
         let mut k = [u32::MAX; 4];
         for (slot, &l) in k.iter_mut().zip(local) {
@@ -311,7 +329,23 @@ fn skin_vertices_hashed(mesh: &Mesh) -> Vec<bool> {
 
 /// Vertices that must not move: the skin plus everything the user fixed.
 pub fn fixed_vertices(mesh: &Mesh) -> Vec<bool> {
-    let mut fixed = skin_vertices(mesh);
+    with_user_fixed(mesh, skin_vertices(mesh))
+}
+
+/// The vertex adjacency a problem starts from, with the mesh's
+/// [`vertex_elements`] built once for all three (ids in range, else as the
+/// separate functions do): (fixed vertices, edge neighbours, vertex elements).
+pub fn vertex_graph(mesh: &Mesh) -> (Vec<bool>, Csr, Csr) {
+    let n = mesh.num_points();
+    if mesh.conn.par_iter().any(|&v| v as usize >= n) {
+        return (fixed_vertices(mesh), vertex_neighbours(mesh), vertex_elements(mesh));
+    }
+    let ve = vertex_elements(mesh);
+    let (skin, nb) = rayon::join(|| skin_vertices_with(mesh, &ve), || vertex_neighbours_with(mesh, &ve));
+    (with_user_fixed(mesh, skin), nb, ve)
+}
+
+fn with_user_fixed(mesh: &Mesh, mut fixed: Vec<bool>) -> Vec<bool> {
     for (f, &u) in fixed.iter_mut().zip(&mesh.fixed) {
         *f |= u;
     }

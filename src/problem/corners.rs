@@ -11,7 +11,7 @@ use crate::mesh::{ElementKind, Mesh};
 use crate::metric::corner::ideal_corner;
 use crate::metric::corner_model::{CornerShape, Model};
 use crate::metric::mat3::{Mat3, Vec3, sub};
-use std::collections::HashMap;
+use rayon::prelude::*;
 
 /// The corners of every element, in a [`Numbering`].
 #[derive(Clone, Debug)]
@@ -36,11 +36,19 @@ pub struct Corners {
 /// Element `e`'s vertices as the problem reads them: reversed for planar
 /// meshes wound clockwise.
 pub fn element_vertices(mesh: &Mesh, e: usize, flip: bool) -> Vec<u32> {
+    let mut out = Vec::new();
+    element_vertices_into(mesh, e, flip, &mut out);
+    out
+}
+
+/// [`element_vertices`] into a buffer the caller reuses (no allocation per element).
+fn element_vertices_into(mesh: &Mesh, e: usize, flip: bool, out: &mut Vec<u32>) {
     let vs = mesh.element(e);
+    out.clear();
     match (flip, mesh.kinds[e]) {
-        (true, ElementKind::Triangle) => vec![vs[0], vs[2], vs[1]],
-        (true, ElementKind::Quadrilateral) => vec![vs[0], vs[3], vs[2], vs[1]],
-        _ => vs.to_vec(),
+        (true, ElementKind::Triangle) => out.extend_from_slice(&[vs[0], vs[2], vs[1]]),
+        (true, ElementKind::Quadrilateral) => out.extend_from_slice(&[vs[0], vs[3], vs[2], vs[1]]),
+        _ => out.extend_from_slice(vs),
     }
 }
 
@@ -57,25 +65,41 @@ fn corner_matrix(pts: &[Vec3], vs: &[u32], c: &[usize; 4], n: usize) -> Mat3 {
     a
 }
 
+/// Elements per parallel task: a fixed size, so tasks (and the first error
+/// found) do not depend on the thread count.
+const CHUNK: usize = 1 << 12;
+
+/// A shape's bits, the key under which equal shapes share one id.
+fn shape_key(shape: &CornerShape) -> [u64; 12] {
+    std::array::from_fn(|i| shape.tet.b(i / 3)[i % 3].to_bits())
+}
+
+/// `s` cut into consecutive pieces of the given lengths.
+fn split_by<'a, T>(mut s: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]> {
+    let mut out = Vec::with_capacity(lens.len());
+    for &len in lens {
+        let (a, b) = s.split_at_mut(len);
+        out.push(a);
+        s = b;
+    }
+    out
+}
+
 /// The corners of `mesh` with its vertices at `points` (which decide the
 /// orientation of a planar mesh), elements and vertices in `numbering`.
 /// Fails on a reference element that is inverted or degenerate.
+///
+/// Elements are filled in parallel, in fixed chunks whose output ranges come
+/// from a prefix sum of their corner counts; shape ids are numbered in order
+/// of first appearance, as a sequential pass would number them, so the
+/// result does not depend on the thread count.
 pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &Numbering) -> Result<Corners> {
     let dim = mesh.dim();
     // planar meshes wound clockwise are optimised in mirrored order
     let flip = crate::metric::is_clockwise(mesh, points);
-    let ne = numbering.elem_order.len();
+    let elem_order = &numbering.elem_order;
+    let ne = elem_order.len();
     let inv = &numbering.inv;
-    let mut out = Corners {
-        dim,
-        flip,
-        corners: Vec::new(),
-        corner_element: Vec::new(),
-        corner_shape: Vec::new(),
-        corner_weight: Vec::new(),
-        shapes: Vec::new(),
-    };
-    let mut shape_ids: HashMap<[u64; 12], u32> = HashMap::new();
     // a planar reference in its own plane's coordinates, as the mesh is in its
     let reference = match opts.reference {
         Some(r) => Some((r, in_plane(Plane::fit(r, &r.points)?.as_ref(), &r.points))),
@@ -91,52 +115,173 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
             mesh.optimised_corners(e)
         }
     };
-    // (an element whose corners are refused is reported in the loop below)
-    let total: usize = (0..mesh.num_elements())
-        .map(|e| used_by(e).map_or(0, |c| c.len()))
-        .sum();
+    let nchunks = ne.div_ceil(CHUNK);
+    let chunk = |c: usize| c * CHUNK..((c + 1) * CHUNK).min(ne);
+    // (an element whose corners are refused counts none here and is
+    // reported by the fill below)
+    let chunk_len: Vec<usize> = (0..nchunks)
+        .into_par_iter()
+        .map(|c| {
+            elem_order[chunk(c)]
+                .iter()
+                .map(|&e| used_by(e as usize).map_or(0, |c| c.len()))
+                .sum()
+        })
+        .collect();
+    let total: usize = chunk_len.iter().sum();
     const OCTANT: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    for (new_e, &old_e) in numbering.elem_order.iter().enumerate() {
-        let old_e = old_e as usize;
-        let kind = mesh.kinds[old_e];
-        let vs = element_vertices(mesh, old_e, flip);
-        let rvs = opts.reference.map(|r| element_vertices(r, old_e, flip));
-        let used = used_by(old_e).map_err(|m| Error::InvalidMesh(format!("element {old_e} ({kind}): {m}")))?;
-        for c in used.iter() {
-            let w = match (&reference, &rvs) {
-                (Some((_, rp)), Some(rvs)) => corner_matrix(rp, rvs, c, dim),
-                _ if every => OCTANT,
-                _ => ideal_corner(kind),
-            };
-            let shape = CornerShape::from_w(&w, dim).ok_or_else(|| {
-                Error::InvalidMesh(format!(
-                    "reference element {old_e} ({kind}) is inverted or degenerate at its corner at vertex {}",
-                    vs[c[0]]
-                ))
-            })?;
-            let key: [u64; 12] = std::array::from_fn(|i| shape.tet.b(i / 3)[i % 3].to_bits());
-            let id = *shape_ids.entry(key).or_insert_with(|| {
-                out.shapes.push(shape);
-                out.shapes.len() as u32 - 1
-            });
-            let mut cv = [0u32; 4];
-            for (slot, l) in cv.iter_mut().zip(c.iter()).take(dim + 1) {
-                *slot = inv[vs[*l] as usize];
-            }
-            if dim == 2 {
-                cv[3] = cv[0];
-            }
-            out.corners.push(cv);
-            out.corner_element.push(new_e as u32);
-            out.corner_shape.push(id);
-            out.corner_weight.push(if every {
-                1.0 / total as f64
+    // Without a reference a corner's shape depends on its element's kind
+    // only: one shape per kind, numbered in the order the kinds first appear.
+    // `None`: the kind's ideal corner is refused (reported by the fill).
+    let kind_index = |k: ElementKind| ElementKind::ALL.iter().position(|&a| a == k).unwrap();
+    let mut shapes: Vec<CornerShape> = Vec::new();
+    let mut kind_shape: [Option<u32>; ElementKind::ALL.len()] = [None; ElementKind::ALL.len()];
+    if reference.is_none() {
+        const NK: usize = ElementKind::ALL.len();
+        let first: [usize; NK] = elem_order
+            .par_iter()
+            .enumerate()
+            .fold(
+                || [usize::MAX; NK],
+                |mut first, (new_e, &e)| {
+                    let k = kind_index(mesh.kinds[e as usize]);
+                    first[k] = first[k].min(new_e);
+                    first
+                },
+            )
+            .reduce(|| [usize::MAX; NK], |a, b| std::array::from_fn(|k| a[k].min(b[k])));
+        let mut kinds: Vec<(usize, usize)> = (0..NK)
+            .map(|k| (first[k], k))
+            .filter(|&(at, _)| at != usize::MAX)
+            .collect();
+        kinds.sort_unstable();
+        for (_, k) in kinds {
+            let w = if every {
+                OCTANT
             } else {
-                1.0 / (ne as f64 * used.len() as f64)
-            });
+                ideal_corner(ElementKind::ALL[k])
+            };
+            if let Some(shape) = CornerShape::from_w(&w, dim) {
+                let key = shape_key(&shape);
+                let id = match shapes.iter().position(|s| shape_key(s) == key) {
+                    Some(id) => id,
+                    None => {
+                        shapes.push(shape);
+                        shapes.len() - 1
+                    }
+                };
+                kind_shape[k] = Some(id as u32);
+            }
         }
     }
+    let mut out = Corners {
+        dim,
+        flip,
+        corners: vec![[0; 4]; total],
+        corner_element: vec![0; total],
+        corner_shape: vec![0; total],
+        corner_weight: vec![0.0; total],
+        shapes,
+    };
+    // with a reference, every corner's own shape, deduplicated afterwards
+    let mut own_shapes: Vec<CornerShape> = Vec::new();
+    if reference.is_some() {
+        own_shapes = vec![CornerShape::from_w(&OCTANT, dim).expect("the octant corner is valid"); total];
+    }
+    let own_lens: Vec<usize> = if reference.is_some() {
+        chunk_len.clone()
+    } else {
+        vec![0; nchunks]
+    };
+    let parts: Vec<_> = split_by(&mut out.corners, &chunk_len)
+        .into_iter()
+        .zip(split_by(&mut out.corner_element, &chunk_len))
+        .zip(split_by(&mut out.corner_shape, &chunk_len))
+        .zip(split_by(&mut out.corner_weight, &chunk_len))
+        .zip(split_by(&mut own_shapes, &own_lens))
+        .enumerate()
+        .collect();
+    let filled: Vec<Result<()>> = parts
+        .into_par_iter()
+        .map(|(ci, ((((cv_out, ce_out), cs_out), cw_out), own_out))| {
+            let (mut vs, mut rvs) = (Vec::new(), Vec::new());
+            let mut at = 0;
+            for new_e in chunk(ci) {
+                let old_e = elem_order[new_e] as usize;
+                let kind = mesh.kinds[old_e];
+                element_vertices_into(mesh, old_e, flip, &mut vs);
+                let used = used_by(old_e).map_err(|m| Error::InvalidMesh(format!("element {old_e} ({kind}): {m}")))?;
+                let refused = |c: &[usize; 4]| {
+                    Error::InvalidMesh(format!(
+                        "reference element {old_e} ({kind}) is inverted or degenerate at its corner at vertex {}",
+                        vs[c[0]]
+                    ))
+                };
+                if let Some((r, rp)) = &reference {
+                    element_vertices_into(r, old_e, flip, &mut rvs);
+                    for (j, c) in used.iter().enumerate() {
+                        let w = corner_matrix(rp, &rvs, c, dim);
+                        own_out[at + j] = CornerShape::from_w(&w, dim).ok_or_else(|| refused(c))?;
+                    }
+                } else if let (None, Some(c)) = (kind_shape[kind_index(kind)], used.first()) {
+                    return Err(refused(c));
+                }
+                let shape = kind_shape[kind_index(kind)].unwrap_or(0);
+                let weight = if every {
+                    1.0 / total as f64
+                } else {
+                    1.0 / (ne as f64 * used.len() as f64)
+                };
+                for c in used.iter() {
+                    let mut cv = [0u32; 4];
+                    for (slot, l) in cv.iter_mut().zip(c.iter()).take(dim + 1) {
+                        *slot = inv[vs[*l] as usize];
+                    }
+                    if dim == 2 {
+                        cv[3] = cv[0];
+                    }
+                    cv_out[at] = cv;
+                    ce_out[at] = new_e as u32;
+                    cs_out[at] = shape;
+                    cw_out[at] = weight;
+                    at += 1;
+                }
+            }
+            Ok(())
+        })
+        .collect();
+    filled.into_iter().collect::<Result<Vec<()>>>()?;
+    if reference.is_some() {
+        number_shapes(&own_shapes, &mut out.corner_shape, &mut out.shapes);
+    }
     Ok(out)
+}
+
+/// Numbers distinct shapes (by their bits) in order of first appearance:
+/// `ids[c]` becomes corner `c`'s shape id and `shapes` the distinct shapes.
+/// A parallel sort of the corners by key, not a hash map.
+fn number_shapes(own: &[CornerShape], ids: &mut [u32], shapes: &mut Vec<CornerShape>) {
+    let keys: Vec<[u64; 12]> = own.par_iter().map(shape_key).collect();
+    let mut by_key: Vec<u32> = (0..own.len() as u32).collect();
+    by_key.par_sort_unstable_by(|&a, &b| keys[a as usize].cmp(&keys[b as usize]).then(a.cmp(&b)));
+    // each corner's first equal corner, then those first corners numbered in order
+    let mut first = vec![0u32; own.len()];
+    let mut reps = Vec::new();
+    for (i, &c) in by_key.iter().enumerate() {
+        if i == 0 || keys[c as usize] != keys[by_key[i - 1] as usize] {
+            reps.push(c);
+        }
+        first[c as usize] = *reps.last().unwrap();
+    }
+    reps.sort_unstable();
+    let mut id_of = vec![0u32; own.len()];
+    for (id, &r) in reps.iter().enumerate() {
+        id_of[r as usize] = id as u32;
+        shapes.push(own[r as usize]);
+    }
+    ids.par_iter_mut()
+        .zip(first.par_iter())
+        .for_each(|(id, &f)| *id = id_of[f as usize]);
 }
 
 impl Corners {
@@ -207,6 +352,102 @@ mod tests {
         // one ideal shape per kind present, shared by all its corners
         let kinds: std::collections::BTreeSet<_> = m.kinds.iter().collect();
         assert!(cs.shapes.len() <= kinds.len() && !cs.shapes.is_empty());
+    }
+
+    /// The corners as a plain sequential loop builds them, shapes numbered
+    /// through a map in order of first appearance.
+    fn sequential(m: &Mesh, opts: &ProblemOptions, num: &Numbering) -> Corners {
+        let dim = m.dim();
+        let every = opts.metric.every_corner();
+        let used_by = |e: usize| {
+            if every {
+                m.element_corners(e).unwrap()
+            } else {
+                m.optimised_corners(e).unwrap()
+            }
+        };
+        let total: usize = (0..m.num_elements()).map(|e| used_by(e).len()).sum();
+        let mut out = Corners {
+            dim,
+            flip: false,
+            corners: vec![],
+            corner_element: vec![],
+            corner_shape: vec![],
+            corner_weight: vec![],
+            shapes: vec![],
+        };
+        let mut ids = std::collections::HashMap::new();
+        for (new_e, &old_e) in num.elem_order.iter().enumerate() {
+            let (old_e, vs) = (old_e as usize, m.element(old_e as usize));
+            let used = used_by(old_e);
+            for c in used.iter() {
+                let w = match opts.reference {
+                    Some(r) => corner_matrix(&r.points, r.element(old_e), c, dim),
+                    None if every => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                    None => ideal_corner(m.kinds[old_e]),
+                };
+                let shape = CornerShape::from_w(&w, dim).unwrap();
+                let id = *ids.entry(shape_key(&shape)).or_insert_with(|| {
+                    out.shapes.push(shape);
+                    out.shapes.len() as u32 - 1
+                });
+                let mut cv = [0u32; 4];
+                for k in 0..=dim {
+                    cv[k] = num.inv[vs[c[k]] as usize];
+                }
+                out.corners.push(cv);
+                out.corner_element.push(new_e as u32);
+                out.corner_shape.push(id);
+                out.corner_weight.push(if every {
+                    1.0 / total as f64
+                } else {
+                    1.0 / (m.num_elements() as f64 * used.len() as f64)
+                });
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn parallel_corners_equal_the_sequential_ones_on_any_thread_count() {
+        use crate::mesh::order::Ordering;
+        use crate::metric::smetric::MetricKind;
+        use crate::problem::{MeshGraph, order};
+        // a mixed mesh of several chunks, and a reference whose corners all
+        // differ (the shape numbering without a per-kind table)
+        let m = generate::mixed_block(12, 10);
+        assert!(m.num_elements() > 2 * CHUNK, "{}", m.num_elements());
+        let mut r = m.clone();
+        for (v, p) in r.points.iter_mut().enumerate() {
+            p[0] += 0.01 * ((v * 7919) % 13) as f64 / 13.0;
+        }
+        let num = order(&m, &MeshGraph::of(&m), Ordering::ReverseBfs);
+        let with_reference = ProblemOptions {
+            reference: Some(&r),
+            ..Default::default()
+        };
+        let every = ProblemOptions {
+            metric: MetricKind::ConditionNumberPaper,
+            ..Default::default()
+        };
+        for (name, opts) in [
+            ("ideal", ProblemOptions::default()),
+            ("reference", with_reference),
+            ("every corner", every),
+        ] {
+            let want = sequential(&m, &opts, &num);
+            assert!(name != "reference" || want.shapes.len() > 100, "{}", want.shapes.len());
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let got = pool.install(|| corners(&m, &m.points, &opts, &num).unwrap());
+                let ctx = format!("{name} on {threads} threads");
+                assert_eq!(got.corners, want.corners, "{ctx}");
+                assert_eq!(got.corner_element, want.corner_element, "{ctx}");
+                assert_eq!(got.corner_shape, want.corner_shape, "{ctx}");
+                assert_eq!(got.corner_weight, want.corner_weight, "{ctx}");
+                assert_eq!(got.shapes, want.shapes, "{ctx}");
+            }
+        }
     }
 
     #[test]

@@ -19,10 +19,11 @@ pub struct MeshGraph {
 
 impl MeshGraph {
     pub fn of(mesh: &Mesh) -> MeshGraph {
+        let (fixed, neighbours, vertex_elements) = topology::vertex_graph(mesh);
         MeshGraph {
-            fixed: topology::fixed_vertices(mesh),
-            neighbours: topology::vertex_neighbours(mesh),
-            vertex_elements: topology::vertex_elements(mesh),
+            fixed,
+            neighbours,
+            vertex_elements,
         }
     }
 }

@@ -54,14 +54,12 @@ impl HessianPattern {
         // row pattern: the free vertices sharing a corner with the row's vertex
         // (for hexahedra that includes face diagonals), and the diagonal
         let nslots = p.dim + 1;
-        // each row from the corners around its vertex: short sorts, not one big one
-        let mut row_offsets = Vec::with_capacity(rows + 1);
-        let mut cols: Vec<u32> = Vec::new();
-        row_offsets.push(0u32);
-        let mut row = Vec::new();
-        for &v in &free_vertex {
-            row.clear();
-            for &packed in p.incidence.of(v as usize) {
+        // each row from the corners around its vertex, rows in parallel:
+        // short sorts, not one big one
+        let pattern = crate::mesh::topology::build_par(rows, |i, row| {
+            let from = row.len();
+            let v = free_vertex[i] as usize;
+            for &packed in p.incidence.of(v) {
                 let t = &p.corners[(packed >> 2) as usize];
                 row.extend(
                     t[..nslots]
@@ -70,13 +68,20 @@ impl HessianPattern {
                         .filter(|&j| j != u32::MAX),
                 );
             }
-            row.push(free_index[v as usize]);
-            row.sort_unstable();
-            row.dedup();
-            cols.extend_from_slice(&row);
-            row_offsets.push(cols.len() as u32);
-        }
+            row.push(i as u32);
+            row[from..].sort_unstable();
+            let mut keep = from;
+            for k in from..row.len() {
+                if keep == from || row[k] != row[keep - 1] {
+                    row[keep] = row[k];
+                    keep += 1;
+                }
+            }
+            row.truncate(keep);
+        });
+        let (row_offsets, cols) = (pattern.offsets, pattern.items);
         let diag: Vec<u32> = (0..rows)
+            .into_par_iter()
             .map(|i| {
                 let (a, b) = (row_offsets[i] as usize, row_offsets[i + 1] as usize);
                 a as u32 + cols[a..b].binary_search(&(i as u32)).expect("diagonal present") as u32
@@ -88,7 +93,7 @@ impl HessianPattern {
         };
         let slots: Vec<[u32; 16]> = p
             .corners
-            .iter()
+            .par_iter()
             .map(|t| {
                 let mut s = [u32::MAX; 16];
                 for a in 0..nslots {
@@ -110,23 +115,34 @@ impl HessianPattern {
                 elements: Vec::new(),
             })
             .collect();
+        // each corner's ranges found in parallel (fixed chunks), then handed
+        // to the ranges in corner order: a linear pass, lists ascending
+        const CHUNK: usize = 1 << 16;
         let range_of = |i: u32| ranges.partition_point(|r| r.end <= i);
-        let mut touched: Vec<(usize, u32)> = Vec::new();
-        for (e, t) in p.corners.iter().enumerate() {
-            let mut seen = [usize::MAX; 4];
-            for (k, &v) in t.iter().enumerate().take(nslots) {
-                let i = free_index[v as usize];
-                if i != u32::MAX {
-                    let r = range_of(i);
-                    if !seen.contains(&r) {
-                        seen[k] = r;
-                        touched.push((r, e as u32));
+        let touched: Vec<Vec<(u32, u32)>> = p
+            .corners
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(ci, cs)| {
+                let mut touched = Vec::with_capacity(cs.len() + cs.len() / 8);
+                for (j, t) in cs.iter().enumerate() {
+                    let mut seen = [usize::MAX; 4];
+                    for (k, &v) in t.iter().enumerate().take(nslots) {
+                        let i = free_index[v as usize];
+                        if i != u32::MAX {
+                            let r = range_of(i);
+                            if !seen.contains(&r) {
+                                seen[k] = r;
+                                touched.push((r as u32, (ci * CHUNK + j) as u32));
+                            }
+                        }
                     }
                 }
-            }
-        }
-        for (r, e) in touched {
-            ranges[r].elements.push(e);
+                touched
+            })
+            .collect();
+        for (r, e) in touched.into_iter().flatten() {
+            ranges[r as usize].elements.push(e);
         }
         let nblocks = cols.len();
         HessianPattern {
