@@ -485,6 +485,34 @@ fn check_line_search(pair: &mut Pair, c: &Case, tol: f64) {
     assert_ne!(cx, c.x);
 }
 
+/// A trial twice as far as the unit random step inverts corners on every
+/// case; a short one inverts none (the CPU's +inf, the GPU's largest real).
+fn check_inversion(pair: &mut Pair, c: &Case, tol: f64) {
+    let n = c.p.free_vertices.len();
+    let d = pair.vectors(&[random_vec(n, 12)])[0];
+    let mut inverted = 0;
+    for alpha in [2.0, 1e-3] {
+        pair.both(|be| {
+            be.trial(Coef::value(alpha), d).unwrap();
+            be.inversion_fraction(Slot(3)).unwrap();
+        });
+        let (g, cp) = pair.slots();
+        let (g, cp) = (g[3], cp[3]);
+        if cp.is_finite() {
+            inverted += 1;
+            assert!(cp > 0.0 && cp <= 1.0, "{}: fraction {cp}", c.name);
+            assert!(rel(g, cp) <= tol, "{}: step {alpha}: fraction {g} vs {cp}", c.name);
+        } else {
+            assert!(
+                g >= f32::MAX as f64 * 0.99,
+                "{}: step {alpha}: the CPU finds no inversion, the GPU {g}",
+                c.name
+            );
+        }
+    }
+    assert_eq!(inverted, 1, "{}: the long step inverts, the short one does not", c.name);
+}
+
 fn check_project_boundary(pair: &mut Pair, c: &Case, tol: f64) {
     let n = c.p.free_vertices.len();
     let d = pair.vectors(&[random_vec(n, 11).iter().map(|v| v.map(|t| t / 8.0)).collect()])[0];
@@ -637,4 +665,5 @@ kernel_tests! {
     check_axpby: axpby_matches_cpu_f32(1e-6), axpby_matches_cpu_f64(1e-15);
     check_set_slot: set_slot_matches_cpu_f32(0.0), set_slot_matches_cpu_f64(0.0);
     check_line_search: line_search_matches_cpu_f32(1e-5), line_search_matches_cpu_f64(1e-13);
+    check_inversion: inversion_matches_cpu_f32(1e-3), inversion_matches_cpu_f64(1e-10);
 }

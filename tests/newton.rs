@@ -232,31 +232,38 @@ fn newton_and_bcd_reach_the_same_vertex_positions() {
         tol: 1e-9,
         ..Params::default()
     };
-    let mut a = mesh.clone();
-    let na = solve::smooth_mesh(
-        &mut a,
-        &Default::default(),
-        &solve::Options::cpu(Method::Newton, &tight),
-        &mut |_| true,
-    )
-    .unwrap();
-    let mut b = mesh.clone();
-    let nb = solve::smooth_mesh(
-        &mut b,
-        &Default::default(),
-        &solve::Options::cpu(Method::Bcd, &tight),
-        &mut |_| true,
-    )
-    .unwrap();
-    assert_eq!(na.stop, StopReason::Converged);
-    assert_eq!(nb.stop, StopReason::Converged);
+    let (na, a) = converged(&mesh, Method::Newton, &tight);
+    let (nb, b) = converged(&mesh, Method::Bcd, &tight);
     assert!(
         na.iterations < nb.iterations / 4,
         "Newton {} vs BCD {} iterations",
         na.iterations,
         nb.iterations
     );
-    let p = Problem::new(&mesh).unwrap();
+    let worst = largest_difference(&mesh, &a, &b);
+    assert!(worst < 1e-4, "largest difference {worst} mean edges");
+    for w in na.history.records.windows(2) {
+        assert!(w[1].objective <= w[0].objective);
+    }
+}
+
+/// Smooths a copy of `mesh` on the CPU; the run must converge.
+fn converged(mesh: &meshsmooth::Mesh, method: Method, params: &Params) -> (solve::Info, meshsmooth::Mesh) {
+    let mut m = mesh.clone();
+    let info = solve::smooth_mesh(
+        &mut m,
+        &Default::default(),
+        &solve::Options::cpu(method, params),
+        &mut |_| true,
+    )
+    .unwrap();
+    assert_eq!(info.stop, StopReason::Converged, "{method:?}");
+    (info, m)
+}
+
+/// Largest distance between corresponding points, in mean edge lengths of `mesh`.
+fn largest_difference(mesh: &meshsmooth::Mesh, a: &meshsmooth::Mesh, b: &meshsmooth::Mesh) -> f64 {
+    let p = Problem::new(mesh).unwrap();
     let edge = p.mean_edge_length(&p.gather(&mesh.points));
     let worst = a
         .points
@@ -264,10 +271,7 @@ fn newton_and_bcd_reach_the_same_vertex_positions() {
         .zip(&b.points)
         .map(|(u, v)| (0..3).map(|i| (u[i] - v[i]).powi(2)).sum::<f64>().sqrt())
         .fold(0.0, f64::max);
-    assert!(worst < 1e-4 * edge, "largest difference {worst} vs mean edge {edge}");
-    for w in na.history.records.windows(2) {
-        assert!(w[1].objective <= w[0].objective);
-    }
+    worst / edge
 }
 
 /// A random symmetric block matrix with a random sparse pattern (diagonally
@@ -474,29 +478,13 @@ fn newton_with_symmetric_gauss_seidel_reaches_the_block_jacobi_optimum() {
             ..Params::default()
         };
         params.newton.preconditioner = pc;
-        let mut m = mesh.clone();
-        let info = solve::smooth_mesh(
-            &mut m,
-            &Default::default(),
-            &solve::Options::cpu(Method::Newton, &params),
-            &mut |_| true,
-        )
-        .unwrap();
-        assert_eq!(info.stop, StopReason::Converged, "{pc}");
-        (info, m)
+        converged(&mesh, Method::Newton, &params)
     };
     let (ij, mj) = run(Preconditioner::Jacobi);
     let (is, ms) = run(Preconditioner::Sgs);
     assert!((ij.objective - is.objective).abs() <= 1e-8 * ij.objective);
-    let p = Problem::new(&mesh).unwrap();
-    let edge = p.mean_edge_length(&p.gather(&mesh.points));
-    let worst = mj
-        .points
-        .iter()
-        .zip(&ms.points)
-        .map(|(u, v)| (0..3).map(|i| (u[i] - v[i]).powi(2)).sum::<f64>().sqrt())
-        .fold(0.0, f64::max);
-    assert!(worst <= 1e-8 * edge, "largest difference {worst} vs mean edge {edge}");
+    let worst = largest_difference(&mesh, &mj, &ms);
+    assert!(worst <= 1e-8, "largest difference {worst} mean edges");
 }
 
 /// The line search's step to 0.7 of the first corner inversion against the
@@ -513,15 +501,7 @@ fn inversion_fraction_saves_trials_and_keeps_the_optimum() {
             ..Params::default()
         };
         params.newton.inversion_fraction = fraction;
-        let mut m = mesh.clone();
-        let info = solve::smooth_mesh(
-            &mut m,
-            &Default::default(),
-            &solve::Options::cpu(Method::Newton, &params),
-            &mut |_| true,
-        )
-        .unwrap();
-        assert_eq!(info.stop, StopReason::Converged, "fraction {fraction}");
+        let (info, m) = converged(&mesh, Method::Newton, &params);
         assert!(meshsmooth::metric::inverted_elements(&m, &m.points).is_empty());
         for w in info.history.records.windows(2) {
             assert!(w[1].objective <= w[0].objective);

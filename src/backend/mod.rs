@@ -162,8 +162,9 @@ pub trait Backend {
     fn accept_trial(&mut self) -> Result<()>;
     /// slots[out] = the fraction of the way from Current to Trial at which a
     /// corner first inverts: the smallest root on (0, 1] of the corners'
-    /// determinant polynomials, +inf if none inverts. A backend without it
-    /// writes NaN, and the line search then halves its steps blindly.
+    /// determinant polynomials, +inf if none inverts (the GPU: its largest
+    /// real). A backend without it writes NaN, and the line search then
+    /// halves its steps blindly.
     fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
         self.set_slot(out, Coef::value(f64::NAN), None)
     }

@@ -14,6 +14,7 @@ pub mod dot;
 pub mod gradient_gather;
 pub mod hessian_assemble;
 pub mod hessian_gather;
+pub mod inversion;
 pub mod laplace;
 pub mod line_search;
 pub mod mean_ratio_eval;
@@ -244,7 +245,7 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
-        let t = objective::first_inversion(self.problem()?, &self.x, &self.trial);
+        let t = inversion::first_inversion(self.problem()?, &self.x, &self.trial);
         self.set(out, t);
         Ok(())
     }

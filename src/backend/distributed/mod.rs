@@ -154,7 +154,7 @@ impl Backend for DistributedBackend<'_> {
             .part
             .owned_corners
             .par_iter()
-            .map(|&c| objective::corner_first_inversion(p, x, y, c as usize))
+            .map(|&c| super::cpu::inversion::corner_first_inversion(p, x, y, c as usize))
             .reduce(|| f64::INFINITY, f64::min);
         let global = self.comm.reduce(&[local], &[comm::min]);
         self.inner.set(out, global[0]);

@@ -551,6 +551,25 @@ impl Backend for GpuBackend<'_> {
         Ok(())
     }
 
+    fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
+        let nc = self.n_corners;
+        self.record(
+            Kernel::Inversion.plain(),
+            &[
+                Buf::Model,
+                Buf::Ops,
+                Buf::X,
+                Buf::Corners,
+                Buf::Shapes,
+                Buf::Trial,
+                Buf::Partials,
+            ],
+            Op::n(nc),
+            nc,
+        )?;
+        self.reduce(None, Some(out), None, None, groups_of(nc))
+    }
+
     fn bcd_color(&mut self, color: usize) -> Result<()> {
         let (offset, count) = self.colors[color];
         if count == 0 {

@@ -54,6 +54,7 @@ const SHARED: &[(&str, &str)] = &[
         include_str!("../../../shaders/metric/reference_jacobian.wgsl"),
     ),
     ("planar", include_str!("../../../shaders/metric/planar.wgsl")),
+    ("det_path", include_str!("../../../shaders/metric/det_path.wgsl")),
     ("shess", include_str!("../../../shaders/metric/shess.wgsl")),
     ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
     (
@@ -166,6 +167,10 @@ kernels! {
         b("partials", RW, V4),
     ];
     Reduce = "reduce", variants: false, [OP, b("partials", R, V4), SCALARS_RW];
+    Inversion = "inversion", variants: false, [
+        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), b("trial", R, Re),
+        b("partials", RW, V4),
+    ];
     GradientGather = "gradient_gather", variants: false, [
         OP, b("free_vertices", R, Ui), b("inc_offsets", R, Ui), s("inc_items", R, Ui), s("elem", R, Re),
         b("grad", RW, Re),
