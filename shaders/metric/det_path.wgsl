@@ -5,21 +5,6 @@
 
 #import mat3
 
-// sum over i, j of cofactor(x)[i][j] y[i][j] = tr(adj(x) y)
-fn cof_dot(x: mat3x3<real>, y: mat3x3<real>) -> real {
-    var s = real(0.0);
-    for (var i = 0u; i < 3u; i++) {
-        let i1 = (i + 1u) % 3u;
-        let i2 = (i + 2u) % 3u;
-        for (var j = 0u; j < 3u; j++) {
-            let j1 = (j + 1u) % 3u;
-            let j2 = (j + 2u) % 3u;
-            s += (x[i1][j1] * x[i2][j2] - x[i1][j2] * x[i2][j1]) * y[i][j];
-        }
-    }
-    return s;
-}
-
 // (c0, c1, c2, c3) of det(A + t B), the leading 2x2 blocks when dim is 2
 fn det_coefficients(a: mat3x3<real>, b: mat3x3<real>, dim: u32) -> vec4<real> {
     if dim == 2u {
@@ -28,7 +13,8 @@ fn det_coefficients(a: mat3x3<real>, b: mat3x3<real>, dim: u32) -> vec4<real> {
         let c2 = b[0][0] * b[1][1] - b[0][1] * b[1][0];
         return vec4<real>(c0, c1, c2, real(0.0));
     }
-    return vec4<real>(det3(a), cof_dot(a, b), cof_dot(b, a), det3(b));
+    // tr(adj(X) Y) = the Frobenius product of X's cofactors with Y
+    return vec4<real>(det3(a), frob_dot(cofactor3(a), b), frob_dot(cofactor3(b), a), det3(b));
 }
 
 fn det_poly(c: vec4<real>, t: real) -> real {

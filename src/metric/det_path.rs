@@ -5,7 +5,7 @@
 //! hard planar meshes most of its trials were steps halved until nothing
 //! inverted.
 
-use super::mat3::{Mat3, det};
+use super::mat3::{Mat3, cofactor, det, frob_dot};
 
 /// Coefficients (c0, c1, c2, c3) of det(A + t B) (the leading 2x2 blocks when `dim` is 2).
 pub fn det_coefficients(a: &Mat3, b: &Mat3, dim: usize) -> [f64; 4] {
@@ -16,19 +16,8 @@ pub fn det_coefficients(a: &Mat3, b: &Mat3, dim: usize) -> [f64; 4] {
         return [c0, c1, c2, 0.0];
     }
     // det(A + tB) = det A + t tr(adj(A) B) + t^2 tr(adj(B) A) + t^3 det B,
-    // tr(adj(X) Y) being the sum of X's cofactors times Y's entries
-    let cof_dot = |x: &Mat3, y: &Mat3| {
-        let mut s = 0.0;
-        for i in 0..3 {
-            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
-            for j in 0..3 {
-                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-                s += (x[i1][j1] * x[i2][j2] - x[i1][j2] * x[i2][j1]) * y[i][j];
-            }
-        }
-        s
-    };
-    [det(a), cof_dot(a, b), cof_dot(b, a), det(b)]
+    // tr(adj(X) Y) being the Frobenius product of X's cofactors with Y
+    [det(a), frob_dot(&cofactor(a), b), frob_dot(&cofactor(b), a), det(b)]
 }
 
 /// The smallest t in (0, 1] with det(A + t B) <= 0, +inf when the

@@ -29,6 +29,11 @@ pub fn cofactor(m: &Mat3) -> Mat3 {
     ]
 }
 
+/// sum_ij a[i][j] b[i][j] in row order (CPU twin of WGSL `frob_dot`).
+pub fn frob_dot(a: &Mat3, b: &Mat3) -> f64 {
+    a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| x * y).sum()
+}
+
 pub fn frobenius_sq(m: &Mat3) -> f64 {
     m.iter().flatten().map(|v| v * v).sum()
 }

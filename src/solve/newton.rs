@@ -35,9 +35,9 @@ pub struct NewtonParams {
     pub preconditioner: Preconditioner,
     /// After a trial step that inverts an element, the next trial goes to
     /// this fraction of the distance at which the first corner inverts
-    /// (found from the corners' determinant polynomials), when that is
-    /// shorter than the halved step; 0 halves blindly, as the paper's
-    /// Armijo search does. On the hard planar meshes most trials were
+    /// (found from the corners' determinant polynomials), whether that is
+    /// longer or shorter than half the step; 0 halves blindly, as the
+    /// paper's Armijo search does. On the hard planar meshes most trials were
     /// halvings until nothing inverted.
     #[serde(default = "default_inversion_fraction")]
     pub inversion_fraction: f64,
