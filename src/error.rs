@@ -83,6 +83,14 @@ impl Error {
         }
     }
 
+    /// `Inverted` for these element ids, the first five named.
+    pub fn inverted(bad: Vec<usize>) -> Self {
+        Error::Inverted {
+            count: bad.len(),
+            first: bad.into_iter().take(5).collect(),
+        }
+    }
+
     pub fn parse(path: impl Into<PathBuf>, at: Option<Location>, msg: impl Into<String>) -> Self {
         Error::Parse {
             path: path.into(),

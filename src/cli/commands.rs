@@ -295,10 +295,7 @@ fn run_with_rules(
     options.check(mesh)?;
     let bad = metric::inverted_elements(mesh, &mesh.points);
     if !bad.is_empty() && !untangle {
-        return Err(Error::Inverted {
-            count: bad.len(),
-            first: bad.into_iter().take(5).collect(),
-        });
+        return Err(Error::inverted(bad));
     }
     if let Some(msg) = (!bad.is_empty())
         .then(|| solve::untangle::convention_problem(mesh))

@@ -29,16 +29,7 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
         None => None,
     };
     let mesh = io::read(&a.input)?;
-    let bad = metric::inverted_elements(&mesh, &mesh.points);
-    if !bad.is_empty() {
-        return Err(io::in_file(
-            &a.input,
-            Error::Inverted {
-                count: bad.len(),
-                first: bad.into_iter().take(5).collect(),
-            },
-        ));
-    }
+    metric::refuse_inverted(&mesh).map_err(|e| io::in_file(&a.input, e))?;
     let params = a.stop.params()?;
     let choice = device::choose(a.device, &a.gpu, &[a.method])?;
     let opts = RezoneOptions {

@@ -3,7 +3,7 @@
 //! and Rust callers share it.
 
 use super::{CellData, Format, LocalPieces, PieceWriter, write, write_pieces_with};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::{Mesh, metric};
 use std::path::Path;
 
@@ -18,7 +18,7 @@ pub fn eta_field(mesh: &Mesh) -> Vec<f64> {
 /// Writes `mesh` with its `inverse_mean_ratio` cell data, refusing (and
 /// writing nothing) if any element is inverted.
 pub fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
-    refuse_inverted(mesh)?;
+    metric::refuse_inverted(mesh)?;
     let eta = eta_field(mesh);
     write(
         path,
@@ -52,7 +52,7 @@ pub fn write_mesh_pieces_with(
     format: Format,
     writer: &mut dyn PieceWriter,
 ) -> Result<Vec<std::path::PathBuf>> {
-    refuse_inverted(mesh)?;
+    metric::refuse_inverted(mesh)?;
     let eta = eta_field(mesh);
     write_pieces_with(
         path,
@@ -66,16 +66,4 @@ pub fn write_mesh_pieces_with(
         }],
         writer,
     )
-}
-
-fn refuse_inverted(mesh: &Mesh) -> Result<()> {
-    let bad = metric::inverted_elements(mesh, &mesh.points);
-    if bad.is_empty() {
-        Ok(())
-    } else {
-        Err(Error::Inverted {
-            count: bad.len(),
-            first: bad.into_iter().take(5).collect(),
-        })
-    }
 }

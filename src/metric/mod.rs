@@ -99,6 +99,16 @@ pub fn oriented<'a>(mesh: &Mesh, points: &'a [Vec3]) -> std::borrow::Cow<'a, [Ve
     }
 }
 
+/// `Error::Inverted` when `mesh` has an inverted element at its own points.
+pub fn refuse_inverted(mesh: &Mesh) -> crate::error::Result<()> {
+    let bad = inverted_elements(mesh, &mesh.points);
+    if bad.is_empty() {
+        Ok(())
+    } else {
+        Err(crate::error::Error::inverted(bad))
+    }
+}
+
 /// Ids of elements with a non-positive corner determinant (against the
 /// mesh's own orientation for planar meshes).
 pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {

@@ -255,10 +255,7 @@ impl Problem {
         if bad.is_empty() {
             Ok(())
         } else {
-            Err(Error::Inverted {
-                count: bad.len(),
-                first: bad.into_iter().take(5).collect(),
-            })
+            Err(Error::inverted(bad))
         }
     }
 }
