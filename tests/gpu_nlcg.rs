@@ -75,7 +75,11 @@ fn converged_matches(precision: Precision, gpu_tol: f64, rel: f64) {
     );
     match precision {
         Precision::F64 => assert_eq!(info.stop, StopReason::Converged),
-        _ => assert!(matches!(info.stop, StopReason::Converged | StopReason::Stalled)),
+        // f32 rounding may leave no decrease at the line search's resolution
+        _ => assert!(matches!(
+            info.stop,
+            StopReason::Converged | StopReason::SmallStep | StopReason::Stalled
+        )),
     }
     assert!((info.objective - cpu.objective).abs() <= rel * cpu.objective);
     // the positions it returns are feasible and have the F it reports

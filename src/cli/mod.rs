@@ -584,7 +584,20 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
     if meshsmooth::solve::distributed::Cluster::launched() {
         return ranks::run_under_mpi(|| dispatch(args));
     }
-    dispatch(args)
+    let args: Vec<OsString> = args.into_iter().collect();
+    on_worker(|| dispatch(args))
+}
+
+/// Runs `f` on a worker thread of rayon's global pool. From the main thread
+/// every parallel loop hands its work to the pool and sleeps until it is
+/// done: a futex wake-up and two context switches per loop, which were a
+/// third of the time of Newton on small meshes with one thread (hundreds of
+/// CG dots and products). From a worker, a loop on one thread runs in
+/// place. Not under MPI: the job's state is the main thread's.
+fn on_worker<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    // the main thread's stack, not the workers' default 2 MiB
+    let _ = rayon::ThreadPoolBuilder::new().stack_size(8 << 20).build_global();
+    rayon::join(f, || ()).0
 }
 
 fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {

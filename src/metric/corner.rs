@@ -46,7 +46,7 @@ pub fn corner_eta(a: &Mat3, winv: &Mat3, n: usize) -> Option<f64> {
     let eta = if n == 2 {
         f / (2.0 * d)
     } else {
-        f / (3.0 * d.cbrt().powi(2))
+        f * super::inv_cbrt::inv_cbrt_sq(d) / 3.0
     };
     eta.is_finite().then_some(eta)
 }

@@ -201,8 +201,27 @@ impl Model {
 
     /// Term, gradient and the 4x4 vertex blocks of the Hessian (into `out`).
     pub fn blocks(&self, shape: &CornerShape, x: &[Vec3; 4], out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
+        let r = self.upper_blocks(shape, x, out)?;
+        // H is symmetric: the lower blocks are the upper ones transposed,
+        // as the device's assembly stores them
+        for k in 0..4 {
+            for l in k + 1..4 {
+                out[l][k] = transpose(&out[k][l]);
+            }
+        }
+        Some(r)
+    }
+
+    /// `blocks` with only the blocks (k, l), k <= l, written: what a
+    /// symmetric store needs, without the six transposes.
+    pub fn upper_blocks(
+        &self,
+        shape: &CornerShape,
+        x: &[Vec3; 4],
+        out: &mut [[Mat3; 4]; 4],
+    ) -> Option<(f64, [Vec3; 4])> {
         if self.fast(shape.n) {
-            return shape.tet.hessian_blocks(x, out);
+            return shape.tet.upper_hessian_blocks(x, out);
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
@@ -218,8 +237,6 @@ impl Model {
             rows[l] = h.row(shape.tet.b(l));
             grad[l] = mul_vec(&g, shape.tet.b(l));
         }
-        // H is symmetric: the lower blocks are the upper ones transposed,
-        // as the device's assembly stores them
         for k in 0..4 {
             for l in k..4 {
                 out[k][l] = if l < nv {
@@ -227,9 +244,6 @@ impl Model {
                 } else {
                     [[0.0; 3]; 3]
                 };
-                if l > k {
-                    out[l][k] = std::array::from_fn(|i| std::array::from_fn(|q| out[k][l][q][i]));
-                }
             }
             if n == 2 && k < nv {
                 out[k][k][2][2] = 1.0;
@@ -239,7 +253,11 @@ impl Model {
     }
 }
 
-/// `Model::blocks` for a planar corner (3 vertices) through `planar.rs`.
+fn transpose(b: &Mat3) -> Mat3 {
+    std::array::from_fn(|i| std::array::from_fn(|q| b[q][i]))
+}
+
+/// `Model::upper_blocks` for a planar corner (3 vertices) through `planar.rs`.
 fn planar_blocks(shape: &CornerShape, s: &Mat3, out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
     let p = planar::parts(s)?;
     let mut grad = [[0.0; 3]; 4];
@@ -250,9 +268,6 @@ fn planar_blocks(shape: &CornerShape, s: &Mat3, out: &mut [[Mat3; 4]; 4]) -> Opt
             } else {
                 [[0.0; 3]; 3]
             };
-            if l > k {
-                out[l][k] = std::array::from_fn(|i| std::array::from_fn(|q| out[k][l][q][i]));
-            }
         }
         if k < 3 {
             grad[k] = p.gradient(shape.tet.b(k));

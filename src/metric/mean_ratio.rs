@@ -6,6 +6,7 @@
 //! 4x3 edge-difference matrix) makes every derivative a contraction with the
 //! rows of B; `b[k]` is vertex k's row.
 
+use super::inv_cbrt::inv_cbrt_sq;
 use super::mat3::{Mat3, Vec3, cofactor, det, frobenius_sq, mul_vec, upper_inverse};
 
 /// Precomputed reference data for one tetrahedron shape.
@@ -15,6 +16,44 @@ pub struct TetShape {
     /// b_k . b_l and (b_k x b_l), constants of the Hessian blocks.
     bb: [[f64; 4]; 4],
     bx: [[Vec3; 4]; 4],
+}
+
+/// A tetrahedral corner's value, gradient and the factors of its Hessian
+/// blocks (`TetShape::block_factors`).
+pub struct BlockFactors {
+    pub eta: f64,
+    pub grad: [Vec3; 4],
+    s: Mat3,
+    u: [Vec3; 4],
+    v: [Vec3; 4],
+    c: [Vec3; 4],
+    diag: f64,
+    skew: f64,
+}
+
+impl BlockFactors {
+    /// The Hessian block (k, l), k <= l, of the corner `shape`.
+    #[inline]
+    pub fn block(&self, shape: &TetShape, k: usize, l: usize) -> Mat3 {
+        let (u, c, v) = (&self.u, &self.c, &self.v);
+        let mut blk = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for q in 0..3 {
+                blk[i][q] = u[k][i] * c[l][q] + c[k][i] * v[l][q];
+            }
+            blk[i][i] += self.diag * shape.bb[k][l];
+        }
+        if k != l {
+            let w = mul_vec(&self.s, &shape.bx[k][l]).map(|c| c * self.skew);
+            blk[0][1] += w[2];
+            blk[1][0] -= w[2];
+            blk[1][2] += w[0];
+            blk[2][1] -= w[0];
+            blk[2][0] += w[1];
+            blk[0][2] -= w[1];
+        }
+        blk
+    }
 }
 
 /// The 9x9 second derivative of eta with respect to S, index 3*i + j for S[i][j].
@@ -137,7 +176,7 @@ impl TetShape {
         if d <= 0.0 || !d.is_finite() {
             return None;
         }
-        let eta = frobenius_sq(s) / (3.0 * cbrt_sq(d));
+        let eta = frobenius_sq(s) * inv_cbrt_sq(d) / 3.0;
         eta.is_finite().then_some(eta)
     }
 
@@ -152,7 +191,7 @@ impl TetShape {
         if d <= 0.0 || !d.is_finite() {
             return None;
         }
-        let h = 1.0 / cbrt_sq(d);
+        let h = inv_cbrt_sq(d);
         let f = frobenius_sq(&s);
         let eta = f * h / 3.0;
         if !eta.is_finite() {
@@ -185,24 +224,36 @@ impl TetShape {
         Some((p.eta, g))
     }
 
-    /// Value, gradient and the Hessian as 4x4 blocks of 3x3, from the
-    /// structure of the S-Hessian rather than a generic contraction:
+    /// Value, gradient and the Hessian's upper blocks (k, l), k <= l, of
+    /// the 4x4 blocks of 3x3 (the lower ones untouched: `Model::blocks`
+    /// mirrors them), from the structure of the S-Hessian rather than a generic contraction:
     /// block (k,l) = (2h/3)(b_k.b_l) I - (4/9) d^(-5/3) (s_k c_l^T + c_k s_l^T)
     ///             + (10/27) f d^(-8/3) c_k c_l^T - (2/9) f d^(-5/3) [S (b_k x b_l)]_x
     /// with s_k = S b_k, c_k = C b_k and [w]_x[i][q] = sum_m eps_iqm w_m.
     /// This is what the Newton assembly calls; the blocks go to `out` (a
     /// 1 KiB array is cheaper to fill in place than to return).
-    pub fn hessian_blocks(&self, x: &[Vec3; 4], out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
+    pub fn upper_hessian_blocks(&self, x: &[Vec3; 4], out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
+        let f = self.block_factors(x)?;
+        for k in 0..4 {
+            for l in k..4 {
+                out[k][l] = f.block(self, k, l);
+            }
+        }
+        Some((f.eta, f.grad))
+    }
+
+    /// What every block (k, l) is made of, for an assembly that builds
+    /// only the blocks it stores ([`BlockFactors::block`]).
+    #[inline]
+    pub fn block_factors(&self, x: &[Vec3; 4]) -> Option<BlockFactors> {
         let p = self.parts(x)?;
-        let g = self.b.map(|bk| mul_vec(&p.grad_s, &bk));
+        let grad = self.b.map(|bk| mul_vec(&p.grad_s, &bk));
         let sv = self.b.map(|bk| mul_vec(&p.s, &bk));
         let cv = self.b.map(|bk| mul_vec(&p.cof, &bk));
         let dm53 = p.h / p.d;
         let dm83 = dm53 / p.d;
-        let diag = 2.0 * p.h / 3.0;
         let cross = -(4.0 / 9.0) * dm53;
         let cc = (10.0 / 27.0) * p.f * dm83;
-        let skew = -(2.0 / 9.0) * p.f * dm53;
         // block (k,l) = u_k c_l^T + c_k v_l^T + diag (b_k.b_l) I + skew [S (b_k x b_l)]_x
         // with v = cross s and u = v + cc c (the two symmetric outer products folded)
         let v = sv.map(|sk| sk.map(|t| cross * t));
@@ -212,33 +263,16 @@ impl TetShape {
                 u[k][i] += cc * cv[k][i];
             }
         }
-        for k in 0..4 {
-            for l in k..4 {
-                let mut blk = [[0.0; 3]; 3];
-                for i in 0..3 {
-                    for q in 0..3 {
-                        blk[i][q] = u[k][i] * cv[l][q] + cv[k][i] * v[l][q];
-                    }
-                    blk[i][i] += diag * self.bb[k][l];
-                }
-                if k != l {
-                    let w = mul_vec(&p.s, &self.bx[k][l]).map(|c| c * skew);
-                    blk[0][1] += w[2];
-                    blk[1][0] -= w[2];
-                    blk[1][2] += w[0];
-                    blk[2][1] -= w[0];
-                    blk[2][0] += w[1];
-                    blk[0][2] -= w[1];
-                    for i in 0..3 {
-                        for q in 0..3 {
-                            out[l][k][q][i] = blk[i][q];
-                        }
-                    }
-                }
-                out[k][l] = blk;
-            }
-        }
-        Some((p.eta, g))
+        Some(BlockFactors {
+            eta: p.eta,
+            grad,
+            s: p.s,
+            u,
+            v,
+            c: cv,
+            diag: 2.0 * p.h / 3.0,
+            skew: -(2.0 / 9.0) * p.f * dm53,
+        })
     }
 
     /// Value, gradient and the 12x12 Hessian (index 3*vertex + coordinate).
@@ -306,13 +340,6 @@ impl TetShape {
         }
         Some((p.eta, grad, hess))
     }
-}
-
-/// d^(2/3) through the real cube root (exact for negative zero and powers of two).
-#[inline]
-fn cbrt_sq(d: f64) -> f64 {
-    let c = d.cbrt();
-    c * c
 }
 
 /// Hessian of eta = f h / 3 with f = |S|^2, h = det(S)^(-2/3):

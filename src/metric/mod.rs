@@ -4,6 +4,7 @@
 pub mod corner;
 pub mod corner_model;
 pub mod det_path;
+pub mod inv_cbrt;
 pub mod mat3;
 pub mod mean_ratio;
 pub mod planar;

@@ -214,7 +214,11 @@ pub fn leading(s: &Mat3, n: usize) -> Mat3 {
 #[inline]
 fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: Option<&mut SHess>) -> (f64, Mat3) {
     let nf = n as f64;
-    let h = if n == 2 { 1.0 / d } else { 1.0 / (d.cbrt() * d.cbrt()) };
+    let h = if n == 2 {
+        1.0 / d
+    } else {
+        super::inv_cbrt::inv_cbrt_sq(d)
+    };
     let f = frob_n(s, n);
     let eta = f * h / nf;
     let c = cof_n(s, n);

@@ -548,9 +548,10 @@ fn iterate(
             stop = Some(StopReason::Cancelled);
         } else if gnorm >= params.tol
             && method == Method::Nlcg
-            && sweep.max_move_sq > 0.0
             && sweep.max_move_sq.sqrt() <= params.nlcg.tol_x * begin.edge
         {
+            // no move at all counts too: the line search resolves steps down
+            // to tol_x, so it found none that long that decreases F
             stop = Some(StopReason::SmallStep);
         } else if gnorm >= params.tol
             && (no_move(method, sweep.max_move_sq, params.laplace.min_move * begin.edge)

@@ -9,6 +9,8 @@
 //! The product and the preconditioners work on fixed row ranges (their
 //! count follows the problem size, never the thread count), so every sum is
 //! taken in one order and results repeat bit for bit on any number of threads.
+//! The assembly's ranges may follow the thread count: a row's sum order does
+//! not depend on them.
 
 use super::block_jacobi_factor::BlockJacobi;
 use super::bsr_spmv::BlockCsr;
@@ -17,8 +19,6 @@ use crate::metric::mat3::{Mat3, Vec3};
 use crate::problem::Problem;
 use rayon::prelude::*;
 
-/// Rows per assembly range: large enough that border elements are few.
-const ASSEMBLY_ROWS: usize = 2048;
 /// Rows per product range: larger, since a block whose column leaves its
 /// row's range costs a second visit in the transposed pass.
 const PRODUCT_ROWS: usize = 4096;
@@ -403,7 +403,7 @@ impl SymHessian {
             cols.extend_from_slice(&row);
             row_offsets.push(cols.len() as u32);
         }
-        let nranges = rows.div_ceil(ASSEMBLY_ROWS).max(1);
+        let nranges = super::hessian_assemble::assembly_ranges(rows);
         let mut ranges: Vec<(u32, u32, Vec<u32>)> = (0..nranges)
             .map(|r| {
                 (
@@ -467,14 +467,10 @@ impl SymHessian {
             blocks.iter_mut().for_each(|b| *b = [[0.0; 3]; 3]);
             diags.iter_mut().for_each(|b| *b = [[0.0; 3]; 3]);
             grads.iter_mut().for_each(|g| *g = [0.0; 3]);
-            let base = offsets[start as usize] as usize;
             let mut h = [[[[0.0; 3]; 3]; 4]; 4];
             for &e in &r.2 {
                 let e = e as usize;
-                let Some((_, g)) = p.model.blocks(p.shape(e), &p.corner_points(x, e), &mut h) else {
-                    return false;
-                };
-                let scale = p.corner_weight[e];
+                let (shape, xe) = (p.shape(e), p.corner_points(x, e));
                 let t = &p.corners[e];
                 let fi: [u32; 4] = std::array::from_fn(|a| {
                     if a < nslots {
@@ -483,30 +479,35 @@ impl SymHessian {
                         u32::MAX
                     }
                 });
-                for a in 0..nslots {
-                    let i = fi[a];
-                    if i < start || i >= end {
-                        continue;
-                    }
-                    let li = (i - start) as usize;
-                    for c in 0..3 {
-                        grads[li][c] += g[a][c] * scale;
-                    }
-                    add(&mut diags[li], &h[a][a], scale);
-                    let (ra, rb) = (offsets[i as usize] as usize, offsets[i as usize + 1] as usize);
-                    for b in 0..nslots {
-                        let j = fi[b];
-                        if j == u32::MAX || j <= i {
-                            continue;
-                        }
-                        // rows hold a handful of columns: a scan beats a bisection
-                        let s = ra
-                            + cols[ra..rb]
-                                .iter()
-                                .position(|&c| c == j)
-                                .expect("pattern holds every element pair");
-                        add(&mut blocks[s - base], &h[a][b], scale);
-                    }
+                let rows = Rows {
+                    start,
+                    end,
+                    offsets,
+                    cols,
+                    base: offsets[start as usize] as usize,
+                };
+                let scale = p.corner_weight[e];
+                // the tetrahedral mean ratio builds only the blocks this
+                // range stores, in the same arithmetic as `upper_blocks`
+                if p.model.fast(shape.n) {
+                    let Some(f) = shape.tet.block_factors(&xe) else {
+                        return false;
+                    };
+                    rows.scatter(
+                        &fi,
+                        nslots,
+                        scale,
+                        &f.grad,
+                        |a, b| f.block(&shape.tet, a, b),
+                        blocks,
+                        diags,
+                        grads,
+                    );
+                } else {
+                    let Some((_, g)) = p.model.upper_blocks(shape, &xe, &mut h) else {
+                        return false;
+                    };
+                    rows.scatter(&fi, nslots, scale, &g, |a, b| h[a][b], blocks, diags, grads);
                 }
             }
             true
@@ -519,11 +520,80 @@ impl SymHessian {
     }
 }
 
+/// One assembly range's rows of the matrix.
+struct Rows<'a> {
+    start: u32,
+    end: u32,
+    offsets: &'a [u32],
+    cols: &'a [u32],
+    /// Index of the range's first block.
+    base: usize,
+}
+
+impl Rows<'_> {
+    /// Adds `scale` times one element's gradient and Hessian blocks to the
+    /// rows of this range; `block(a, b)` gives the element's block (a, b)
+    /// for a <= b only.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn scatter(
+        &self,
+        fi: &[u32; 4],
+        nslots: usize,
+        scale: f64,
+        g: &[Vec3; 4],
+        block: impl Fn(usize, usize) -> Mat3,
+        blocks: &mut [Mat3],
+        diags: &mut [Mat3],
+        grads: &mut [Vec3],
+    ) {
+        for a in 0..nslots {
+            let i = fi[a];
+            if i < self.start || i >= self.end {
+                continue;
+            }
+            let li = (i - self.start) as usize;
+            for c in 0..3 {
+                grads[li][c] += g[a][c] * scale;
+            }
+            add(&mut diags[li], &block(a, a), scale);
+            let (ra, rb) = (self.offsets[i as usize] as usize, self.offsets[i as usize + 1] as usize);
+            for b in 0..nslots {
+                let j = fi[b];
+                if j == u32::MAX || j <= i {
+                    continue;
+                }
+                // rows hold a handful of columns: a scan beats a bisection
+                let s = ra
+                    + self.cols[ra..rb]
+                        .iter()
+                        .position(|&c| c == j)
+                        .expect("pattern holds every element pair");
+                let dest = &mut blocks[s - self.base];
+                if a < b {
+                    add(dest, &block(a, b), scale);
+                } else {
+                    add_transposed(dest, &block(b, a), scale);
+                }
+            }
+        }
+    }
+}
+
 #[inline]
 fn add(blk: &mut Mat3, h: &Mat3, scale: f64) {
     for c in 0..3 {
         for q in 0..3 {
             blk[c][q] += h[c][q] * scale;
+        }
+    }
+}
+
+#[inline]
+fn add_transposed(blk: &mut Mat3, h: &Mat3, scale: f64) {
+    for c in 0..3 {
+        for q in 0..3 {
+            blk[c][q] += h[q][c] * scale;
         }
     }
 }
