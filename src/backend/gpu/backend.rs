@@ -8,7 +8,7 @@
 use super::buffers::{BindingLimits, check_bindings};
 use super::context::{DeviceLayout, GpuContext};
 use super::layout::{CORNER_STRIDE, ELEM_STRIDE, ModelUniform, Op, corner_tables};
-use super::shader::{Access, Form, Kernel, Variant};
+use super::shader::{Access, Elem, Form, Kernel, MAX_SPLIT, Variant};
 use super::sweep_layout::SweepLayout;
 use crate::backend::cpu::hessian_assemble::HessianPattern;
 use crate::backend::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
@@ -17,6 +17,7 @@ use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use crate::solve::line_search::LineSearch;
 use std::collections::HashMap;
+use std::ops::Range;
 
 /// Device buffers by role: the keys of the bind-group cache.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -29,7 +30,10 @@ enum Buf {
     Corners,
     Shapes,
     IncOffsets,
+    /// Incidence lists in the problem's corner order (the sweeps').
     Inc,
+    /// The same lists in ascending device corner order (the gradient gathers').
+    GatherInc,
     Free,
     Colors,
     Moves,
@@ -74,7 +78,9 @@ pub struct GpuBackend<'c> {
     bufs: HashMap<Buf, Vec<wgpu::Buffer>>,
     vectors: Vec<wgpu::Buffer>,
     staging: wgpu::Buffer,
-    groups: HashMap<(Variant, Vec<Buf>), wgpu::BindGroup>,
+    /// Bind groups by kernel instance, arrays and first part of each split
+    /// binding (`Op::base`).
+    groups: HashMap<(Variant, Vec<Buf>, [u32; MAX_SPLIT]), wgpu::BindGroup>,
     encoder: Option<wgpu::CommandEncoder>,
     /// Pending `Op` records, `ctx.op_stride()` apart.
     ops: Vec<u8>,
@@ -84,6 +90,8 @@ pub struct GpuBackend<'c> {
     layout: SweepLayout,
     /// Command buffers submitted so far.
     submissions: usize,
+    /// Dispatches recorded one window of parts at a time.
+    window_dispatches: usize,
 }
 
 fn groups_of(n: usize) -> usize {
@@ -134,6 +142,7 @@ impl<'c> GpuBackend<'c> {
             .collect();
         drop(problem_corners);
         let incidence = layout.incidence(&p.incidence);
+        let gather_incidence = layout.gather_incidence(&p.incidence);
         let flat: Vec<f64> = layout.to_device(x.as_flattened(), 3);
         let partials = groups_of(nc.max(nv).max(nf));
         let mut single = HashMap::new();
@@ -175,6 +184,10 @@ impl<'c> GpuBackend<'c> {
         let mut bufs: HashMap<Buf, Vec<wgpu::Buffer>> = single.into_iter().map(|(k, b)| (k, vec![b])).collect();
         bufs.insert(Buf::Corners, ctx.split_u32("corners", &corner_items));
         bufs.insert(Buf::Inc, ctx.split_u32("incidence", &incidence.items));
+        bufs.insert(
+            Buf::GatherInc,
+            ctx.split_u32("incidence by device corner", &gather_incidence.items),
+        );
         bufs.insert(Buf::CornerGrad, ctx.split_zeros_real("corner gradients", 12 * nc));
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scalar slots read back"),
@@ -208,6 +221,7 @@ impl<'c> GpuBackend<'c> {
             problem: p,
             layout,
             submissions: 0,
+            window_dispatches: 0,
         })
     }
 
@@ -219,12 +233,33 @@ impl<'c> GpuBackend<'c> {
         }
     }
 
+    /// The storage buffers `v` binds with `bufs` in table order, every part
+    /// of each split array.
+    fn storage_buffers(&self, v: Variant, bufs: &[Buf]) -> usize {
+        bufs.iter()
+            .zip(v.kernel.def().bindings)
+            .filter(|(_, b)| matches!(b.access, Access::Read | Access::ReadWrite))
+            .map(|(buf, _)| self.buf(*buf).len())
+            .sum()
+    }
+
+    fn too_wide(&self, v: Variant, storage: usize) -> Error {
+        Error::Gpu(format!(
+            "mesh too large for this device: the kernel '{}' would bind {storage} storage \
+             buffers (its large arrays split into parts of {:.1} MiB, the largest one \
+             binding holds) but the device allows {} per shader stage",
+            v.kernel.name(),
+            self.ctx.part_bytes() as f64 / 1048576.0,
+            self.ctx.limits.max_storage_buffers_per_shader_stage
+        ))
+    }
+
     /// `v` with its split bindings spanning the parts of the arrays in
     /// `bufs`; an error with the numbers where the kernel would need more
     /// storage bindings than the device has.
     fn split_variant(&self, mut v: Variant, bufs: &[Buf]) -> Result<Variant> {
         let def = v.kernel.def();
-        let (mut j, mut storage) = (0, 0);
+        let mut j = 0;
         for (b, binding) in bufs.iter().zip(def.bindings) {
             let n = self.buf(*b).len();
             if binding.split {
@@ -233,19 +268,11 @@ impl<'c> GpuBackend<'c> {
             } else {
                 debug_assert_eq!(n, 1, "{}: '{}' is not split", def.stem, binding.name);
             }
-            if matches!(binding.access, Access::Read | Access::ReadWrite) {
-                storage += n;
-            }
         }
+        let storage = self.storage_buffers(v, bufs);
         let max = self.ctx.limits.max_storage_buffers_per_shader_stage as usize;
         if storage > max || v.extra.contains(&u8::MAX) {
-            return Err(Error::Gpu(format!(
-                "mesh too large for this device: the kernel '{}' would bind {storage} storage \
-                 buffers (its large arrays split into parts of {:.1} MiB, the largest one \
-                 binding holds) but the device allows {max} per shader stage",
-                def.stem,
-                self.ctx.part_bytes() as f64 / 1048576.0
-            )));
+            return Err(self.too_wide(v, storage));
         }
         Ok(v)
     }
@@ -254,16 +281,134 @@ impl<'c> GpuBackend<'c> {
     /// order and `op` as its `Op` record.
     fn record(&mut self, v: Variant, bufs: &[Buf], op: Op, threads: usize) -> Result<()> {
         let v = self.split_variant(v, bufs)?;
+        self.record_parts(v, bufs, [0; MAX_SPLIT], op, threads)
+    }
+
+    /// Records `v` over `units` (corners), whose data sit in `windowed`
+    /// (array, elements per unit, in ascending unit order): one dispatch
+    /// binding every part of every array where the device has the storage
+    /// bindings for it, else one dispatch per window of units, each binding
+    /// only the parts of `windowed` that its units touch (and all parts of
+    /// the other arrays). `place` gives a window's `Op` and thread count: the
+    /// thread-indexed kernels run the window's units, the gathers run all
+    /// their threads and add the window's units to what the windows before
+    /// stored (the windows ascend, so the sums keep their order and a split
+    /// device gives the bits of an unsplit one).
+    fn record_windowed(
+        &mut self,
+        v: Variant,
+        bufs: &[Buf],
+        op: Op,
+        units: usize,
+        windowed: &[(Buf, usize)],
+        place: impl Fn(Op, Range<usize>) -> (Op, usize),
+    ) -> Result<()> {
+        if let Ok(full) = self.split_variant(v, bufs) {
+            let (op, threads) = place(op, 0..units);
+            return self.record_parts(full, bufs, [0; MAX_SPLIT], op, threads);
+        }
+        let def = v.kernel.def();
+        // (binding index, elements per part, elements per unit) of each windowed array
+        let arrays: Vec<(usize, u64, u64)> = windowed
+            .iter()
+            .map(|&(buf, per_unit)| {
+                let i = bufs.iter().position(|b| *b == buf).expect("a windowed array is bound");
+                let size = match def.bindings[i].elem {
+                    Elem::Real => self.ctx.real_size(),
+                    _ => 4,
+                };
+                debug_assert!(def.bindings[i].split, "{}: a windowed array is split", def.stem);
+                (i, self.ctx.part_bytes() / size, per_unit as u64)
+            })
+            .collect();
+        let fixed: usize = bufs
+            .iter()
+            .zip(def.bindings)
+            .enumerate()
+            .filter(|(i, (_, b))| {
+                matches!(b.access, Access::Read | Access::ReadWrite) && !arrays.iter().any(|a| a.0 == *i)
+            })
+            .map(|(_, (buf, _))| self.buf(*buf).len())
+            .sum();
+        let max = self.ctx.limits.max_storage_buffers_per_shader_stage as usize;
+        // the parts [first, last] of each windowed array that units [u0, u1) touch
+        let span = |&(_, per_part, per_unit): &(usize, u64, u64), u: &Range<usize>| {
+            let first = per_unit * u.start as u64 / per_part;
+            let last = (per_unit * u.end as u64 - 1) / per_part;
+            (first as usize, (last - first + 1) as usize)
+        };
+        let fits = |u: &Range<usize>| {
+            let spans = arrays.iter().map(|a| span(a, u));
+            fixed + spans.clone().map(|s| s.1).sum::<usize>() <= max && spans.clone().all(|s| s.1 <= 256)
+        };
+        let mut start = 0;
+        while start < units {
+            if !fits(&(start..start + 1)) {
+                return Err(self.too_wide(v, self.storage_buffers(v, bufs)));
+            }
+            // the longest window that fits (fitting shrinks as a window grows)
+            let (mut lo, mut hi) = (start + 1, units);
+            while lo < hi {
+                let mid = lo + (hi - lo).div_ceil(2);
+                if fits(&(start..mid)) { lo = mid } else { hi = mid - 1 }
+            }
+            let window = start..lo;
+            let mut w = v;
+            w.window = true;
+            let mut first = [0u32; MAX_SPLIT];
+            for (j, (i, binding)) in def.bindings.iter().enumerate().filter(|(_, b)| b.split).enumerate() {
+                let (f, count) = match arrays.iter().find(|a| a.0 == i) {
+                    Some(a) => span(a, &window),
+                    None => (0, self.buf(bufs[i]).len()),
+                };
+                debug_assert!(binding.split);
+                first[j] = f as u32;
+                w.extra[j] = (count - 1) as u8;
+            }
+            let (op, threads) = place(op, window.clone());
+            self.record_parts(w, bufs, first, op, threads)?;
+            self.window_dispatches += 1;
+            start = window.end;
+        }
+        Ok(())
+    }
+
+    /// Records one dispatch of `v` (its part counts set) with each split
+    /// array bound from part `first[j]` on.
+    fn record_parts(
+        &mut self,
+        v: Variant,
+        bufs: &[Buf],
+        first: [u32; MAX_SPLIT],
+        op: Op,
+        threads: usize,
+    ) -> Result<()> {
         let stride = self.ctx.op_stride() as usize;
         if self.ops.len() / stride >= OPS_PER_BATCH {
             self.submit()?;
         }
         let offset = self.ops.len();
+        let op = Op { base: first, ..op };
         self.ops.extend_from_slice(&op.bytes(self.ctx.real));
         self.ops.resize(offset + stride, 0);
-        let key = (v, bufs.to_vec());
+        let key = (v, bufs.to_vec(), first);
         if !self.groups.contains_key(&key) {
-            let buffers: Vec<&[wgpu::Buffer]> = bufs.iter().map(|b| self.buf(*b)).collect();
+            let mut j = 0;
+            let buffers: Vec<&[wgpu::Buffer]> = bufs
+                .iter()
+                .zip(v.kernel.def().bindings)
+                .map(|(b, binding)| {
+                    let all = self.buf(*b);
+                    if binding.split {
+                        let from = first[j] as usize;
+                        let to = from + 1 + v.extra[j] as usize;
+                        j += 1;
+                        &all[from..to]
+                    } else {
+                        all
+                    }
+                })
+                .collect();
             let group = self.ctx.bind(v, &buffers);
             self.groups.insert(key.clone(), group);
         }
@@ -350,9 +495,40 @@ impl<'c> GpuBackend<'c> {
         self.form
     }
 
+    /// Dispatches recorded one window of parts at a time so far
+    /// (`record_windowed`; 0 where every kernel binds all its parts).
+    pub fn window_dispatches(&self) -> usize {
+        self.window_dispatches
+    }
+
     /// The most buffers any one array is split across (1: none is split).
     pub fn max_parts(&self) -> usize {
         self.bufs.values().map(Vec::len).max().unwrap_or(1)
+    }
+
+    /// g <- the gradient at each free vertex, gathered from the per-corner
+    /// data in `corner_data` (`stride` reals per corner, gradient first).
+    fn gradient_gather(&mut self, corner_data: Buf, stride: u32, g: Vector) -> Result<()> {
+        let (nc, nf) = (self.n_corners, self.n_free);
+        let op = Op {
+            aux: stride,
+            ..Op::n(nf)
+        };
+        self.record_windowed(
+            Kernel::GradientGather.plain(),
+            &[
+                Buf::Ops,
+                Buf::Free,
+                Buf::IncOffsets,
+                Buf::GatherInc,
+                corner_data,
+                Buf::Vector(g.0),
+            ],
+            op,
+            nc,
+            &[(corner_data, stride as usize)],
+            |op, corners| (passes(op, corners), nf),
+        )
     }
 
     /// The block-Jacobi factors (after `factor_precond`), as `BlockJacobi::factors`.
@@ -373,6 +549,15 @@ impl<'c> GpuBackend<'c> {
             .chunks_exact(9)
             .map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]])
             .collect())
+    }
+}
+
+/// A gather's pass over the corners `corners` (`Op::aux2`, `Op::aux3`).
+fn passes(op: Op, corners: Range<usize>) -> Op {
+    Op {
+        aux2: corners.start as u32,
+        aux3: corners.end as u32,
+        ..op
     }
 }
 
@@ -405,7 +590,9 @@ fn slide_tables(p: &Problem, layout: &SweepLayout) -> (Vec<f64>, Vec<u32>) {
 }
 
 /// Per block slot, its element contributions `corner * 16 + 4 a + b` (the
-/// device corner) in ascending problem corner order (the CPU assembly's sum order).
+/// device corner) in ascending device corner order: the order in which
+/// `hessian_gather` adds them, in one pass or in windows of corners. (The
+/// CPU adds in problem corner order, the same under `DeviceLayout::Problem`.)
 fn contributions(pattern: &HessianPattern, layout: &SweepLayout) -> (Vec<u32>, Vec<u32>) {
     let nb = pattern.matrix.blocks.len();
     let mut offsets = vec![0u32; nb + 1];
@@ -426,6 +613,9 @@ fn contributions(pattern: &HessianPattern, layout: &SweepLayout) -> (Vec<u32>, V
                 fill[s as usize] += 1;
             }
         }
+    }
+    for s in 0..nb {
+        items[offsets[s] as usize..offsets[s + 1] as usize].sort_unstable();
     }
     (offsets, items)
 }
@@ -502,23 +692,7 @@ impl Backend for GpuBackend<'_> {
         )?;
         self.reduce(Some(out.value), out.min_det, None, Some(out.infeasible), groups_of(nc))?;
         if let Some(g) = gradient {
-            let op = Op {
-                aux: 12,
-                ..Op::n(self.n_free)
-            };
-            self.record(
-                Kernel::GradientGather.plain(),
-                &[
-                    Buf::Ops,
-                    Buf::Free,
-                    Buf::IncOffsets,
-                    Buf::Inc,
-                    Buf::CornerGrad,
-                    Buf::Vector(g.0),
-                ],
-                op,
-                self.n_free,
-            )?;
+            self.gradient_gather(Buf::CornerGrad, 12, g)?;
             self.constrain(g)?;
         }
         Ok(())
@@ -694,35 +868,32 @@ impl Backend for GpuBackend<'_> {
 
     fn assemble(&mut self, g: Vector) -> Result<()> {
         let (nc, nb, nf) = (self.n_corners, self.n_blocks, self.n_free);
-        self.record(
+        let elem = ELEM_STRIDE as usize;
+        self.record_windowed(
             Kernel::HessianAssemble.with(self.form),
             &[Buf::Model, Buf::Ops, Buf::X, Buf::Corners, Buf::Shapes, Buf::Elem],
             Op::n(nc),
             nc,
+            &[(Buf::Corners, CORNER_STRIDE as usize), (Buf::Elem, elem)],
+            |op, corners| {
+                let threads = corners.len();
+                let op = Op {
+                    offset: corners.start as u32,
+                    n: corners.end as u32,
+                    ..op
+                };
+                (op, threads)
+            },
         )?;
-        self.record(
+        self.record_windowed(
             Kernel::HessianGather.plain(),
             &[Buf::Ops, Buf::ContribOffsets, Buf::ContribItems, Buf::Elem, Buf::Blocks],
             Op::n(nb),
-            nb,
+            nc,
+            &[(Buf::Elem, elem)],
+            |op, corners| (passes(op, corners), nb),
         )?;
-        let op = Op {
-            aux: ELEM_STRIDE,
-            ..Op::n(nf)
-        };
-        self.record(
-            Kernel::GradientGather.plain(),
-            &[
-                Buf::Ops,
-                Buf::Free,
-                Buf::IncOffsets,
-                Buf::Inc,
-                Buf::Elem,
-                Buf::Vector(g.0),
-            ],
-            op,
-            nf,
-        )?;
+        self.gradient_gather(Buf::Elem, ELEM_STRIDE, g)?;
         if self.problem.sliding.is_some() {
             self.constrain(g)?;
             self.record(

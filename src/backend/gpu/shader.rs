@@ -275,12 +275,15 @@ pub const MAX_SPLIT: usize = 4;
 /// A kernel as compiled: kernels without variants have the one `Form::Fast`
 /// instance; `extra[j]` is how many buffers beyond the first the kernel's
 /// j-th split binding spans (0 for a mesh whose arrays fit one binding each,
-/// which compiles to plain indexing).
+/// which compiles to plain indexing). `window`: the split bindings are bound
+/// from part `op.base[j]` on rather than from their first part (one
+/// dispatch per window of parts, `GpuBackend::record_windowed`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Variant {
     pub kernel: Kernel,
     pub form: Form,
     pub extra: [u8; MAX_SPLIT],
+    pub window: bool,
 }
 
 impl Kernel {
@@ -307,6 +310,7 @@ impl Kernel {
             kernel: self,
             form: if self.def().variants { form } else { Form::Fast },
             extra: [0; MAX_SPLIT],
+            window: false,
         }
     }
 
@@ -350,6 +354,11 @@ impl Variant {
         let mut accessors = String::new();
         let splits: Vec<&Binding> = def.bindings.iter().filter(|b| b.split).collect();
         assert!(splits.len() <= MAX_SPLIT, "{}: too many split bindings", def.stem);
+        assert!(
+            !self.window || def.bindings.contains(&OP),
+            "{}: a windowed kernel reads its parts' bases from `op`",
+            def.stem
+        );
         let mut extra_decl: Vec<String> = vec![String::new(); splits.len()];
         for (j, b) in splits.iter().enumerate() {
             let parts = 1 + self.extra[j] as usize;
@@ -370,7 +379,8 @@ impl Variant {
                 ));
                 next += 1;
             }
-            accessors.push_str(&split_accessors(b, ty, parts, part_log2 - size.trailing_zeros()));
+            let base = self.window.then_some(j);
+            accessors.push_str(&split_accessors(b, ty, parts, part_log2 - size.trailing_zeros(), base));
         }
         for line in text.lines() {
             out.push_str(line);
@@ -390,26 +400,38 @@ impl Variant {
 
 /// `NAME_get(i)` (and `NAME_set(i, v)` where writable) over the `parts`
 /// buffers of a split binding, `2^shift` elements each: part 0 is the
-/// declared `NAME`, part k is `NAME_pk`.
-fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32) -> String {
+/// declared `NAME`, part k is `NAME_pk`. With `base = Some(j)` the buffers
+/// bound are parts `op.base[j]` on of the array, and `i` must fall in them.
+fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32, base: Option<usize>) -> String {
     let n = b.name;
     let part = |k: usize| if k == 0 { n.to_string() } else { format!("{n}_p{k}") };
     let mut s = String::new();
+    let writable = b.access == Access::ReadWrite;
+    let mask = (1u64 << shift) - 1;
     if parts == 1 {
-        s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{ return {n}[i]; }}\n"));
-        if b.access == Access::ReadWrite {
-            s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{ {n}[i] = v; }}\n"));
+        // one part, the whole array or (windowed) the one the index falls in
+        let at = if base.is_some() {
+            format!("i & {mask}u")
+        } else {
+            "i".into()
+        };
+        s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{ return {n}[{at}]; }}\n"));
+        if writable {
+            s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{ {n}[{at}] = v; }}\n"));
         }
         return s;
     }
-    let mask = (1u64 << shift) - 1;
-    let head = format!("    let p = i >> {shift}u;\n    let j = i & {mask}u;\n");
+    let p = match base {
+        Some(j) => format!("(i >> {shift}u) - op.base[{j}]"),
+        None => format!("i >> {shift}u"),
+    };
+    let head = format!("    let p = {p};\n    let j = i & {mask}u;\n");
     s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{\n{head}"));
     for k in 0..parts - 1 {
         s.push_str(&format!("    if p == {k}u {{ return {}[j]; }}\n", part(k)));
     }
     s.push_str(&format!("    return {}[j];\n}}\n", part(parts - 1)));
-    if b.access == Access::ReadWrite {
+    if writable {
         s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{\n{head}"));
         for k in 0..parts - 1 {
             s.push_str(&format!("    if p == {k}u {{ {}[j] = v; return; }}\n", part(k)));
@@ -624,20 +646,42 @@ mod tests {
         }
     }
 
+    fn validate_source(src: &str, real: Real) -> naga::Module {
+        let m = naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+        let mut caps = naga::valid::Capabilities::default();
+        if real == Real::F64 {
+            caps |= naga::valid::Capabilities::FLOAT64;
+        }
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+            .validate(&m)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+        m
+    }
+
+    #[test]
+    fn windowed_bindings_index_from_their_base_part() {
+        for real in [Real::F32, Real::F64] {
+            let mut v = Kernel::HessianGather.plain();
+            v.extra = [0, 0, 2, 0];
+            v.window = true;
+            let src = v.compose_split(real, 8);
+            validate_source(&src, real);
+            let shift = 8 - real.size().trailing_zeros();
+            // elem (the third split binding) spans three parts from op.base[2]
+            assert!(src.contains(&format!("let p = (i >> {shift}u) - op.base[2];")), "{src}");
+            // a one-part window still finds the element within its part
+            assert!(src.contains("return contrib_offsets[i & 63u];"), "{src}");
+            assert!(!src.contains("op.base[0]"));
+        }
+    }
+
     #[test]
     fn split_bindings_validate_with_their_extra_parts_after_the_table() {
         for real in [Real::F32, Real::F64] {
             let mut v = Kernel::HessianGather.plain();
             v.extra = [1, 2, 3, 2];
             let src = v.compose_split(real, 8);
-            let m = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
-            let mut caps = naga::valid::Capabilities::default();
-            if real == Real::F64 {
-                caps |= naga::valid::Capabilities::FLOAT64;
-            }
-            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
-                .validate(&m)
-                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+            let m = validate_source(&src, real);
             let bound: Vec<(u32, String)> = m
                 .global_variables
                 .iter()
