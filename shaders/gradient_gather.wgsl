@@ -30,7 +30,7 @@ fn main(
     let v = free_vertices[i];
     var acc = vec3<real>(real(0.0));
     if op.aux2 != 0u {
-        acc = vec3<real>(grad[3u * i], grad[3u * i + 1u], grad[3u * i + 2u]);
+        acc = vec3<real>(grad_get(3u * i), grad_get(3u * i + 1u), grad_get(3u * i + 2u));
     }
     for (var it = inc_offsets[v]; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items_get(it);
@@ -47,6 +47,6 @@ fn main(
         }
     }
     for (var c = 0u; c < 3u; c++) {
-        grad[3u * i + c] = acc[c];
+        grad_set(3u * i + c, acc[c]);
     }
 }

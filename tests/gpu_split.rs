@@ -146,6 +146,8 @@ fn windowed_newton_matches(precision: Precision, cap: u64, storage: u32, tol_edg
         );
         let mut unsplit = GpuBackend::new(&ctx, &p, &x0, &Default::default()).unwrap();
         Backend::prepare_hessian(&mut unsplit).unwrap();
+        // the positions come back from their parts as they went up
+        assert_eq!(be.download().unwrap(), unsplit.download().unwrap());
         let gu = unsplit.vector().unwrap();
         unsplit.assemble(gu).unwrap();
         unsplit.flush().unwrap();
@@ -166,6 +168,66 @@ fn newton_in_windows_of_parts_matches_cpu_f64() {
 fn newton_in_windows_of_parts_matches_cpu_f32() {
     // the corner blocks in 77 parts of 16 KiB; lavapipe's 32 storage buffers
     windowed_newton_matches(Precision::F32, 16 << 10, 32, 1e-2, 1e-3);
+}
+
+/// `method` with the positions and free-vertex vectors (arrays that grow
+/// with vertices) in several bindings each; the per-corner arrays then have
+/// more parts than lavapipe's 32 storage buffers, so the objective runs in
+/// windows of corners as well.
+fn vertex_arrays_split_match(method: Method, precision: Precision, cap: u64, tol_edge: f64, rel: f64) {
+    let (Some(ctx), Some(small)) = (context(precision), capped(precision, cap)) else {
+        return;
+    };
+    let mesh = perturbed_box(8, 0.3, 1);
+    let p = Problem::new(&mesh).unwrap();
+    let x0 = p.gather(&mesh.points);
+    {
+        use meshsmooth::backend::{Backend, EvalSlots, Points, Slot};
+        let mut be = GpuBackend::new(&small, &p, &x0, &Default::default()).unwrap();
+        eprintln!(
+            "{method:?} {precision:?}: positions in {} parts, vectors in {}, corner gradients in {}",
+            be.position_parts(),
+            be.vector_parts(),
+            be.max_parts()
+        );
+        assert!(be.position_parts() >= 3, "{} position parts", be.position_parts());
+        assert!(be.vector_parts() >= 2, "{} vector parts", be.vector_parts());
+        let g = be.vector().unwrap();
+        let out = EvalSlots {
+            value: Slot(0),
+            min_det: None,
+            infeasible: Slot(1),
+        };
+        be.evaluate(Points::Current, out, Some(g)).unwrap();
+        be.flush().unwrap();
+        assert!(be.window_dispatches() >= 2, "the objective in windows");
+        let mut unsplit = GpuBackend::new(&ctx, &p, &x0, &Default::default()).unwrap();
+        // the positions come back from their parts as they went up
+        assert_eq!(be.download().unwrap(), unsplit.download().unwrap());
+        let gu = unsplit.vector().unwrap();
+        unsplit.evaluate(Points::Current, out, Some(gu)).unwrap();
+        let (a, b) = (be.flush().unwrap(), unsplit.flush().unwrap());
+        assert_eq!(a[0].to_bits(), b[0].to_bits(), "the objective");
+        assert_eq!(be.read_vector(g).unwrap(), unsplit.read_vector(gu).unwrap());
+    }
+    split_matches_on(&ctx, &small, method, precision, 3, tol_edge, rel);
+}
+
+#[test]
+fn bcd_with_vertex_arrays_split_matches_cpu_f64() {
+    // positions in 3 parts of 8 KiB, corner gradients in 36
+    vertex_arrays_split_match(Method::BcdColored, Precision::F64, 8 << 10, 1e-9, 1e-9);
+}
+
+#[test]
+fn bcd_with_vertex_arrays_split_matches_cpu_f32() {
+    vertex_arrays_split_match(Method::BcdColored, Precision::F32, 4 << 10, 1e-2, 1e-4);
+}
+
+#[test]
+fn nlcg_with_vertex_arrays_split_matches_cpu_f64() {
+    // the free-vertex vectors (search directions, gradients) in 2 parts
+    vertex_arrays_split_match(Method::Nlcg, Precision::F64, 8 << 10, 1e-9, 1e-9);
 }
 
 #[test]

@@ -76,7 +76,8 @@ pub struct GpuBackend<'c> {
     /// Each array as its buffers: one, or the parts of an array split
     /// across bindings (`Binding::split`).
     bufs: HashMap<Buf, Vec<wgpu::Buffer>>,
-    vectors: Vec<wgpu::Buffer>,
+    /// Each vector as its parts (`Binding::split`).
+    vectors: Vec<Vec<wgpu::Buffer>>,
     staging: wgpu::Buffer,
     /// Bind groups by kernel instance, arrays and first part of each split
     /// binding (`Op::base`).
@@ -124,7 +125,6 @@ impl<'c> GpuBackend<'c> {
                     slide_real.len() as u64 * r,
                 ),
                 ("sliding-boundary candidates", 4 * slide_idx.len() as u64),
-                ("positions", 3 * nv as u64 * r),
                 ("incidence offsets", 4 * (nv as u64 + 1)),
             ],
         )?;
@@ -160,8 +160,6 @@ impl<'c> GpuBackend<'c> {
                 mapped_at_creation: false,
             }),
         );
-        single.insert(Buf::X, ctx.storage_real("positions", &flat));
-        single.insert(Buf::Trial, ctx.storage_real("trial positions", &flat));
         single.insert(Buf::Shapes, ctx.storage_real("corner shapes", &table));
         single.insert(
             Buf::IncOffsets,
@@ -172,7 +170,6 @@ impl<'c> GpuBackend<'c> {
             ctx.storage_u32("free vertices", &layout.vertex_ids(&p.free_vertices)),
         );
         single.insert(Buf::Colors, ctx.storage_u32("colours", &layout.colours));
-        single.insert(Buf::Moves, ctx.zeros_real("moves", 3 * nv));
         single.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
         single.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
         single.insert(Buf::Dummy, ctx.zeros_real("unused", 4));
@@ -189,6 +186,9 @@ impl<'c> GpuBackend<'c> {
             ctx.split_u32("incidence by device corner", &gather_incidence.items),
         );
         bufs.insert(Buf::CornerGrad, ctx.split_zeros_real("corner gradients", 12 * nc));
+        bufs.insert(Buf::X, ctx.split_real("positions", &flat));
+        bufs.insert(Buf::Trial, ctx.split_real("trial positions", &flat));
+        bufs.insert(Buf::Moves, ctx.split_zeros_real("moves", 3 * nv));
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scalar slots read back"),
             size: N_SLOTS as u64 * r,
@@ -228,7 +228,7 @@ impl<'c> GpuBackend<'c> {
     /// The buffers of array `b` (one unless it is split).
     fn buf(&self, b: Buf) -> &[wgpu::Buffer] {
         match b {
-            Buf::Vector(i) => std::slice::from_ref(&self.vectors[i as usize]),
+            Buf::Vector(i) => &self.vectors[i as usize],
             other => &self.bufs[&other],
         }
     }
@@ -293,7 +293,9 @@ impl<'c> GpuBackend<'c> {
     /// thread-indexed kernels run the window's units, the gathers run all
     /// their threads and add the window's units to what the windows before
     /// stored (the windows ascend, so the sums keep their order and a split
-    /// device gives the bits of an unsplit one).
+    /// device gives the bits of an unsplit one). Windows start at multiples
+    /// of `align` units (a workgroup's, where the kernel reduces per workgroup).
+    #[allow(clippy::too_many_arguments)]
     fn record_windowed(
         &mut self,
         v: Variant,
@@ -301,6 +303,7 @@ impl<'c> GpuBackend<'c> {
         op: Op,
         units: usize,
         windowed: &[(Buf, usize)],
+        align: usize,
         place: impl Fn(Op, Range<usize>) -> (Op, usize),
     ) -> Result<()> {
         if let Ok(full) = self.split_variant(v, bufs) {
@@ -343,16 +346,22 @@ impl<'c> GpuBackend<'c> {
         };
         let mut start = 0;
         while start < units {
-            if !fits(&(start..start + 1)) {
+            let end = |k: usize| (start + k * align).min(units);
+            if !fits(&(start..end(1))) {
                 return Err(self.too_wide(v, self.storage_buffers(v, bufs)));
             }
-            // the longest window that fits (fitting shrinks as a window grows)
-            let (mut lo, mut hi) = (start + 1, units);
+            // the longest window that fits, in steps of `align` (fitting
+            // shrinks as a window grows)
+            let (mut lo, mut hi) = (1, (units - start).div_ceil(align));
             while lo < hi {
                 let mid = lo + (hi - lo).div_ceil(2);
-                if fits(&(start..mid)) { lo = mid } else { hi = mid - 1 }
+                if fits(&(start..end(mid))) {
+                    lo = mid
+                } else {
+                    hi = mid - 1
+                }
             }
-            let window = start..lo;
+            let window = start..end(lo);
             let mut w = v;
             w.window = true;
             let mut first = [0u32; MAX_SPLIT];
@@ -425,11 +434,17 @@ impl<'c> GpuBackend<'c> {
             .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()))
     }
 
-    /// Copies between arrays of one buffer each (positions).
+    /// Copies between arrays of the same length (positions), part by part.
     fn copy(&mut self, src: Buf, dst: Buf) {
-        let size = self.buf(src)[0].size().min(self.buf(dst)[0].size());
-        let (src, dst) = (self.bufs[&src][0].clone(), self.bufs[&dst][0].clone());
-        self.encoder().copy_buffer_to_buffer(&src, 0, &dst, 0, size);
+        let pairs: Vec<(wgpu::Buffer, wgpu::Buffer)> = self.bufs[&src]
+            .iter()
+            .cloned()
+            .zip(self.bufs[&dst].iter().cloned())
+            .collect();
+        for (src, dst) in pairs {
+            let size = src.size().min(dst.size());
+            self.encoder().copy_buffer_to_buffer(&src, 0, &dst, 0, size);
+        }
     }
 
     /// Submits what was recorded (the `Op` records go first).
@@ -466,7 +481,7 @@ impl<'c> GpuBackend<'c> {
 
     fn read_vec3(&mut self, b: Buf, n: usize) -> Result<Vec<Vec3>> {
         self.submit()?;
-        let flat = self.ctx.read_real(&self.buf(b)[0], 3 * n)?;
+        let flat = self.ctx.read_split_real(self.buf(b), 3 * n)?;
         Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
@@ -501,6 +516,18 @@ impl<'c> GpuBackend<'c> {
         self.window_dispatches
     }
 
+    /// The buffers the positions are split across.
+    pub fn position_parts(&self) -> usize {
+        self.bufs[&Buf::X].len()
+    }
+
+    /// The buffers a free-vertex vector is split across.
+    pub fn vector_parts(&self) -> usize {
+        (3 * self.n_free as u64 * self.ctx.real_size())
+            .div_ceil(self.ctx.part_bytes())
+            .max(1) as usize
+    }
+
     /// The most buffers any one array is split across (1: none is split).
     pub fn max_parts(&self) -> usize {
         self.bufs.values().map(Vec::len).max().unwrap_or(1)
@@ -527,6 +554,7 @@ impl<'c> GpuBackend<'c> {
             op,
             nc,
             &[(corner_data, stride as usize)],
+            1,
             |op, corners| (passes(op, corners), nf),
         )
     }
@@ -534,7 +562,7 @@ impl<'c> GpuBackend<'c> {
     /// The block-Jacobi factors (after `factor_precond`), as `BlockJacobi::factors`.
     pub fn block_jacobi_factors(&mut self) -> Result<Vec<[f64; 6]>> {
         self.submit()?;
-        let flat = self.ctx.read_real(&self.buf(Buf::Factors)[0], 6 * self.n_free)?;
+        let flat = self.ctx.read_split_real(self.buf(Buf::Factors), 6 * self.n_free)?;
         Ok(flat
             .chunks_exact(6)
             .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
@@ -550,6 +578,17 @@ impl<'c> GpuBackend<'c> {
             .map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]])
             .collect())
     }
+}
+
+/// A thread-per-corner kernel over the corners `corners` (`Op::offset`, `Op::n`).
+fn corner_window(op: Op, corners: Range<usize>) -> (Op, usize) {
+    let threads = corners.len();
+    let op = Op {
+        offset: corners.start as u32,
+        n: corners.end as u32,
+        ..op
+    };
+    (op, threads)
 }
 
 /// A gather's pass over the corners `corners` (`Op::aux2`, `Op::aux3`).
@@ -638,11 +677,7 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn vector(&mut self) -> Result<Vector> {
-        check_bindings(
-            &BindingLimits::of(&self.ctx.limits),
-            &[("free-vertex vector", 3 * self.n_free as u64 * self.ctx.real_size())],
-        )?;
-        self.vectors.push(self.ctx.zeros_real("vector", 3 * self.n_free));
+        self.vectors.push(self.ctx.split_zeros_real("vector", 3 * self.n_free));
         Ok(Vector(self.vectors.len() as u32 - 1))
     }
 
@@ -661,7 +696,7 @@ impl Backend for GpuBackend<'_> {
         // after what is recorded, before what comes next
         self.submit()?;
         let flat: Vec<f64> = data.iter().flatten().copied().collect();
-        self.ctx.write_real(&self.vectors[v.0 as usize], &flat);
+        self.ctx.write_split_real(&self.vectors[v.0 as usize], &flat);
         Ok(())
     }
 
@@ -676,7 +711,7 @@ impl Backend for GpuBackend<'_> {
             Points::Trial => Buf::Trial,
         };
         let nc = self.n_corners;
-        self.record(
+        self.record_windowed(
             Kernel::Objective.with(self.form),
             &[
                 Buf::Model,
@@ -689,6 +724,9 @@ impl Backend for GpuBackend<'_> {
             ],
             Op::n(nc),
             nc,
+            &[(Buf::Corners, CORNER_STRIDE as usize), (Buf::CornerGrad, 12)],
+            64,
+            corner_window,
         )?;
         self.reduce(Some(out.value), out.min_det, None, Some(out.infeasible), groups_of(nc))?;
         if let Some(g) = gradient {
@@ -785,15 +823,16 @@ impl Backend for GpuBackend<'_> {
         )?;
         self.reduce(None, None, Some(out), None, groups_of(nv))?;
         // "since the last call": the next colours start from no move
-        let moves = self.bufs[&Buf::Moves][0].clone();
-        self.encoder().clear_buffer(&moves, 0, None);
+        for moves in self.bufs[&Buf::Moves].clone() {
+            self.encoder().clear_buffer(&moves, 0, None);
+        }
         Ok(())
     }
 
     fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
         if !self.bufs.contains_key(&Buf::Reference) {
-            let buf = self.ctx.zeros_real("reference positions", 3 * self.n_vertices);
-            self.bufs.insert(Buf::Reference, vec![buf]);
+            let parts = self.ctx.split_zeros_real("reference positions", 3 * self.n_vertices);
+            self.bufs.insert(Buf::Reference, parts);
         }
         // fixed vertices are their own reference
         self.copy(Buf::X, Buf::Reference);
@@ -832,13 +871,11 @@ impl Backend for GpuBackend<'_> {
         let pattern = HessianPattern::new(self.problem);
         let nb = pattern.matrix.blocks.len();
         let (c_off, c_items) = contributions(&pattern, &self.layout);
-        let r = ctx.real_size();
         check_bindings(
             &BindingLimits::of(&ctx.limits),
             &[
                 ("Hessian row offsets", 4 * (self.n_free as u64 + 1)),
                 ("diagonal blocks", 4 * self.n_free as u64),
-                ("block-Jacobi factors", 6 * self.n_free as u64 * r),
             ],
         )?;
         super::buffers::grid(nb)?;
@@ -856,7 +893,7 @@ impl Backend for GpuBackend<'_> {
             (Buf::Blocks, ctx.split_zeros_real("Hessian blocks", 9 * nb)),
             (
                 Buf::Factors,
-                vec![ctx.zeros_real("block-Jacobi factors", 6 * self.n_free)],
+                ctx.split_zeros_real("block-Jacobi factors", 6 * self.n_free),
             ),
         ];
         let bytes = new.iter().flat_map(|(_, b)| b).map(|b| b.size() as usize).sum();
@@ -875,15 +912,8 @@ impl Backend for GpuBackend<'_> {
             Op::n(nc),
             nc,
             &[(Buf::Corners, CORNER_STRIDE as usize), (Buf::Elem, elem)],
-            |op, corners| {
-                let threads = corners.len();
-                let op = Op {
-                    offset: corners.start as u32,
-                    n: corners.end as u32,
-                    ..op
-                };
-                (op, threads)
-            },
+            1,
+            corner_window,
         )?;
         self.record_windowed(
             Kernel::HessianGather.plain(),
@@ -891,6 +921,7 @@ impl Backend for GpuBackend<'_> {
             Op::n(nb),
             nc,
             &[(Buf::Elem, elem)],
+            1,
             |op, corners| (passes(op, corners), nb),
         )?;
         self.gradient_gather(Buf::Elem, ELEM_STRIDE, g)?;
@@ -1008,7 +1039,7 @@ impl Backend for GpuBackend<'_> {
                 .bufs
                 .values()
                 .flatten()
-                .chain(&self.vectors)
+                .chain(self.vectors.iter().flatten())
                 .chain([&self.staging])
                 .map(|b| b.size() as usize)
                 .sum::<usize>()

@@ -163,50 +163,50 @@ kernels! {
     ];
     CbrtEval = "cbrt_eval", variants: false, [b("sizes", U, St("Sizes")), b("values", RW, Re)];
     Objective = "objective", variants: true, [
-        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("grad", RW, Re),
+        MODEL, OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("grad", RW, Re),
         b("partials", RW, V4),
     ];
     Reduce = "reduce", variants: false, [OP, b("partials", R, V4), SCALARS_RW];
     Inversion = "inversion", variants: false, [
-        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), b("trial", R, Re),
+        MODEL, OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("trial", R, Re),
         b("partials", RW, V4),
     ];
     GradientGather = "gradient_gather", variants: false, [
         OP, b("free_vertices", R, Ui), b("inc_offsets", R, Ui), s("inc_items", R, Ui), s("elem", R, Re),
-        b("grad", RW, Re),
+        s("grad", RW, Re),
     ];
     Bcd = "bcd", variants: true, [
-        MODEL, b("ls", U, V4), OP, b("x", RW, Re), s("corners", R, Ui), b("shapes", R, V4),
-        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
+        MODEL, b("ls", U, V4), OP, s("x", RW, Re), s("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("colors", R, Ui), s("moves", RW, Re),
         SLIDE_REAL, SLIDE_IDX,
     ];
     ReferencePosition = "reference_position", variants: true, [
-        MODEL, b("ls", U, V4), OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4),
-        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("free_vertices", R, Ui), b("xr", RW, Re),
+        MODEL, b("ls", U, V4), OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("free_vertices", R, Ui), s("xr", RW, Re),
     ];
     HessianAssemble = "hessian_assemble", variants: true, [
-        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("elem", RW, Re),
+        MODEL, OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("elem", RW, Re),
     ];
     HessianGather = "hessian_gather", variants: false, [
         OP, s("contrib_offsets", R, Ui), s("contrib_items", R, Ui), s("elem", R, Re), s("blocks", RW, Re),
     ];
     BsrSpmv = "bsr_spmv", variants: false, [
-        OP, b("row_offsets", R, Ui), s("cols", R, Ui), s("blocks", R, Re), b("x", R, Re), b("y", RW, Re),
+        OP, b("row_offsets", R, Ui), s("cols", R, Ui), s("blocks", R, Re), s("x", R, Re), s("y", RW, Re),
     ];
     BlockJacobiFactor = "block_jacobi_factor", variants: false, [
-        OP, s("blocks", R, Re), b("diag", R, Ui), b("factors", RW, Re),
+        OP, s("blocks", R, Re), b("diag", R, Ui), s("factors", RW, Re),
     ];
-    BlockJacobi = "block_jacobi", variants: false, [OP, b("factors", R, Re), b("x", R, Re), b("y", RW, Re)];
-    Axpby = "axpby", variants: false, [OP, SCALARS_R, b("x", R, Re), b("y", RW, Re)];
+    BlockJacobi = "block_jacobi", variants: false, [OP, s("factors", R, Re), s("x", R, Re), s("y", RW, Re)];
+    Axpby = "axpby", variants: false, [OP, SCALARS_R, s("x", R, Re), s("y", RW, Re)];
     SetSlot = "set_slot", variants: false, [OP, SCALARS_RW];
-    Dot = "dot", variants: false, [OP, b("a", R, Re), b("b", R, Re), b("partials", RW, V4)];
+    Dot = "dot", variants: false, [OP, s("a", R, Re), s("b", R, Re), b("partials", RW, V4)];
     LineSearch = "line_search", variants: false, [
-        OP, SCALARS_R, b("free_vertices", R, Ui), b("x", R, Re), b("d", R, Re), b("trial", RW, Re),
+        OP, SCALARS_R, b("free_vertices", R, Ui), s("x", R, Re), s("d", R, Re), s("trial", RW, Re),
     ];
     ProjectBoundary = "project_boundary", variants: false, [
-        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("x", RW, Re),
+        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), s("x", RW, Re),
     ];
-    Constrain = "constrain", variants: false, [OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("y", RW, Re)];
+    Constrain = "constrain", variants: false, [OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), s("y", RW, Re)];
     ConstrainBlocks = "constrain_blocks", variants: false, [
         OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("row_offsets", R, Ui), s("cols", R, Ui),
         b("diag", R, Ui), s("blocks", RW, Re),
