@@ -365,12 +365,11 @@ impl<'c> GpuBackend<'c> {
             let mut w = v;
             w.window = true;
             let mut first = [0u32; MAX_SPLIT];
-            for (j, (i, binding)) in def.bindings.iter().enumerate().filter(|(_, b)| b.split).enumerate() {
+            for (j, (i, _)) in def.bindings.iter().enumerate().filter(|(_, b)| b.split).enumerate() {
                 let (f, count) = match arrays.iter().find(|a| a.0 == i) {
                     Some(a) => span(a, &window),
                     None => (0, self.buf(bufs[i]).len()),
                 };
-                debug_assert!(binding.split);
                 first[j] = f as u32;
                 w.extra[j] = (count - 1) as u8;
             }

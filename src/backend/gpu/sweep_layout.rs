@@ -105,7 +105,7 @@ impl SweepLayout {
 
     /// The incidence lists in device order, each item `corner << 2 | k`
     /// with its device corner; within a list the problem's order, so that
-    /// gathers sum in the CPU's order.
+    /// the sweeps sum in the CPU's order.
     pub fn incidence(&self, inc: &Csr) -> Csr {
         self.incidence_ordered(inc, false)
     }
