@@ -334,6 +334,15 @@ impl<'c> GpuBackend<'c> {
             .map(|(_, (buf, _))| self.buf(*buf).len())
             .sum();
         let max = self.ctx.limits.max_storage_buffers_per_shader_stage as usize;
+        // a binding spans at most 256 parts (`Variant::extra`), windowed or not
+        let whole_too_long = bufs
+            .iter()
+            .zip(def.bindings)
+            .enumerate()
+            .any(|(i, (buf, b))| b.split && !arrays.iter().any(|a| a.0 == i) && self.buf(*buf).len() > 256);
+        if whole_too_long {
+            return Err(self.too_wide(v, self.storage_buffers(v, bufs)));
+        }
         // the parts [first, last] of each windowed array that units [u0, u1) touch
         let span = |&(_, per_part, per_unit): &(usize, u64, u64), u: &Range<usize>| {
             let first = per_unit * u.start as u64 / per_part;
