@@ -28,14 +28,14 @@ fn main(
     for (var k = 3u * i; k < 3u * i + 3u; k++) {
         var xk = real(0.0);
         if aliased {
-            xk = y[k];
+            xk = y_get(k);
         } else {
-            xk = x[k];
+            xk = x_get(k);
         }
         if b == real(0.0) {
-            y[k] = a * xk;
+            y_set(k, a * xk);
         } else {
-            y[k] = a * xk + b * y[k];
+            y_set(k, a * xk + b * y_get(k));
         }
     }
 }

@@ -101,7 +101,7 @@ fn main(
     }
     let v = colors[op.offset + t];
     for (var i = 0u; i < 3u; i++) {
-        moves[3u * v + i] = real(0.0);
+        moves_set(3u * v + i, real(0.0));
     }
     let xv = corner_point(v);
 
@@ -149,11 +149,11 @@ fn main(
         }
         let f = patch_value(v, trial);
         if f.ok && f.eta <= f0 + sigma * alpha * slope {
-            x[3u * v] = trial[0];
-            x[3u * v + 1u] = trial[1];
-            x[3u * v + 2u] = trial[2];
+            x_set(3u * v, trial[0]);
+            x_set(3u * v + 1u, trial[1]);
+            x_set(3u * v + 2u, trial[2]);
             for (var i = 0u; i < 3u; i++) {
-                moves[3u * v + i] = trial[i] - xv[i];
+                moves_set(3u * v + i, trial[i] - xv[i]);
             }
             return;
         }

@@ -12,21 +12,21 @@
 
 fn apply(i: u32) {
     let f = 6u * i;
-    let l10 = factors[f];
-    let l20 = factors[f + 1u];
-    let l21 = factors[f + 2u];
-    let z0 = x[3u * i];
-    let z1 = x[3u * i + 1u] - l10 * z0;
-    let z2 = x[3u * i + 2u] - l20 * z0 - l21 * z1;
-    let w0 = z0 * factors[f + 3u];
-    let w1 = z1 * factors[f + 4u];
-    let w2 = z2 * factors[f + 5u];
+    let l10 = factors_get(f);
+    let l20 = factors_get(f + 1u);
+    let l21 = factors_get(f + 2u);
+    let z0 = x_get(3u * i);
+    let z1 = x_get(3u * i + 1u) - l10 * z0;
+    let z2 = x_get(3u * i + 2u) - l20 * z0 - l21 * z1;
+    let w0 = z0 * factors_get(f + 3u);
+    let w1 = z1 * factors_get(f + 4u);
+    let w2 = z2 * factors_get(f + 5u);
     let y2 = w2;
     let y1 = w1 - l21 * y2;
     let y0 = w0 - l10 * y1 - l20 * y2;
-    y[3u * i] = y0;
-    y[3u * i + 1u] = y1;
-    y[3u * i + 2u] = y2;
+    y_set(3u * i, y0);
+    y_set(3u * i + 1u, y1);
+    y_set(3u * i + 2u, y2);
 }
 
 @compute @workgroup_size(64)

@@ -21,24 +21,24 @@ fn factor(i: u32) {
     let d2 = blocks_get(h + 8u) - l20 * l20 * d0 - l21 * l21 * d1;
     let f = 6u * i;
     if d0 > real(0.0) && d1 > real(0.0) && d2 > real(0.0) && abs(l21) <= REAL_MAX {
-        factors[f] = l10;
-        factors[f + 1u] = l20;
-        factors[f + 2u] = l21;
-        factors[f + 3u] = real(1.0) / d0;
-        factors[f + 4u] = real(1.0) / d1;
-        factors[f + 5u] = real(1.0) / d2;
+        factors_set(f, l10);
+        factors_set(f + 1u, l20);
+        factors_set(f + 2u, l21);
+        factors_set(f + 3u, real(1.0) / d0);
+        factors_set(f + 4u, real(1.0) / d1);
+        factors_set(f + 5u, real(1.0) / d2);
     } else {
         let s = (abs(blocks_get(h)) + abs(blocks_get(h + 4u)) + abs(blocks_get(h + 8u))) / real(3.0);
         var inv = real(1.0);
         if s > real(0.0) {
             inv = real(1.0) / s;
         }
-        factors[f] = real(0.0);
-        factors[f + 1u] = real(0.0);
-        factors[f + 2u] = real(0.0);
-        factors[f + 3u] = inv;
-        factors[f + 4u] = inv;
-        factors[f + 5u] = inv;
+        factors_set(f, real(0.0));
+        factors_set(f + 1u, real(0.0));
+        factors_set(f + 2u, real(0.0));
+        factors_set(f + 3u, inv);
+        factors_set(f + 4u, inv);
+        factors_set(f + 5u, inv);
     }
 }
 

@@ -25,13 +25,13 @@ fn main(
     var acc = vec3<real>(real(0.0));
     for (var s = row_offsets[i]; s < row_offsets[i + 1u]; s++) {
         let j = cols_get(s);
-        let xj = vec3<real>(x[3u * j], x[3u * j + 1u], x[3u * j + 2u]);
+        let xj = vec3<real>(x_get(3u * j), x_get(3u * j + 1u), x_get(3u * j + 2u));
         for (var r = 0u; r < 3u; r++) {
             let b = 9u * s + 3u * r;
             acc[r] += blocks_get(b) * xj[0] + blocks_get(b + 1u) * xj[1] + blocks_get(b + 2u) * xj[2];
         }
     }
-    y[3u * i] = acc[0];
-    y[3u * i + 1u] = acc[1];
-    y[3u * i + 2u] = acc[2];
+    y_set(3u * i, acc[0]);
+    y_set(3u * i + 1u, acc[1]);
+    y_set(3u * i + 2u, acc[2]);
 }

@@ -24,8 +24,8 @@ fn main(
         return;
     }
     let v = free_vertices[i];
-    let r = mul_vec(projector(v), vec3<real>(y[3u * i], y[3u * i + 1u], y[3u * i + 2u]));
+    let r = mul_vec(projector(v), vec3<real>(y_get(3u * i), y_get(3u * i + 1u), y_get(3u * i + 2u)));
     for (var c = 0u; c < 3u; c++) {
-        y[3u * i + c] = r[c];
+        y_set(3u * i + c, r[c]);
     }
 }

@@ -23,8 +23,8 @@ fn main(
     var v = tree_zero();
     if i < op.n {
         let k = 3u * i;
-        v.x = a[k] * b[k] + a[k + 1u] * b[k + 1u] + a[k + 2u] * b[k + 2u];
-        v.z = b[k] * b[k] + b[k + 1u] * b[k + 1u] + b[k + 2u] * b[k + 2u];
+        v.x = a_get(k) * b_get(k) + a_get(k + 1u) * b_get(k + 1u) + a_get(k + 2u) * b_get(k + 2u);
+        v.z = b_get(k) * b_get(k) + b_get(k + 1u) * b_get(k + 1u) + b_get(k + 2u) * b_get(k + 2u);
     }
     let total = tree_reduce(lid, v);
     if lid == 0u && group < (op.n + 63u) / 64u {

@@ -11,7 +11,8 @@
 #import corner_model
 
 @group(0) @binding(0) var<uniform> model: Model;
-// n = number of corners
+// the corners [offset, n): all of them, or one window of the split arrays
+// (`GpuBackend::record_windowed`)
 @group(0) @binding(1) var<uniform> op: Op;
 @group(0) @binding(2) var<storage, read> x: array<real>;
 @group(0) @binding(3) var<storage, read> corners: array<u32>;
@@ -94,7 +95,7 @@ fn main(
     // the closed-form variant never reads the model; binding it in both keeps
     // one bind-group layout for the two
     _ = model;
-    let e = linear_group(wid, nwg) * 64u + lid;
+    let e = op.offset + linear_group(wid, nwg) * 64u + lid;
     if e >= op.n {
         return;
     }

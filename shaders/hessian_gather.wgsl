@@ -1,11 +1,16 @@
 // One thread per block of the BSR Hessian: the sum of its element
-// contributions, each `element * 16 + 4 a + b` (local pair (a, b)), listed in
-// ascending element order so that the sum order is the CPU's.
+// contributions, each `corner * 16 + 4 a + b` (device corner, local pair
+// (a, b)), listed in ascending device corner order. A pass adds those of the
+// corners [aux2, aux3) to what the passes before it stored: one pass over all
+// corners, or one per window of the split corner blocks where binding them
+// all would pass the device's storage-binding count
+// (`GpuBackend::record_windowed`); the windows ascend, so every split adds in
+// the one-pass order and gives the same bits.
 // CPU twin: backend/cpu/hessian_gather.rs.
 
 #import layout
 
-// n = number of blocks
+// n = number of blocks, [aux2, aux3) = the corners of this pass
 @group(0) @binding(0) var<uniform> op: Op;
 @group(0) @binding(1) var<storage, read> contrib_offsets: array<u32>;
 @group(0) @binding(2) var<storage, read> contrib_items: array<u32>;
@@ -25,11 +30,21 @@ fn main(
     }
     var acc: array<real, 9>;
     for (var i = 0u; i < 9u; i++) {
-        acc[i] = real(0.0);
+        if op.aux2 == 0u {
+            acc[i] = real(0.0);
+        } else {
+            acc[i] = blocks_get(9u * s + i);
+        }
     }
     for (var it = contrib_offsets_get(s); it < contrib_offsets_get(s + 1u); it++) {
         let item = contrib_items_get(it);
         let e = item >> 4u;
+        if e < op.aux2 {
+            continue;
+        }
+        if e >= op.aux3 {
+            break;
+        }
         let a = (item >> 2u) & 3u;
         let b = item & 3u;
         let base = ELEM_STRIDE * e + 12u;

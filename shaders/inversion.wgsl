@@ -19,7 +19,7 @@
 @group(0) @binding(6) var<storage, read_write> partials: array<vec4<real>>;
 
 fn trial_point(v: u32) -> vec3<real> {
-    return vec3<real>(trial[3u * v], trial[3u * v + 1u], trial[3u * v + 2u]);
+    return vec3<real>(trial_get(3u * v), trial_get(3u * v + 1u), trial_get(3u * v + 2u));
 }
 
 @compute @workgroup_size(64)

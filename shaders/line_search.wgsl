@@ -28,6 +28,6 @@ fn main(
     let v = free_vertices[i];
     let alpha = coef(op.coef.x, op.a_num, op.a_den);
     for (var c = 0u; c < 3u; c++) {
-        trial[3u * v + c] = x[3u * v + c] + alpha * d[3u * i + c];
+        trial_set(3u * v + c, x_get(3u * v + c) + alpha * d_get(3u * i + c));
     }
 }

@@ -8,7 +8,9 @@
 #import tree
 
 @group(0) @binding(0) var<uniform> model: Model;
-// n = number of corners
+// the corners [offset, n): all of them, or one window of the split arrays
+// (offset a multiple of 64, so that each workgroup and its partial are the
+// one-pass ones: `GpuBackend::record_windowed`)
 @group(0) @binding(1) var<uniform> op: Op;
 @group(0) @binding(2) var<storage, read> x: array<real>;
 @group(0) @binding(3) var<storage, read> corners: array<u32>;
@@ -22,7 +24,7 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let group = linear_group(wid, nwg);
+    let group = op.offset / 64u + linear_group(wid, nwg);
     let c = group * 64u + lid;
     var term = real(0.0);
     var dmin = REAL_MAX;

@@ -27,8 +27,8 @@ fn main(
     if !slides(v) {
         return;
     }
-    let q = project_vertex(v, vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]));
+    let q = project_vertex(v, vec3<real>(x_get(3u * v), x_get(3u * v + 1u), x_get(3u * v + 2u)));
     for (var c = 0u; c < 3u; c++) {
-        x[3u * v + c] = q[c];
+        x_set(3u * v + c, q[c]);
     }
 }

@@ -119,7 +119,7 @@ fn main(
         }
         y = step.y;
     }
-    xr[3u * v] = y[0];
-    xr[3u * v + 1u] = y[1];
-    xr[3u * v + 2u] = y[2];
+    xr_set(3u * v, y[0]);
+    xr_set(3u * v + 1u, y[1]);
+    xr_set(3u * v + 2u, y[2]);
 }

@@ -1,8 +1,9 @@
 //! The device numbering (`DeviceLayout`) changes where data sits, not what
 //! is computed: BCD sweeps give the same positions bit for bit in every
 //! layout (each vertex sums its corners in the problem's order), Newton the
-//! same iterates to rounding (the objective's reduction tree follows the
-//! device's corner order), all handed back in the problem's numbering.
+//! same iterates to rounding (the objective's reduction tree and the Hessian
+//! and gradient gathers follow the device's corner order), all handed back in
+//! the problem's numbering.
 
 mod common;
 use common::{context, context_with, max_abs_diff, perturbed_box, solve_on};
@@ -66,7 +67,10 @@ fn bcd_sweeps_are_the_same_in_every_layout_f32() {
 
 #[test]
 fn newton_iterates_agree_in_every_layout_f64() {
-    layouts_agree(Method::Newton, Precision::F64, 1e-12);
+    // the Hessian and gradient gathers add in device corner order (so that
+    // windows of parts give the one-pass bits, `gpu_split.rs`): rounding
+    // that differs between layouts, carried by three CG solves
+    layouts_agree(Method::Newton, Precision::F64, 1e-8);
 }
 
 #[test]

@@ -17,7 +17,7 @@ fn corner_ref(c: u32) -> CornerRef {
 }
 
 fn corner_point(v: u32) -> vec3<real> {
-    return vec3<real>(x[3u * v], x[3u * v + 1u], x[3u * v + 2u]);
+    return vec3<real>(x_get(3u * v), x_get(3u * v + 1u), x_get(3u * v + 2u));
 }
 
 fn corner_points(c: u32) -> array<vec3<real>, 4> {

@@ -44,7 +44,9 @@ struct Op {
     a_den: u32,
     b_num: u32,
     b_den: u32,
-    pad: vec4<u32>,
+    // the first part bound of each split binding (in table order) when the
+    // kernel runs in windows (`GpuBackend::record_windowed`); 0 otherwise
+    base: vec4<u32>,
     // x = scale of coefficient a, y = scale of coefficient b
     coef: vec4<real>,
 }

@@ -1,6 +1,7 @@
 //! CPU twin of `shaders/gradient_gather.wgsl`: each vertex's gradient of F
 //! gathered over its incident corners in ascending corner order (a gather,
-//! not a scatter, so the sum order is fixed and the result repeats bit for bit).
+//! not a scatter, so the sum order is fixed and the result repeats bit for
+//! bit). The kernel's order is the device's corners' (`hessian_gather.rs`).
 
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;

@@ -1,7 +1,10 @@
 //! CPU twin of `shaders/hessian_gather.wgsl`: the Hessian blocks as sums of
-//! their corners' weighted contributions, in ascending corner order. The
-//! CPU fuses this with `hessian_assemble` (each row range adds a corner's
-//! blocks as soon as they are evaluated, in the same order the kernel sums them).
+//! their corners' weighted contributions, in ascending (problem) corner
+//! order. The CPU fuses this with `hessian_assemble` (each row range adds a
+//! corner's blocks as soon as they are evaluated). The kernel adds in
+//! ascending device corner order (so that it can run in windows of corners),
+//! which is this order under `DeviceLayout::Problem` and a reordering of it
+//! otherwise.
 
 use crate::metric::mat3::Mat3;
 

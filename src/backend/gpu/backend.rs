@@ -8,7 +8,7 @@
 use super::buffers::{BindingLimits, check_bindings};
 use super::context::{DeviceLayout, GpuContext};
 use super::layout::{CORNER_STRIDE, ELEM_STRIDE, ModelUniform, Op, corner_tables};
-use super::shader::{Access, Form, Kernel, Variant};
+use super::shader::{Access, Elem, Form, Kernel, MAX_SPLIT, Variant};
 use super::sweep_layout::SweepLayout;
 use crate::backend::cpu::hessian_assemble::HessianPattern;
 use crate::backend::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
@@ -17,6 +17,7 @@ use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
 use crate::solve::line_search::LineSearch;
 use std::collections::HashMap;
+use std::ops::Range;
 
 /// Device buffers by role: the keys of the bind-group cache.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -29,7 +30,10 @@ enum Buf {
     Corners,
     Shapes,
     IncOffsets,
+    /// Incidence lists in the problem's corner order (the sweeps').
     Inc,
+    /// The same lists in ascending device corner order (the gradient gathers').
+    GatherInc,
     Free,
     Colors,
     Moves,
@@ -72,9 +76,12 @@ pub struct GpuBackend<'c> {
     /// Each array as its buffers: one, or the parts of an array split
     /// across bindings (`Binding::split`).
     bufs: HashMap<Buf, Vec<wgpu::Buffer>>,
-    vectors: Vec<wgpu::Buffer>,
+    /// Each vector as its parts (`Binding::split`).
+    vectors: Vec<Vec<wgpu::Buffer>>,
     staging: wgpu::Buffer,
-    groups: HashMap<(Variant, Vec<Buf>), wgpu::BindGroup>,
+    /// Bind groups by kernel instance, arrays and first part of each split
+    /// binding (`Op::base`).
+    groups: HashMap<(Variant, Vec<Buf>, [u32; MAX_SPLIT]), wgpu::BindGroup>,
     encoder: Option<wgpu::CommandEncoder>,
     /// Pending `Op` records, `ctx.op_stride()` apart.
     ops: Vec<u8>,
@@ -84,6 +91,8 @@ pub struct GpuBackend<'c> {
     layout: SweepLayout,
     /// Command buffers submitted so far.
     submissions: usize,
+    /// Dispatches recorded one window of parts at a time.
+    window_dispatches: usize,
 }
 
 fn groups_of(n: usize) -> usize {
@@ -116,7 +125,6 @@ impl<'c> GpuBackend<'c> {
                     slide_real.len() as u64 * r,
                 ),
                 ("sliding-boundary candidates", 4 * slide_idx.len() as u64),
-                ("positions", 3 * nv as u64 * r),
                 ("incidence offsets", 4 * (nv as u64 + 1)),
             ],
         )?;
@@ -134,6 +142,7 @@ impl<'c> GpuBackend<'c> {
             .collect();
         drop(problem_corners);
         let incidence = layout.incidence(&p.incidence);
+        let gather_incidence = layout.gather_incidence(&p.incidence);
         let flat: Vec<f64> = layout.to_device(x.as_flattened(), 3);
         let partials = groups_of(nc.max(nv).max(nf));
         let mut single = HashMap::new();
@@ -151,8 +160,6 @@ impl<'c> GpuBackend<'c> {
                 mapped_at_creation: false,
             }),
         );
-        single.insert(Buf::X, ctx.storage_real("positions", &flat));
-        single.insert(Buf::Trial, ctx.storage_real("trial positions", &flat));
         single.insert(Buf::Shapes, ctx.storage_real("corner shapes", &table));
         single.insert(
             Buf::IncOffsets,
@@ -163,7 +170,6 @@ impl<'c> GpuBackend<'c> {
             ctx.storage_u32("free vertices", &layout.vertex_ids(&p.free_vertices)),
         );
         single.insert(Buf::Colors, ctx.storage_u32("colours", &layout.colours));
-        single.insert(Buf::Moves, ctx.zeros_real("moves", 3 * nv));
         single.insert(Buf::Partials, ctx.zeros_real("partials", 4 * partials));
         single.insert(Buf::Scalars, ctx.zeros_real("scalar slots", N_SLOTS));
         single.insert(Buf::Dummy, ctx.zeros_real("unused", 4));
@@ -175,7 +181,14 @@ impl<'c> GpuBackend<'c> {
         let mut bufs: HashMap<Buf, Vec<wgpu::Buffer>> = single.into_iter().map(|(k, b)| (k, vec![b])).collect();
         bufs.insert(Buf::Corners, ctx.split_u32("corners", &corner_items));
         bufs.insert(Buf::Inc, ctx.split_u32("incidence", &incidence.items));
+        bufs.insert(
+            Buf::GatherInc,
+            ctx.split_u32("incidence by device corner", &gather_incidence.items),
+        );
         bufs.insert(Buf::CornerGrad, ctx.split_zeros_real("corner gradients", 12 * nc));
+        bufs.insert(Buf::X, ctx.split_real("positions", &flat));
+        bufs.insert(Buf::Trial, ctx.split_real("trial positions", &flat));
+        bufs.insert(Buf::Moves, ctx.split_zeros_real("moves", 3 * nv));
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scalar slots read back"),
             size: N_SLOTS as u64 * r,
@@ -208,15 +221,37 @@ impl<'c> GpuBackend<'c> {
             problem: p,
             layout,
             submissions: 0,
+            window_dispatches: 0,
         })
     }
 
     /// The buffers of array `b` (one unless it is split).
     fn buf(&self, b: Buf) -> &[wgpu::Buffer] {
         match b {
-            Buf::Vector(i) => std::slice::from_ref(&self.vectors[i as usize]),
+            Buf::Vector(i) => &self.vectors[i as usize],
             other => &self.bufs[&other],
         }
+    }
+
+    /// The storage buffers `v` binds with `bufs` in table order, every part
+    /// of each split array.
+    fn storage_buffers(&self, v: Variant, bufs: &[Buf]) -> usize {
+        bufs.iter()
+            .zip(v.kernel.def().bindings)
+            .filter(|(_, b)| matches!(b.access, Access::Read | Access::ReadWrite))
+            .map(|(buf, _)| self.buf(*buf).len())
+            .sum()
+    }
+
+    fn too_wide(&self, v: Variant, storage: usize) -> Error {
+        Error::Gpu(format!(
+            "mesh too large for this device: the kernel '{}' would bind {storage} storage \
+             buffers (its large arrays split into parts of {:.1} MiB, the largest one \
+             binding holds) but the device allows {} per shader stage",
+            v.kernel.name(),
+            self.ctx.part_bytes() as f64 / 1048576.0,
+            self.ctx.limits.max_storage_buffers_per_shader_stage
+        ))
     }
 
     /// `v` with its split bindings spanning the parts of the arrays in
@@ -224,7 +259,7 @@ impl<'c> GpuBackend<'c> {
     /// storage bindings than the device has.
     fn split_variant(&self, mut v: Variant, bufs: &[Buf]) -> Result<Variant> {
         let def = v.kernel.def();
-        let (mut j, mut storage) = (0, 0);
+        let mut j = 0;
         for (b, binding) in bufs.iter().zip(def.bindings) {
             let n = self.buf(*b).len();
             if binding.split {
@@ -233,19 +268,11 @@ impl<'c> GpuBackend<'c> {
             } else {
                 debug_assert_eq!(n, 1, "{}: '{}' is not split", def.stem, binding.name);
             }
-            if matches!(binding.access, Access::Read | Access::ReadWrite) {
-                storage += n;
-            }
         }
+        let storage = self.storage_buffers(v, bufs);
         let max = self.ctx.limits.max_storage_buffers_per_shader_stage as usize;
         if storage > max || v.extra.contains(&u8::MAX) {
-            return Err(Error::Gpu(format!(
-                "mesh too large for this device: the kernel '{}' would bind {storage} storage \
-                 buffers (its large arrays split into parts of {:.1} MiB, the largest one \
-                 binding holds) but the device allows {max} per shader stage",
-                def.stem,
-                self.ctx.part_bytes() as f64 / 1048576.0
-            )));
+            return Err(self.too_wide(v, storage));
         }
         Ok(v)
     }
@@ -254,16 +281,151 @@ impl<'c> GpuBackend<'c> {
     /// order and `op` as its `Op` record.
     fn record(&mut self, v: Variant, bufs: &[Buf], op: Op, threads: usize) -> Result<()> {
         let v = self.split_variant(v, bufs)?;
+        self.record_parts(v, bufs, [0; MAX_SPLIT], op, threads)
+    }
+
+    /// Records `v` over `units` (corners), whose data sit in `windowed`
+    /// (array, elements per unit, in ascending unit order): one dispatch
+    /// binding every part of every array where the device has the storage
+    /// bindings for it, else one dispatch per window of units, each binding
+    /// only the parts of `windowed` that its units touch (and all parts of
+    /// the other arrays). `place` gives a window's `Op` and thread count: the
+    /// thread-indexed kernels run the window's units, the gathers run all
+    /// their threads and add the window's units to what the windows before
+    /// stored (the windows ascend, so the sums keep their order and a split
+    /// device gives the bits of an unsplit one). Windows start at multiples
+    /// of `align` units (a workgroup's, where the kernel reduces per workgroup).
+    #[allow(clippy::too_many_arguments)]
+    fn record_windowed(
+        &mut self,
+        v: Variant,
+        bufs: &[Buf],
+        op: Op,
+        units: usize,
+        windowed: &[(Buf, usize)],
+        align: usize,
+        place: impl Fn(Op, Range<usize>) -> (Op, usize),
+    ) -> Result<()> {
+        if let Ok(full) = self.split_variant(v, bufs) {
+            let (op, threads) = place(op, 0..units);
+            return self.record_parts(full, bufs, [0; MAX_SPLIT], op, threads);
+        }
+        let def = v.kernel.def();
+        // (binding index, elements per part, elements per unit) of each windowed array
+        let arrays: Vec<(usize, u64, u64)> = windowed
+            .iter()
+            .map(|&(buf, per_unit)| {
+                let i = bufs.iter().position(|b| *b == buf).expect("a windowed array is bound");
+                let size = match def.bindings[i].elem {
+                    Elem::Real => self.ctx.real_size(),
+                    _ => 4,
+                };
+                debug_assert!(def.bindings[i].split, "{}: a windowed array is split", def.stem);
+                (i, self.ctx.part_bytes() / size, per_unit as u64)
+            })
+            .collect();
+        let fixed: usize = bufs
+            .iter()
+            .zip(def.bindings)
+            .enumerate()
+            .filter(|(i, (_, b))| {
+                matches!(b.access, Access::Read | Access::ReadWrite) && !arrays.iter().any(|a| a.0 == *i)
+            })
+            .map(|(_, (buf, _))| self.buf(*buf).len())
+            .sum();
+        let max = self.ctx.limits.max_storage_buffers_per_shader_stage as usize;
+        // a binding spans at most 256 parts (`Variant::extra`), windowed or not
+        let whole_too_long = bufs
+            .iter()
+            .zip(def.bindings)
+            .enumerate()
+            .any(|(i, (buf, b))| b.split && !arrays.iter().any(|a| a.0 == i) && self.buf(*buf).len() > 256);
+        if whole_too_long {
+            return Err(self.too_wide(v, self.storage_buffers(v, bufs)));
+        }
+        // the parts [first, last] of each windowed array that units [u0, u1) touch
+        let span = |&(_, per_part, per_unit): &(usize, u64, u64), u: &Range<usize>| {
+            let first = per_unit * u.start as u64 / per_part;
+            let last = (per_unit * u.end as u64 - 1) / per_part;
+            (first as usize, (last - first + 1) as usize)
+        };
+        let fits = |u: &Range<usize>| {
+            let spans = arrays.iter().map(|a| span(a, u));
+            fixed + spans.clone().map(|s| s.1).sum::<usize>() <= max && spans.clone().all(|s| s.1 <= 256)
+        };
+        let mut start = 0;
+        while start < units {
+            let end = |k: usize| (start + k * align).min(units);
+            if !fits(&(start..end(1))) {
+                return Err(self.too_wide(v, self.storage_buffers(v, bufs)));
+            }
+            // the longest window that fits, in steps of `align` (fitting
+            // shrinks as a window grows)
+            let (mut lo, mut hi) = (1, (units - start).div_ceil(align));
+            while lo < hi {
+                let mid = lo + (hi - lo).div_ceil(2);
+                if fits(&(start..end(mid))) {
+                    lo = mid
+                } else {
+                    hi = mid - 1
+                }
+            }
+            let window = start..end(lo);
+            let mut w = v;
+            w.window = true;
+            let mut first = [0u32; MAX_SPLIT];
+            for (j, (i, _)) in def.bindings.iter().enumerate().filter(|(_, b)| b.split).enumerate() {
+                let (f, count) = match arrays.iter().find(|a| a.0 == i) {
+                    Some(a) => span(a, &window),
+                    None => (0, self.buf(bufs[i]).len()),
+                };
+                first[j] = f as u32;
+                w.extra[j] = (count - 1) as u8;
+            }
+            let (op, threads) = place(op, window.clone());
+            self.record_parts(w, bufs, first, op, threads)?;
+            self.window_dispatches += 1;
+            start = window.end;
+        }
+        Ok(())
+    }
+
+    /// Records one dispatch of `v` (its part counts set) with each split
+    /// array bound from part `first[j]` on.
+    fn record_parts(
+        &mut self,
+        v: Variant,
+        bufs: &[Buf],
+        first: [u32; MAX_SPLIT],
+        op: Op,
+        threads: usize,
+    ) -> Result<()> {
         let stride = self.ctx.op_stride() as usize;
         if self.ops.len() / stride >= OPS_PER_BATCH {
             self.submit()?;
         }
         let offset = self.ops.len();
+        let op = Op { base: first, ..op };
         self.ops.extend_from_slice(&op.bytes(self.ctx.real));
         self.ops.resize(offset + stride, 0);
-        let key = (v, bufs.to_vec());
+        let key = (v, bufs.to_vec(), first);
         if !self.groups.contains_key(&key) {
-            let buffers: Vec<&[wgpu::Buffer]> = bufs.iter().map(|b| self.buf(*b)).collect();
+            let mut j = 0;
+            let buffers: Vec<&[wgpu::Buffer]> = bufs
+                .iter()
+                .zip(v.kernel.def().bindings)
+                .map(|(b, binding)| {
+                    let all = self.buf(*b);
+                    if binding.split {
+                        let from = first[j] as usize;
+                        let to = from + 1 + v.extra[j] as usize;
+                        j += 1;
+                        &all[from..to]
+                    } else {
+                        all
+                    }
+                })
+                .collect();
             let group = self.ctx.bind(v, &buffers);
             self.groups.insert(key.clone(), group);
         }
@@ -280,11 +442,17 @@ impl<'c> GpuBackend<'c> {
             .get_or_insert_with(|| ctx.device.create_command_encoder(&Default::default()))
     }
 
-    /// Copies between arrays of one buffer each (positions).
+    /// Copies between arrays of the same length (positions), part by part.
     fn copy(&mut self, src: Buf, dst: Buf) {
-        let size = self.buf(src)[0].size().min(self.buf(dst)[0].size());
-        let (src, dst) = (self.bufs[&src][0].clone(), self.bufs[&dst][0].clone());
-        self.encoder().copy_buffer_to_buffer(&src, 0, &dst, 0, size);
+        let pairs: Vec<(wgpu::Buffer, wgpu::Buffer)> = self.bufs[&src]
+            .iter()
+            .cloned()
+            .zip(self.bufs[&dst].iter().cloned())
+            .collect();
+        for (src, dst) in pairs {
+            let size = src.size().min(dst.size());
+            self.encoder().copy_buffer_to_buffer(&src, 0, &dst, 0, size);
+        }
     }
 
     /// Submits what was recorded (the `Op` records go first).
@@ -321,7 +489,7 @@ impl<'c> GpuBackend<'c> {
 
     fn read_vec3(&mut self, b: Buf, n: usize) -> Result<Vec<Vec3>> {
         self.submit()?;
-        let flat = self.ctx.read_real(&self.buf(b)[0], 3 * n)?;
+        let flat = self.ctx.read_split_real(self.buf(b), 3 * n)?;
         Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
@@ -350,15 +518,59 @@ impl<'c> GpuBackend<'c> {
         self.form
     }
 
+    /// Dispatches recorded one window of parts at a time so far
+    /// (`record_windowed`; 0 where every kernel binds all its parts).
+    pub fn window_dispatches(&self) -> usize {
+        self.window_dispatches
+    }
+
+    /// The buffers the positions are split across.
+    pub fn position_parts(&self) -> usize {
+        self.bufs[&Buf::X].len()
+    }
+
+    /// The buffers a free-vertex vector is split across.
+    pub fn vector_parts(&self) -> usize {
+        (3 * self.n_free as u64 * self.ctx.real_size())
+            .div_ceil(self.ctx.part_bytes())
+            .max(1) as usize
+    }
+
     /// The most buffers any one array is split across (1: none is split).
     pub fn max_parts(&self) -> usize {
         self.bufs.values().map(Vec::len).max().unwrap_or(1)
     }
 
+    /// g <- the gradient at each free vertex, gathered from the per-corner
+    /// data in `corner_data` (`stride` reals per corner, gradient first).
+    fn gradient_gather(&mut self, corner_data: Buf, stride: u32, g: Vector) -> Result<()> {
+        let (nc, nf) = (self.n_corners, self.n_free);
+        let op = Op {
+            aux: stride,
+            ..Op::n(nf)
+        };
+        self.record_windowed(
+            Kernel::GradientGather.plain(),
+            &[
+                Buf::Ops,
+                Buf::Free,
+                Buf::IncOffsets,
+                Buf::GatherInc,
+                corner_data,
+                Buf::Vector(g.0),
+            ],
+            op,
+            nc,
+            &[(corner_data, stride as usize)],
+            1,
+            |op, corners| (passes(op, corners), nf),
+        )
+    }
+
     /// The block-Jacobi factors (after `factor_precond`), as `BlockJacobi::factors`.
     pub fn block_jacobi_factors(&mut self) -> Result<Vec<[f64; 6]>> {
         self.submit()?;
-        let flat = self.ctx.read_real(&self.buf(Buf::Factors)[0], 6 * self.n_free)?;
+        let flat = self.ctx.read_split_real(self.buf(Buf::Factors), 6 * self.n_free)?;
         Ok(flat
             .chunks_exact(6)
             .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
@@ -373,6 +585,26 @@ impl<'c> GpuBackend<'c> {
             .chunks_exact(9)
             .map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]])
             .collect())
+    }
+}
+
+/// A thread-per-corner kernel over the corners `corners` (`Op::offset`, `Op::n`).
+fn corner_window(op: Op, corners: Range<usize>) -> (Op, usize) {
+    let threads = corners.len();
+    let op = Op {
+        offset: corners.start as u32,
+        n: corners.end as u32,
+        ..op
+    };
+    (op, threads)
+}
+
+/// A gather's pass over the corners `corners` (`Op::aux2`, `Op::aux3`).
+fn passes(op: Op, corners: Range<usize>) -> Op {
+    Op {
+        aux2: corners.start as u32,
+        aux3: corners.end as u32,
+        ..op
     }
 }
 
@@ -405,7 +637,9 @@ fn slide_tables(p: &Problem, layout: &SweepLayout) -> (Vec<f64>, Vec<u32>) {
 }
 
 /// Per block slot, its element contributions `corner * 16 + 4 a + b` (the
-/// device corner) in ascending problem corner order (the CPU assembly's sum order).
+/// device corner) in ascending device corner order: the order in which
+/// `hessian_gather` adds them, in one pass or in windows of corners. (The
+/// CPU adds in problem corner order, the same under `DeviceLayout::Problem`.)
 fn contributions(pattern: &HessianPattern, layout: &SweepLayout) -> (Vec<u32>, Vec<u32>) {
     let nb = pattern.matrix.blocks.len();
     let mut offsets = vec![0u32; nb + 1];
@@ -426,6 +660,9 @@ fn contributions(pattern: &HessianPattern, layout: &SweepLayout) -> (Vec<u32>, V
                 fill[s as usize] += 1;
             }
         }
+    }
+    for s in 0..nb {
+        items[offsets[s] as usize..offsets[s + 1] as usize].sort_unstable();
     }
     (offsets, items)
 }
@@ -448,11 +685,7 @@ impl Backend for GpuBackend<'_> {
     }
 
     fn vector(&mut self) -> Result<Vector> {
-        check_bindings(
-            &BindingLimits::of(&self.ctx.limits),
-            &[("free-vertex vector", 3 * self.n_free as u64 * self.ctx.real_size())],
-        )?;
-        self.vectors.push(self.ctx.zeros_real("vector", 3 * self.n_free));
+        self.vectors.push(self.ctx.split_zeros_real("vector", 3 * self.n_free));
         Ok(Vector(self.vectors.len() as u32 - 1))
     }
 
@@ -471,7 +704,7 @@ impl Backend for GpuBackend<'_> {
         // after what is recorded, before what comes next
         self.submit()?;
         let flat: Vec<f64> = data.iter().flatten().copied().collect();
-        self.ctx.write_real(&self.vectors[v.0 as usize], &flat);
+        self.ctx.write_split_real(&self.vectors[v.0 as usize], &flat);
         Ok(())
     }
 
@@ -486,7 +719,7 @@ impl Backend for GpuBackend<'_> {
             Points::Trial => Buf::Trial,
         };
         let nc = self.n_corners;
-        self.record(
+        self.record_windowed(
             Kernel::Objective.with(self.form),
             &[
                 Buf::Model,
@@ -499,26 +732,13 @@ impl Backend for GpuBackend<'_> {
             ],
             Op::n(nc),
             nc,
+            &[(Buf::Corners, CORNER_STRIDE as usize), (Buf::CornerGrad, 12)],
+            64,
+            corner_window,
         )?;
         self.reduce(Some(out.value), out.min_det, None, Some(out.infeasible), groups_of(nc))?;
         if let Some(g) = gradient {
-            let op = Op {
-                aux: 12,
-                ..Op::n(self.n_free)
-            };
-            self.record(
-                Kernel::GradientGather.plain(),
-                &[
-                    Buf::Ops,
-                    Buf::Free,
-                    Buf::IncOffsets,
-                    Buf::Inc,
-                    Buf::CornerGrad,
-                    Buf::Vector(g.0),
-                ],
-                op,
-                self.n_free,
-            )?;
+            self.gradient_gather(Buf::CornerGrad, 12, g)?;
             self.constrain(g)?;
         }
         Ok(())
@@ -611,15 +831,16 @@ impl Backend for GpuBackend<'_> {
         )?;
         self.reduce(None, None, Some(out), None, groups_of(nv))?;
         // "since the last call": the next colours start from no move
-        let moves = self.bufs[&Buf::Moves][0].clone();
-        self.encoder().clear_buffer(&moves, 0, None);
+        for moves in self.bufs[&Buf::Moves].clone() {
+            self.encoder().clear_buffer(&moves, 0, None);
+        }
         Ok(())
     }
 
     fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
         if !self.bufs.contains_key(&Buf::Reference) {
-            let buf = self.ctx.zeros_real("reference positions", 3 * self.n_vertices);
-            self.bufs.insert(Buf::Reference, vec![buf]);
+            let parts = self.ctx.split_zeros_real("reference positions", 3 * self.n_vertices);
+            self.bufs.insert(Buf::Reference, parts);
         }
         // fixed vertices are their own reference
         self.copy(Buf::X, Buf::Reference);
@@ -658,13 +879,11 @@ impl Backend for GpuBackend<'_> {
         let pattern = HessianPattern::new(self.problem);
         let nb = pattern.matrix.blocks.len();
         let (c_off, c_items) = contributions(&pattern, &self.layout);
-        let r = ctx.real_size();
         check_bindings(
             &BindingLimits::of(&ctx.limits),
             &[
                 ("Hessian row offsets", 4 * (self.n_free as u64 + 1)),
                 ("diagonal blocks", 4 * self.n_free as u64),
-                ("block-Jacobi factors", 6 * self.n_free as u64 * r),
             ],
         )?;
         super::buffers::grid(nb)?;
@@ -682,7 +901,7 @@ impl Backend for GpuBackend<'_> {
             (Buf::Blocks, ctx.split_zeros_real("Hessian blocks", 9 * nb)),
             (
                 Buf::Factors,
-                vec![ctx.zeros_real("block-Jacobi factors", 6 * self.n_free)],
+                ctx.split_zeros_real("block-Jacobi factors", 6 * self.n_free),
             ),
         ];
         let bytes = new.iter().flat_map(|(_, b)| b).map(|b| b.size() as usize).sum();
@@ -694,35 +913,26 @@ impl Backend for GpuBackend<'_> {
 
     fn assemble(&mut self, g: Vector) -> Result<()> {
         let (nc, nb, nf) = (self.n_corners, self.n_blocks, self.n_free);
-        self.record(
+        let elem = ELEM_STRIDE as usize;
+        self.record_windowed(
             Kernel::HessianAssemble.with(self.form),
             &[Buf::Model, Buf::Ops, Buf::X, Buf::Corners, Buf::Shapes, Buf::Elem],
             Op::n(nc),
             nc,
+            &[(Buf::Corners, CORNER_STRIDE as usize), (Buf::Elem, elem)],
+            1,
+            corner_window,
         )?;
-        self.record(
+        self.record_windowed(
             Kernel::HessianGather.plain(),
             &[Buf::Ops, Buf::ContribOffsets, Buf::ContribItems, Buf::Elem, Buf::Blocks],
             Op::n(nb),
-            nb,
+            nc,
+            &[(Buf::Elem, elem)],
+            1,
+            |op, corners| (passes(op, corners), nb),
         )?;
-        let op = Op {
-            aux: ELEM_STRIDE,
-            ..Op::n(nf)
-        };
-        self.record(
-            Kernel::GradientGather.plain(),
-            &[
-                Buf::Ops,
-                Buf::Free,
-                Buf::IncOffsets,
-                Buf::Inc,
-                Buf::Elem,
-                Buf::Vector(g.0),
-            ],
-            op,
-            nf,
-        )?;
+        self.gradient_gather(Buf::Elem, ELEM_STRIDE, g)?;
         if self.problem.sliding.is_some() {
             self.constrain(g)?;
             self.record(
@@ -837,7 +1047,7 @@ impl Backend for GpuBackend<'_> {
                 .bufs
                 .values()
                 .flatten()
-                .chain(&self.vectors)
+                .chain(self.vectors.iter().flatten())
                 .chain([&self.staging])
                 .map(|b| b.size() as usize)
                 .sum::<usize>()

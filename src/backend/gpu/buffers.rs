@@ -27,16 +27,16 @@ impl BindingLimits {
 
 /// Refuses arrays (name, bytes) that one storage binding cannot hold, so a
 /// large mesh gets an error with the numbers instead of a wgpu panic. Only
-/// for arrays that scale with vertices; those that scale with corners and
-/// Hessian blocks are split across bindings (`GpuContext::split_real`).
+/// for the arrays that are not split across bindings (`Binding::split`):
+/// u32s per vertex and the sliding-boundary tables.
 pub fn check_bindings(limits: &BindingLimits, arrays: &[(&str, u64)]) -> Result<()> {
     let cap = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
     for &(name, bytes) in arrays {
         if bytes > cap {
             return Err(Error::Gpu(format!(
                 "mesh too large for this device: the array '{name}' needs {bytes} bytes \
-                 ({:.1} MiB) but one storage binding holds at most {cap} bytes ({:.1} MiB); \
-                 splitting across bindings is not implemented yet",
+                 ({:.1} MiB) but one storage binding holds at most {cap} bytes ({:.1} MiB), \
+                 and this array is not split across bindings",
                 bytes as f64 / 1048576.0,
                 cap as f64 / 1048576.0
             )));
@@ -114,6 +114,12 @@ impl GpuContext {
             .collect()
     }
 
+    /// A storage array of reals split across bindings.
+    pub(crate) fn split_real(&self, label: &str, v: &[f64]) -> Vec<wgpu::Buffer> {
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        self.init_split(label, &self.real_bytes(v), usage)
+    }
+
     /// A storage array of u32s split across bindings.
     pub(crate) fn split_u32(&self, label: &str, v: &[u32]) -> Vec<wgpu::Buffer> {
         self.init_split(label, bytemuck::cast_slice(v), wgpu::BufferUsages::STORAGE)
@@ -147,6 +153,15 @@ impl GpuContext {
             }
         }
         Ok(out)
+    }
+
+    /// Overwrites the start of an array split across bindings with `v`
+    /// (applied before the next submission).
+    pub(crate) fn write_split_real(&self, parts: &[wgpu::Buffer], v: &[f64]) {
+        let per = (self.part_bytes() / self.real_size()) as usize;
+        for (part, chunk) in parts.iter().zip(v.chunks(per)) {
+            self.write_real(part, chunk);
+        }
     }
 
     /// Overwrites the start of `dst` with `v` (applied before the next submission).

@@ -27,6 +27,10 @@ pub struct GpuOptions {
     /// offers, so that tests reach split arrays (`Binding::split`) with
     /// small meshes.
     pub max_binding_bytes: Option<u64>,
+    /// Caps the storage buffers one kernel may bind below what the adapter
+    /// offers, so that tests reach kernels run one window of parts at a time
+    /// (`GpuBackend::window_dispatches`) on any device.
+    pub max_storage_buffers: Option<u32>,
     /// How vertices and corners are numbered on the device.
     pub layout: DeviceLayout,
     /// Every model through the structured general kernels, the closed forms
@@ -228,6 +232,9 @@ impl GpuContext {
         if let Some(cap) = opts.max_binding_bytes {
             limits.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size.min(cap.max(256));
         }
+        if let Some(cap) = opts.max_storage_buffers {
+            limits.max_storage_buffers_per_shader_stage = limits.max_storage_buffers_per_shader_stage.min(cap);
+        }
         let ctx = GpuContext {
             device,
             queue,
@@ -254,6 +261,12 @@ impl GpuContext {
     /// Whether the adapter emulates a GPU on the CPU (Mesa lavapipe).
     pub fn is_software(&self) -> bool {
         self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// The storage buffers one kernel may bind (`GpuOptions::max_storage_buffers`
+    /// or the adapter's limit).
+    pub fn max_storage_buffers(&self) -> u32 {
+        self.limits.max_storage_buffers_per_shader_stage
     }
 
     /// Whether the device computes in f64.

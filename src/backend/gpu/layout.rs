@@ -33,9 +33,14 @@ pub(crate) struct Op {
     pub guard: u32,
     pub flags: u32,
     pub offset: u32,
+    /// `base`: the first part bound of each split binding, in table order.
+    pub base: [u32; 4],
     pub a: Coef,
     pub b: Coef,
 }
+
+// `Op::base` is the WGSL `vec4<u32>`: one entry per split binding.
+const _: () = assert!(super::shader::MAX_SPLIT == 4);
 
 /// "No slot" in `Op` fields.
 pub(crate) const NONE: u32 = u32::MAX;
@@ -58,6 +63,7 @@ impl Op {
             guard: NONE,
             flags: 0,
             offset: 0,
+            base: [0; 4],
             a: Coef::value(1.0),
             b: Coef::value(1.0),
         }
@@ -87,10 +93,10 @@ impl Op {
             slot_id(self.a.den),
             slot_id(self.b.num),
             slot_id(self.b.den),
-            0,
-            0,
-            0,
-            0,
+            self.base[0],
+            self.base[1],
+            self.base[2],
+            self.base[3],
         ];
         let mut out = bytemuck::cast_slice(&header).to_vec();
         let coef = [self.a.scale, self.b.scale, 0.0, 0.0];

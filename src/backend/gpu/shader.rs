@@ -163,50 +163,50 @@ kernels! {
     ];
     CbrtEval = "cbrt_eval", variants: false, [b("sizes", U, St("Sizes")), b("values", RW, Re)];
     Objective = "objective", variants: true, [
-        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("grad", RW, Re),
+        MODEL, OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("grad", RW, Re),
         b("partials", RW, V4),
     ];
     Reduce = "reduce", variants: false, [OP, b("partials", R, V4), SCALARS_RW];
     Inversion = "inversion", variants: false, [
-        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), b("trial", R, Re),
+        MODEL, OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("trial", R, Re),
         b("partials", RW, V4),
     ];
     GradientGather = "gradient_gather", variants: false, [
         OP, b("free_vertices", R, Ui), b("inc_offsets", R, Ui), s("inc_items", R, Ui), s("elem", R, Re),
-        b("grad", RW, Re),
+        s("grad", RW, Re),
     ];
     Bcd = "bcd", variants: true, [
-        MODEL, b("ls", U, V4), OP, b("x", RW, Re), s("corners", R, Ui), b("shapes", R, V4),
-        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("colors", R, Ui), b("moves", RW, Re),
+        MODEL, b("ls", U, V4), OP, s("x", RW, Re), s("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("colors", R, Ui), s("moves", RW, Re),
         SLIDE_REAL, SLIDE_IDX,
     ];
     ReferencePosition = "reference_position", variants: true, [
-        MODEL, b("ls", U, V4), OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4),
-        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("free_vertices", R, Ui), b("xr", RW, Re),
+        MODEL, b("ls", U, V4), OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4),
+        b("inc_offsets", R, Ui), s("inc_items", R, Ui), b("free_vertices", R, Ui), s("xr", RW, Re),
     ];
     HessianAssemble = "hessian_assemble", variants: true, [
-        MODEL, OP, b("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("elem", RW, Re),
+        MODEL, OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("elem", RW, Re),
     ];
     HessianGather = "hessian_gather", variants: false, [
         OP, s("contrib_offsets", R, Ui), s("contrib_items", R, Ui), s("elem", R, Re), s("blocks", RW, Re),
     ];
     BsrSpmv = "bsr_spmv", variants: false, [
-        OP, b("row_offsets", R, Ui), s("cols", R, Ui), s("blocks", R, Re), b("x", R, Re), b("y", RW, Re),
+        OP, b("row_offsets", R, Ui), s("cols", R, Ui), s("blocks", R, Re), s("x", R, Re), s("y", RW, Re),
     ];
     BlockJacobiFactor = "block_jacobi_factor", variants: false, [
-        OP, s("blocks", R, Re), b("diag", R, Ui), b("factors", RW, Re),
+        OP, s("blocks", R, Re), b("diag", R, Ui), s("factors", RW, Re),
     ];
-    BlockJacobi = "block_jacobi", variants: false, [OP, b("factors", R, Re), b("x", R, Re), b("y", RW, Re)];
-    Axpby = "axpby", variants: false, [OP, SCALARS_R, b("x", R, Re), b("y", RW, Re)];
+    BlockJacobi = "block_jacobi", variants: false, [OP, s("factors", R, Re), s("x", R, Re), s("y", RW, Re)];
+    Axpby = "axpby", variants: false, [OP, SCALARS_R, s("x", R, Re), s("y", RW, Re)];
     SetSlot = "set_slot", variants: false, [OP, SCALARS_RW];
-    Dot = "dot", variants: false, [OP, b("a", R, Re), b("b", R, Re), b("partials", RW, V4)];
+    Dot = "dot", variants: false, [OP, s("a", R, Re), s("b", R, Re), b("partials", RW, V4)];
     LineSearch = "line_search", variants: false, [
-        OP, SCALARS_R, b("free_vertices", R, Ui), b("x", R, Re), b("d", R, Re), b("trial", RW, Re),
+        OP, SCALARS_R, b("free_vertices", R, Ui), s("x", R, Re), s("d", R, Re), s("trial", RW, Re),
     ];
     ProjectBoundary = "project_boundary", variants: false, [
-        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("x", RW, Re),
+        OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), s("x", RW, Re),
     ];
-    Constrain = "constrain", variants: false, [OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("y", RW, Re)];
+    Constrain = "constrain", variants: false, [OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), s("y", RW, Re)];
     ConstrainBlocks = "constrain_blocks", variants: false, [
         OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("row_offsets", R, Ui), s("cols", R, Ui),
         b("diag", R, Ui), s("blocks", RW, Re),
@@ -275,12 +275,15 @@ pub const MAX_SPLIT: usize = 4;
 /// A kernel as compiled: kernels without variants have the one `Form::Fast`
 /// instance; `extra[j]` is how many buffers beyond the first the kernel's
 /// j-th split binding spans (0 for a mesh whose arrays fit one binding each,
-/// which compiles to plain indexing).
+/// which compiles to plain indexing). `window`: the split bindings are bound
+/// from part `op.base[j]` on rather than from their first part (one
+/// dispatch per window of parts, `GpuBackend::record_windowed`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Variant {
     pub kernel: Kernel,
     pub form: Form,
     pub extra: [u8; MAX_SPLIT],
+    pub window: bool,
 }
 
 impl Kernel {
@@ -307,6 +310,7 @@ impl Kernel {
             kernel: self,
             form: if self.def().variants { form } else { Form::Fast },
             extra: [0; MAX_SPLIT],
+            window: false,
         }
     }
 
@@ -350,6 +354,11 @@ impl Variant {
         let mut accessors = String::new();
         let splits: Vec<&Binding> = def.bindings.iter().filter(|b| b.split).collect();
         assert!(splits.len() <= MAX_SPLIT, "{}: too many split bindings", def.stem);
+        assert!(
+            !self.window || def.bindings.contains(&OP),
+            "{}: a windowed kernel reads its parts' bases from `op`",
+            def.stem
+        );
         let mut extra_decl: Vec<String> = vec![String::new(); splits.len()];
         for (j, b) in splits.iter().enumerate() {
             let parts = 1 + self.extra[j] as usize;
@@ -370,7 +379,8 @@ impl Variant {
                 ));
                 next += 1;
             }
-            accessors.push_str(&split_accessors(b, ty, parts, part_log2 - size.trailing_zeros()));
+            let base = self.window.then_some(j);
+            accessors.push_str(&split_accessors(b, ty, parts, part_log2 - size.trailing_zeros(), base));
         }
         for line in text.lines() {
             out.push_str(line);
@@ -390,26 +400,38 @@ impl Variant {
 
 /// `NAME_get(i)` (and `NAME_set(i, v)` where writable) over the `parts`
 /// buffers of a split binding, `2^shift` elements each: part 0 is the
-/// declared `NAME`, part k is `NAME_pk`.
-fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32) -> String {
+/// declared `NAME`, part k is `NAME_pk`. With `base = Some(j)` the buffers
+/// bound are parts `op.base[j]` on of the array, and `i` must fall in them.
+fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32, base: Option<usize>) -> String {
     let n = b.name;
     let part = |k: usize| if k == 0 { n.to_string() } else { format!("{n}_p{k}") };
     let mut s = String::new();
+    let writable = b.access == Access::ReadWrite;
+    let mask = (1u64 << shift) - 1;
     if parts == 1 {
-        s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{ return {n}[i]; }}\n"));
-        if b.access == Access::ReadWrite {
-            s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{ {n}[i] = v; }}\n"));
+        // one part, the whole array or (windowed) the one the index falls in
+        let at = if base.is_some() {
+            format!("i & {mask}u")
+        } else {
+            "i".into()
+        };
+        s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{ return {n}[{at}]; }}\n"));
+        if writable {
+            s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{ {n}[{at}] = v; }}\n"));
         }
         return s;
     }
-    let mask = (1u64 << shift) - 1;
-    let head = format!("    let p = i >> {shift}u;\n    let j = i & {mask}u;\n");
+    let p = match base {
+        Some(j) => format!("(i >> {shift}u) - op.base[{j}]"),
+        None => format!("i >> {shift}u"),
+    };
+    let head = format!("    let p = {p};\n    let j = i & {mask}u;\n");
     s.push_str(&format!("fn {n}_get(i: u32) -> {ty} {{\n{head}"));
     for k in 0..parts - 1 {
         s.push_str(&format!("    if p == {k}u {{ return {}[j]; }}\n", part(k)));
     }
     s.push_str(&format!("    return {}[j];\n}}\n", part(parts - 1)));
-    if b.access == Access::ReadWrite {
+    if writable {
         s.push_str(&format!("fn {n}_set(i: u32, v: {ty}) {{\n{head}"));
         for k in 0..parts - 1 {
             s.push_str(&format!("    if p == {k}u {{ {}[j] = v; return; }}\n", part(k)));
@@ -624,20 +646,42 @@ mod tests {
         }
     }
 
+    fn validate_source(src: &str, real: Real) -> naga::Module {
+        let m = naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+        let mut caps = naga::valid::Capabilities::default();
+        if real == Real::F64 {
+            caps |= naga::valid::Capabilities::FLOAT64;
+        }
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+            .validate(&m)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+        m
+    }
+
+    #[test]
+    fn windowed_bindings_index_from_their_base_part() {
+        for real in [Real::F32, Real::F64] {
+            let mut v = Kernel::HessianGather.plain();
+            v.extra = [0, 0, 2, 0];
+            v.window = true;
+            let src = v.compose_split(real, 8);
+            validate_source(&src, real);
+            let shift = 8 - real.size().trailing_zeros();
+            // elem (the third split binding) spans three parts from op.base[2]
+            assert!(src.contains(&format!("let p = (i >> {shift}u) - op.base[2];")), "{src}");
+            // a one-part window still finds the element within its part
+            assert!(src.contains("return contrib_offsets[i & 63u];"), "{src}");
+            assert!(!src.contains("op.base[0]"));
+        }
+    }
+
     #[test]
     fn split_bindings_validate_with_their_extra_parts_after_the_table() {
         for real in [Real::F32, Real::F64] {
             let mut v = Kernel::HessianGather.plain();
             v.extra = [1, 2, 3, 2];
             let src = v.compose_split(real, 8);
-            let m = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
-            let mut caps = naga::valid::Capabilities::default();
-            if real == Real::F64 {
-                caps |= naga::valid::Capabilities::FLOAT64;
-            }
-            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
-                .validate(&m)
-                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+            let m = validate_source(&src, real);
             let bound: Vec<(u32, String)> = m
                 .global_variables
                 .iter()

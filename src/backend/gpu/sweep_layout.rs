@@ -105,17 +105,32 @@ impl SweepLayout {
 
     /// The incidence lists in device order, each item `corner << 2 | k`
     /// with its device corner; within a list the problem's order, so that
-    /// gathers sum in the CPU's order.
+    /// the sweeps sum in the CPU's order.
     pub fn incidence(&self, inc: &Csr) -> Csr {
+        self.incidence_ordered(inc, false)
+    }
+
+    /// `incidence` with each list in ascending device corner order, the
+    /// order in which the gradient gathers run over windows of corners
+    /// (`gradient_gather.wgsl`).
+    pub fn gather_incidence(&self, inc: &Csr) -> Csr {
+        self.incidence_ordered(inc, true)
+    }
+
+    fn incidence_ordered(&self, inc: &Csr, by_device_corner: bool) -> Csr {
         let mut offsets = Vec::with_capacity(inc.offsets.len());
         let mut items = Vec::with_capacity(inc.items.len());
         offsets.push(0);
         for &v in &self.vertex_of {
+            let start = items.len();
             items.extend(
                 inc.of(v as usize)
                     .iter()
                     .map(|&packed| (self.corner[(packed >> 2) as usize] << 2) | (packed & 3)),
             );
+            if by_device_corner {
+                items[start..].sort_unstable();
+            }
             offsets.push(items.len() as u32);
         }
         Csr { offsets, items }
@@ -179,6 +194,7 @@ mod tests {
         assert!(l.corner_of.windows(2).all(|w| first(w[0]) <= first(w[1])));
         // an incidence list names the same corners and local vertices
         let inc = l.incidence(&p.incidence);
+        let gather = l.gather_incidence(&p.incidence);
         for v in 0..p.num_vertices() {
             let d = l.vertex[v] as usize;
             let back: Vec<u32> = inc
@@ -187,6 +203,10 @@ mod tests {
                 .map(|&q| (l.corner_of[(q >> 2) as usize] << 2) | (q & 3))
                 .collect();
             assert_eq!(back, p.incidence.of(v));
+            // the gathers' lists: the same items, ascending
+            let mut sorted = inc.of(d).to_vec();
+            sorted.sort();
+            assert_eq!(gather.of(d), sorted);
         }
         let x: Vec<Vec3> = (0..p.num_vertices()).map(|i| [i as f64, 0.0, 1.0]).collect();
         let flat: Vec<f64> = x.iter().flatten().copied().collect();
