@@ -200,6 +200,8 @@ kernels! {
     Axpby = "axpby", variants: false, [OP, SCALARS_R, b("x", R, Re), b("y", RW, Re)];
     SetSlot = "set_slot", variants: false, [OP, SCALARS_RW];
     Dot = "dot", variants: false, [OP, b("a", R, Re), b("b", R, Re), b("partials", RW, V4)];
+    HaloGather = "halo_gather", variants: false, [OP, b("idx", R, Ui), b("src", R, Re), b("dst", RW, Re)];
+    HaloScatter = "halo_scatter", variants: false, [OP, b("idx", R, Ui), b("data", R, Re), b("dst", RW, Re)];
     LineSearch = "line_search", variants: false, [
         OP, SCALARS_R, b("free_vertices", R, Ui), b("x", R, Re), b("d", R, Re), b("trial", RW, Re),
     ];
