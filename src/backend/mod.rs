@@ -270,7 +270,8 @@ pub trait Backend {
     /// `corners` only, and `dot` sums and maximises over the free entries
     /// `free` only (both ascending): a part's owned share, so that over all
     /// parts each corner and each free vertex of the whole counts once. The
-    /// gradient, `min_det` and everything else still cover the whole part.
+    /// gradient and everything else still cover the whole part; `min_det`
+    /// may cover either (the minimum over the parts is the whole's both ways).
     fn restrict_sums(&mut self, _free: &[u32], _corners: &[u32]) -> Result<()> {
         Err(crate::error::Error::Unsupported(format!(
             "partial sums on {}",

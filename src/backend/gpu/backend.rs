@@ -67,7 +67,8 @@ enum Buf {
 /// zeroing the ghost entries (halo list `ghosts`) of copies in `temps`.
 struct Share {
     corners: usize,
-    ghosts: Option<u32>,
+    /// The halo list of the ghost entries and its length.
+    ghosts: Option<(u32, usize)>,
     temps: [Vector; 2],
 }
 
@@ -394,18 +395,15 @@ impl<'c> GpuBackend<'c> {
     }
 
     /// `t` = `v` with the ghost entries of the share zeroed.
-    fn owned_copy(&mut self, v: Vector, t: Vector, ghosts: Option<u32>) -> Result<()> {
+    fn owned_copy(&mut self, v: Vector, t: Vector, ghosts: Option<(u32, usize)>) -> Result<()> {
         self.axpby(Coef::value(1.0), v, Coef::value(0.0), t, None)?;
         match ghosts {
-            Some(k) => {
-                let n = self.buf(Buf::HaloIdx(k))[0].size() as usize / 4;
-                self.record(
-                    Kernel::HaloScatter.plain(),
-                    &[Buf::Ops, Buf::HaloIdx(k), Buf::GhostZeros, Buf::Vector(t.0)],
-                    Op::n(n),
-                    n,
-                )
-            }
+            Some((k, n)) => self.record(
+                Kernel::HaloScatter.plain(),
+                &[Buf::Ops, Buf::HaloIdx(k), Buf::GhostZeros, Buf::Vector(t.0)],
+                Op::n(n),
+                n,
+            ),
             None => Ok(()),
         }
     }
@@ -1008,7 +1006,7 @@ impl Backend for GpuBackend<'_> {
         let ghosts = (!ghosts.is_empty()).then(|| {
             let zeros = self.ctx.zeros_real("ghost zeros", 3 * ghosts.len());
             self.bufs.insert(Buf::GhostZeros, vec![zeros]);
-            self.halo_list(false, &ghosts)
+            (self.halo_list(false, &ghosts), ghosts.len())
         });
         let temps = [self.vector()?, self.vector()?];
         self.share = Some(Share {
