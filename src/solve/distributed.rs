@@ -2,8 +2,10 @@
 //! problem, splits it (`partition`), ships each rank its part, runs its own
 //! part and gathers the owned positions back; every other rank waits in
 //! [`follow`] for parts to solve. All ranks run the same solver loop
-//! (`run_scaled`) over a `DistributedBackend`, whose reductions make every
-//! slot — and so every branch — the same on all ranks.
+//! (`run_scaled`) over a `DistributedBackend` around a CPU backend or, when
+//! rank 0 was asked for a GPU (`Cluster::set_gpu`), a GPU backend on a
+//! context each rank opens itself; its reductions make every slot — and so
+//! every branch — the same on all ranks.
 //!
 //! Decisions that one rank could take alone would split the ranks: a time
 //! limit is read from rank 0's clock and shared (`Backend::past`), so all
@@ -187,7 +189,7 @@ impl fmt::Display for Report {
 #[derive(serde::Serialize, serde::Deserialize)]
 enum Job {
     /// Solve this part (on a GPU if given); answered with an `Outcome`.
-    Solve(Box<Part>, Method, Params, Option<RankGpu>),
+    Solve(Box<Part>, Method, Params, Option<Box<RankGpu>>),
     /// Read these pieces (number, file) of an index; answered with each
     /// piece or the error reading it.
     Read(Vec<(usize, PathBuf)>),
@@ -200,7 +202,7 @@ enum Job {
 #[derive(serde::Serialize)]
 #[serde(rename = "Job")]
 enum JobRef<'a> {
-    Solve(&'a Part, Method, &'a Params, &'a Option<RankGpu>),
+    Solve(&'a Part, Method, &'a Params, Option<&'a RankGpu>),
     Read(&'a [(usize, PathBuf)]),
     Write(&'a Path, &'a Mesh, Format, Vec<(&'a str, &'a [f64])>),
 }
@@ -241,7 +243,7 @@ pub fn lead(
     let quality = Quality::of(p, &owner, &parts);
     let gpu = cluster.gpu.borrow().clone();
     for (r, part) in parts.iter().enumerate().skip(1) {
-        let job = encode(&JobRef::Solve(part, opts.method, &opts.params, &gpu));
+        let job = encode(&JobRef::Solve(part, opts.method, &opts.params, gpu.as_ref()));
         cluster.world.process_at_rank(r as i32).send_with_tag(&job[..], JOB_TAG);
     }
     // cancelling on one rank would leave the others waiting for it
@@ -338,7 +340,7 @@ pub fn follow(cluster: &Cluster) -> Result<()> {
         }
         let answer = match decode(&bytes)? {
             Job::Solve(part, method, params, gpu) => {
-                encode(&run_part(&cluster.world, &part, method, &params, gpu.as_ref(), &mut |_| true).1)
+                encode(&run_part(&cluster.world, &part, method, &params, gpu.as_deref(), &mut |_| true).1)
             }
             Job::Read(pieces) => encode(&read_own(&pieces)),
             Job::Write(path, piece, format, cells) => {
