@@ -1,7 +1,7 @@
 //! The distributed backend: one rank's part of a partitioned problem
-//! (`partition::Part`) on an inner backend — the CPU one, or a GPU per rank
-//! — with the reductions and halo exchanges that make the solvers —
-//! unchanged — solve the whole problem. It reaches the inner backend only
+//! (`partition::Part`) on an inner backend (the CPU one, or a GPU per rank),
+//! with the reductions and halo exchanges that make the solvers — unchanged
+//! — solve the whole problem. It reaches the inner backend only
 //! through the `Backend` contract: `restrict_sums` once, `read_entries` and
 //! `write_entries` per exchange (on a GPU one gather and one read-back, then
 //! one upload and one scatter), `flush` per reduction.
