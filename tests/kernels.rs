@@ -17,7 +17,7 @@ use meshsmooth::backend::cpu::hessian_assemble::HessianPattern;
 use meshsmooth::backend::cpu::project_boundary::project_vertex;
 use meshsmooth::backend::gpu::shader::Form;
 use meshsmooth::backend::gpu::{GpuBackend, GpuContext, Precision};
-use meshsmooth::backend::{Backend, Coef, EvalSlots, Points, Slot, Vector};
+use meshsmooth::backend::{Backend, Coef, Entries, EvalSlots, Points, Slot, Vector};
 use meshsmooth::metric::corner_model::Template;
 use meshsmooth::metric::mat3::Vec3;
 use meshsmooth::metric::smetric::MetricKind;
@@ -445,6 +445,121 @@ fn check_axpby(pair: &mut Pair, c: &Case, tol: f64) {
     }
 }
 
+/// Every third free entry, last first: the list's order, not the entries',
+/// is the packing order.
+fn halo_list(c: &Case) -> Vec<u32> {
+    (0..c.p.free_vertices.len() as u32).rev().step_by(3).collect()
+}
+
+fn check_halo_gather(pair: &mut Pair, c: &Case, _tol: f64) {
+    let n = c.p.free_vertices.len();
+    let data = random_vec(n, 10);
+    let v = pair.vectors(std::slice::from_ref(&data))[0];
+    let idx = halo_list(c);
+    for (of, src) in [
+        (
+            Entries::Points(Points::Current),
+            c.p.free_vertices.iter().map(|&i| c.x[i as usize]).collect(),
+        ),
+        (Entries::Vector(v), data.clone()),
+    ] {
+        let (g, cp) = pair.both(|be| {
+            let mut out = vec![7.0];
+            be.read_entries(of, &idx, &mut out).unwrap();
+            out
+        });
+        let want: Vec<f64> = [7.0]
+            .into_iter()
+            .chain(idx.iter().flat_map(|&i| src[i as usize]))
+            .collect();
+        assert_eq!(cp, want, "{}: CPU gather of {of:?}", c.name);
+        // multiples of 1/64: exact in either precision
+        assert_eq!(g, cp, "{}: gather of {of:?}", c.name);
+    }
+}
+
+fn check_halo_scatter(pair: &mut Pair, c: &Case, _tol: f64) {
+    let n = c.p.free_vertices.len();
+    let v = pair.vectors(&[random_vec(n, 11)])[0];
+    let idx = halo_list(c);
+    let data: Vec<f64> = random_vec(idx.len(), 12).into_iter().flatten().collect();
+    pair.both(|be| {
+        be.write_entries(Entries::Points(Points::Current), &idx, &data).unwrap();
+        be.write_entries(Entries::Vector(v), &idx, &data).unwrap();
+    });
+    let (gx, cx) = pair.both(|be| be.download().unwrap());
+    let (gv, cv) = pair.read(v);
+    let mut want_x = c.x.clone();
+    let mut want_v = random_vec(n, 11);
+    for (&i, d) in idx.iter().zip(data.chunks_exact(3)) {
+        want_x[c.p.free_vertices[i as usize] as usize] = [d[0], d[1], d[2]];
+        want_v[i as usize] = [d[0], d[1], d[2]];
+    }
+    assert_eq!(cx, want_x, "{}: CPU scatter into positions", c.name);
+    assert_eq!(cv, want_v, "{}: CPU scatter into a vector", c.name);
+    assert_eq!(gx, cx, "{}: scatter into positions", c.name);
+    assert_eq!(gv, cv, "{}: scatter into a vector", c.name);
+}
+
+/// `restrict_sums`: F, the infeasible count and dot over a subset only (a
+/// part's owned share), the gradient and min det still over everything.
+fn check_restricted_sums(pair: &mut Pair, c: &Case, tol: f64) {
+    let n = c.p.free_vertices.len();
+    let free: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 1).collect();
+    let corners: Vec<u32> = (0..c.p.num_corners() as u32).filter(|k| k % 4 != 2).collect();
+    let v = pair.vectors(&[random_vec(n, 4), random_vec(n, 5), vec![[0.0; 3]; n]]);
+    // the whole problem's gradient and min det, before restricting
+    pair.both(|be| be.evaluate(Points::Current, EVAL, Some(v[2])).unwrap());
+    let (gwhole, cwhole) = pair.slots();
+    let (gw, _) = pair.read(v[2]);
+    pair.both(|be| {
+        be.restrict_sums(&free, &corners).unwrap();
+        be.evaluate(Points::Current, EVAL, Some(v[2])).unwrap();
+        be.dot(v[0], v[1], Slot(4), Some(Slot(5))).unwrap();
+        be.norm_sq(v[1], Slot(6)).unwrap();
+    });
+    let (g, cp) = pair.slots();
+    let f: f64 = corners
+        .iter()
+        .map(|&k| c.p.corner_term(&c.x, k as usize).unwrap())
+        .sum();
+    assert!(rel(cp[0], f) <= 1e-13, "{}: CPU partial F {} vs {f}", c.name, cp[0]);
+    assert!(rel(g[0], cp[0]) <= tol, "{}: partial F {} vs {}", c.name, g[0], cp[0]);
+    assert_eq!((g[1], cp[1]), (0.0, 0.0), "{}: infeasible", c.name);
+    // min det over the share (GPU) or the whole (CPU): a minimum over the
+    // parts is the whole's either way
+    assert!(
+        g[2] >= gwhole[2] && cp[2] == cwhole[2],
+        "{}: min det {} (whole {}), CPU {} (whole {})",
+        c.name,
+        g[2],
+        gwhole[2],
+        cp[2],
+        cwhole[2]
+    );
+    let (a, b) = (random_vec(n, 4), random_vec(n, 5));
+    let dot = |x: &[Vec3], y: &[Vec3]| -> (f64, f64) {
+        free.iter().fold((0.0, 0.0f64), |(s, m), &i| {
+            let (p, q) = (x[i as usize], y[i as usize]);
+            (
+                s + p[0] * q[0] + p[1] * q[1] + p[2] * q[2],
+                m.max(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]),
+            )
+        })
+    };
+    // products of multiples of 1/64 add exactly
+    assert_eq!(
+        (cp[4], cp[5], cp[6]),
+        (dot(&a, &b).0, dot(&a, &b).1, dot(&b, &b).0),
+        "{}: CPU partial dot",
+        c.name
+    );
+    assert_eq!((g[4], g[5], g[6]), (cp[4], cp[5], cp[6]), "{}: partial dot", c.name);
+    let (gg, cg) = pair.read(v[2]);
+    assert!(rel_diff(&gg, &cg) <= tol, "{}: gradient", c.name);
+    assert!(rel_diff(&gg, &gw) <= tol, "{}: the gradient is restricted", c.name);
+}
+
 fn check_set_slot(pair: &mut Pair, c: &Case, _tol: f64) {
     pair.both(|be| {
         be.set_slot(Slot(9), Coef::value(3.0), None).unwrap();
@@ -666,4 +781,7 @@ kernel_tests! {
     check_set_slot: set_slot_matches_cpu_f32(0.0), set_slot_matches_cpu_f64(0.0);
     check_line_search: line_search_matches_cpu_f32(1e-5), line_search_matches_cpu_f64(1e-13);
     check_inversion: inversion_matches_cpu_f32(1e-3), inversion_matches_cpu_f64(1e-10);
+    check_halo_gather: halo_gather_matches_cpu_f32(0.0), halo_gather_matches_cpu_f64(0.0);
+    check_halo_scatter: halo_scatter_matches_cpu_f32(0.0), halo_scatter_matches_cpu_f64(0.0);
+    check_restricted_sums: restricted_sums_match_cpu_f32(1e-5), restricted_sums_match_cpu_f64(1e-13);
 }

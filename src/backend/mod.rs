@@ -29,9 +29,13 @@
 //!   (Hessian pattern, block-Jacobi factors) by [`Backend::prepare_hessian`], whose
 //!   time the solver reports as setup.
 //!
-//! The distributed backend (`distributed`, feature `mpi`) wraps the CPU one on
-//! each rank's part: every reduction is an allreduce in rank order, with halo
-//! exchanges after each colour, each trial point and before each product.
+//! The distributed backend (`distributed`, feature `mpi`) wraps a CPU or a
+//! GPU backend on each rank's part, through this contract only: the inner
+//! backend sums only what the part owns ([`Backend::restrict_sums`]) and
+//! hands halo entries in and out ([`Backend::read_entries`],
+//! [`Backend::write_entries`]); every reduction is then combined over the
+//! ranks in rank order, with halo exchanges after each colour, each trial
+//! point and before each product.
 
 pub mod cpu;
 #[cfg(feature = "mpi")]
@@ -114,6 +118,14 @@ pub struct EvalSlots {
     pub value: Slot,
     pub infeasible: Slot,
     pub min_det: Option<Slot>,
+}
+
+/// What a halo exchange reads or overwrites: a position set or a vector,
+/// at free-vector indices (only free vertices ever change).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Entries {
+    Points(Points),
+    Vector(Vector),
 }
 
 /// How a sequential sweep visits the free vertices.
@@ -236,6 +248,36 @@ pub trait Backend {
     fn flush(&mut self) -> Result<[f64; N_SLOTS]>;
     /// Bytes the backend holds for the problem and the solver's data.
     fn bytes(&self) -> usize;
+
+    /// Appends the entries `idx` (free-vector indices) of `of` to `out`, 3
+    /// reals each, in `idx` order, after running what was recorded: the
+    /// send side of a halo exchange (on a GPU one gather and one read-back).
+    fn read_entries(&mut self, _of: Entries, _idx: &[u32], _out: &mut Vec<f64>) -> Result<()> {
+        Err(crate::error::Error::Unsupported(format!(
+            "halo exchanges on {}",
+            self.describe()
+        )))
+    }
+    /// Overwrites the entries `idx` of `of` with `data` (3 reals each),
+    /// ordered after everything recorded so far: the receive side.
+    fn write_entries(&mut self, _of: Entries, _idx: &[u32], _data: &[f64]) -> Result<()> {
+        Err(crate::error::Error::Unsupported(format!(
+            "halo exchanges on {}",
+            self.describe()
+        )))
+    }
+    /// From now on `evaluate` sums F and counts infeasible corners over
+    /// `corners` only, and `dot` sums and maximises over the free entries
+    /// `free` only (both ascending): a part's owned share, so that over all
+    /// parts each corner and each free vertex of the whole counts once. The
+    /// gradient and everything else still cover the whole part; `min_det`
+    /// may cover either (the minimum over the parts is the whole's both ways).
+    fn restrict_sums(&mut self, _free: &[u32], _corners: &[u32]) -> Result<()> {
+        Err(crate::error::Error::Unsupported(format!(
+            "partial sums on {}",
+            self.describe()
+        )))
+    }
 
     /// Has `deadline` passed? Stopping is a decision every process of a
     /// solve must take at the same point: a distributed backend answers with

@@ -347,7 +347,10 @@ fn run_with_rules(
     let mut progress = Progress::new(params.max_iter, !quiet);
     // under mpirun the smoothing is partitioned over the ranks (untangling stays on one)
     #[cfg(feature = "mpi")]
-    let device = super::ranks::device().unwrap_or(choice.device());
+    let device = {
+        super::ranks::set_gpu(&choice, &solver.gpu);
+        super::ranks::device().unwrap_or(choice.device())
+    };
     #[cfg(not(feature = "mpi"))]
     let device = choice.device();
     let opts = solve::Options {
@@ -482,14 +485,6 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     }
     #[cfg(feature = "mpi")]
     super::ranks::set_partitioner(a.partitioner);
-    // the ranks solve on the CPU backend: a GPU asked for would sit unused
-    #[cfg(feature = "mpi")]
-    if super::ranks::size() > 1 && a.solver.device == super::DeviceArg::Gpu {
-        return Err(Error::Unsupported(
-            "--device gpu under MPI (partitioned runs): each rank smooths its part on the CPU backend; use --device cpu"
-                .into(),
-        ));
-    }
     if let Some(h) = &a.history {
         refuse_overwrite(&a.input, h)?;
         for (other, what) in [(&a.output, "the output mesh (-o)"), (&a.input, "the input mesh")] {

@@ -2,9 +2,11 @@
 //! with every solve partitioned over the ranks (`Device::Mpi`); the other
 //! ranks only solve the parts rank 0 sends them.
 
+use super::GpuArgs;
+use super::device::Choice;
 use meshsmooth::partition::Partitioner;
 use meshsmooth::solve::Device;
-use meshsmooth::solve::distributed::{Cluster, Report, follow};
+use meshsmooth::solve::distributed::{Cluster, RankGpu, Report, follow};
 use std::cell::Cell;
 
 thread_local! {
@@ -74,6 +76,18 @@ pub fn size() -> usize {
 pub fn set_partitioner(partitioner: Partitioner) {
     if let Some(c) = CLUSTER.with(|c| c.get()) {
         c.set_partitioner(partitioner);
+    }
+}
+
+/// Where the ranks smooth their parts: each on its own GPU context (with
+/// the same adapter and precision options) when rank 0's command runs on a
+/// GPU (`choice`), else on the CPU.
+pub fn set_gpu(choice: &Choice, gpu: &GpuArgs) {
+    if let Some(c) = CLUSTER.with(|c| c.get()) {
+        c.set_gpu(matches!(choice, Choice::Gpu(_)).then(|| RankGpu {
+            adapter: gpu.adapter.clone(),
+            precision: gpu.precision,
+        }));
     }
 }
 

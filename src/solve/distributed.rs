@@ -2,8 +2,10 @@
 //! problem, splits it (`partition`), ships each rank its part, runs its own
 //! part and gathers the owned positions back; every other rank waits in
 //! [`follow`] for parts to solve. All ranks run the same solver loop
-//! (`run_scaled`) over a `DistributedBackend`, whose reductions make every
-//! slot — and so every branch — the same on all ranks.
+//! (`run_scaled`) over a `DistributedBackend` around a CPU backend or, when
+//! rank 0 was asked for a GPU (`Cluster::set_gpu`), a GPU backend on a
+//! context each rank opens itself; its reductions make every slot — and so
+//! every branch — the same on all ranks.
 //!
 //! Decisions that one rank could take alone would split the ranks: a time
 //! limit is read from rank 0's clock and shared (`Backend::past`), so all
@@ -14,8 +16,11 @@
 //! projecting is per vertex, so it gives the single-process bits.
 
 use super::{Info, Method, Options, Params, Record, Scale, run_scaled};
+use crate::backend::Backend;
+use crate::backend::cpu::CpuBackend;
 use crate::backend::distributed::DistributedBackend;
-use crate::backend::distributed::comm::CommStats;
+use crate::backend::distributed::comm::{self, Comm, CommStats};
+use crate::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};
 use crate::error::{Error, Result};
 use crate::io::{self, CellData, Format};
 use crate::mesh::Mesh;
@@ -40,6 +45,16 @@ pub struct Cluster {
     world: SimpleCommunicator,
     report: RefCell<Option<Report>>,
     partitioner: Cell<Partitioner>,
+    gpu: RefCell<Option<RankGpu>>,
+}
+
+/// The GPU every rank smooths its part on (`--device gpu` under mpirun):
+/// each rank opens its own context with these options, so ranks on one
+/// machine may share one adapter.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RankGpu {
+    pub adapter: Option<String>,
+    pub precision: Precision,
 }
 
 impl Cluster {
@@ -60,6 +75,7 @@ impl Cluster {
             world,
             report: RefCell::new(None),
             partitioner: Cell::new(Partitioner::default()),
+            gpu: RefCell::new(None),
         })
     }
 
@@ -74,6 +90,11 @@ impl Cluster {
     /// How the next solves share out the vertices (rank 0 decides).
     pub fn set_partitioner(&self, partitioner: Partitioner) {
         self.partitioner.set(partitioner);
+    }
+
+    /// Where the ranks solve their parts: a GPU each, or the CPU (`None`).
+    pub fn set_gpu(&self, gpu: Option<RankGpu>) {
+        *self.gpu.borrow_mut() = gpu;
     }
 
     /// The report of the last partitioned solve (rank 0).
@@ -167,8 +188,8 @@ impl fmt::Display for Report {
 /// What rank 0 asks of another rank.
 #[derive(serde::Serialize, serde::Deserialize)]
 enum Job {
-    /// Solve this part; answered with an `Outcome`.
-    Solve(Box<Part>, Method, Params),
+    /// Solve this part (on a GPU if given); answered with an `Outcome`.
+    Solve(Box<Part>, Method, Params, Option<Box<RankGpu>>),
     /// Read these pieces (number, file) of an index; answered with each
     /// piece or the error reading it.
     Read(Vec<(usize, PathBuf)>),
@@ -181,7 +202,7 @@ enum Job {
 #[derive(serde::Serialize)]
 #[serde(rename = "Job")]
 enum JobRef<'a> {
-    Solve(&'a Part, Method, &'a Params),
+    Solve(&'a Part, Method, &'a Params, Option<&'a RankGpu>),
     Read(&'a [(usize, PathBuf)]),
     Write(&'a Path, &'a Mesh, Format, Vec<(&'a str, &'a [f64])>),
 }
@@ -220,8 +241,9 @@ pub fn lead(
     let (partitioner, owner, fallback) = share_out(cluster.partitioner.get(), p, x, size)?;
     let parts = partition::split(p, x, &owner, size);
     let quality = Quality::of(p, &owner, &parts);
+    let gpu = cluster.gpu.borrow().clone();
     for (r, part) in parts.iter().enumerate().skip(1) {
-        let job = encode(&JobRef::Solve(part, opts.method, &opts.params));
+        let job = encode(&JobRef::Solve(part, opts.method, &opts.params, gpu.as_ref()));
         cluster.world.process_at_rank(r as i32).send_with_tag(&job[..], JOB_TAG);
     }
     // cancelling on one rank would leave the others waiting for it
@@ -234,6 +256,7 @@ pub fn lead(
         &parts[0],
         opts.method,
         &opts.params,
+        gpu.as_ref(),
         &mut report_progress,
     );
     let mut outcomes = vec![own];
@@ -316,8 +339,8 @@ pub fn follow(cluster: &Cluster) -> Result<()> {
             return Ok(());
         }
         let answer = match decode(&bytes)? {
-            Job::Solve(part, method, params) => {
-                encode(&run_part(&cluster.world, &part, method, &params, &mut |_| true).1)
+            Job::Solve(part, method, params, gpu) => {
+                encode(&run_part(&cluster.world, &part, method, &params, gpu.as_deref(), &mut |_| true).1)
             }
             Job::Read(pieces) => encode(&read_own(&pieces)),
             Job::Write(path, piece, format, cells) => {
@@ -451,6 +474,7 @@ fn run_part(
     part: &Part,
     method: Method,
     params: &Params,
+    gpu: Option<&RankGpu>,
     progress: &mut dyn FnMut(&Record) -> bool,
 ) -> (Result<Info>, Outcome) {
     let opts = Options {
@@ -458,19 +482,36 @@ fn run_part(
         params: params.clone(),
         ..Default::default()
     };
-    let scale = Scale {
-        edge: part.edge,
-        setup: part.setup,
-        colors: part.problem.colors.len(),
-    };
     let mut x = part.x.clone();
     let start = Instant::now();
-    let (result, comm) = match DistributedBackend::new(part, world, &params.bcd.line_search) {
-        Ok(mut be) => {
-            let r = run_scaled(&mut be, &part.problem, scale, &mut x, &opts, progress);
-            (r, be.comm_stats())
+    let ls = &params.bcd.line_search;
+    let (result, comm) = match gpu {
+        None => run_on(
+            world,
+            part,
+            CpuBackend::new(&part.problem, &part.x, ls),
+            &opts,
+            &mut x,
+            progress,
+        ),
+        Some(g) => {
+            let options = GpuOptions {
+                adapter: g.adapter.clone(),
+                precision: g.precision,
+                ..Default::default()
+            };
+            match GpuContext::new(&options) {
+                Ok(ctx) => run_on(
+                    world,
+                    part,
+                    GpuBackend::new(&ctx, &part.problem, &part.x, ls),
+                    &opts,
+                    &mut x,
+                    progress,
+                ),
+                Err(e) => run_on(world, part, Err::<CpuBackend, _>(e), &opts, &mut x, progress),
+            }
         }
-        Err(e) => (Err(e), CommStats::default()),
     };
     let owned: Vec<usize> = (0..x.len()).filter(|&l| part.owned[l]).collect();
     let outcome = Outcome {
@@ -486,6 +527,41 @@ fn run_part(
         error: result.as_ref().err().map(|e| e.to_string()),
     };
     (result, outcome)
+}
+
+/// The solver loop on `part` over `inner` wrapped in a `DistributedBackend`,
+/// once every rank has its inner backend (a rank that could not build one,
+/// say for want of a GPU, would leave the others waiting in a reduction).
+fn run_on<B: Backend>(
+    world: &SimpleCommunicator,
+    part: &Part,
+    inner: Result<B>,
+    opts: &Options,
+    x: &mut [Vec3],
+    progress: &mut dyn FnMut(&Record) -> bool,
+) -> (Result<Info>, CommStats) {
+    let failed = f64::from(u8::from(inner.is_err()));
+    let any_failed = Comm::new(world).reduce(&[failed], &[comm::max])[0] != 0.0;
+    let be = match (inner, any_failed) {
+        (Err(e), _) => return (Err(e), CommStats::default()),
+        (Ok(_), true) => {
+            let e = Error::InvalidArgument("another rank could not set up its backend".into());
+            return (Err(e), CommStats::default());
+        }
+        (Ok(inner), false) => DistributedBackend::new(part, world, inner),
+    };
+    let scale = Scale {
+        edge: part.edge,
+        setup: part.setup,
+        colors: part.problem.colors.len(),
+    };
+    match be {
+        Ok(mut be) => {
+            let r = run_scaled(&mut be, &part.problem, scale, x, opts, progress);
+            (r, be.comm_stats())
+        }
+        Err(e) => (Err(e), CommStats::default()),
+    }
 }
 
 #[cfg(test)]

@@ -158,7 +158,8 @@ pub enum Device<'a> {
     Cpu,
     /// A wgpu device (`GpuContext::new` picks the adapter and precision).
     Gpu(&'a GpuContext),
-    /// The ranks of an MPI job, each on its part of the problem (CPU, f64).
+    /// The ranks of an MPI job, each on its part of the problem: on the CPU
+    /// (f64), or each on a GPU (`distributed::Cluster::set_gpu`).
     #[cfg(feature = "mpi")]
     Mpi(&'a distributed::Cluster),
 }

@@ -27,3 +27,15 @@ pub fn dot(a: &[Vec3], b: &[Vec3], with_max: bool) -> (f64, f64) {
     let sum = in_order(&partials.iter().map(|p| p.0).collect::<Vec<_>>());
     (sum, partials.iter().fold(0.0f64, |m, p| m.max(p.1)))
 }
+
+/// (a . b, max |b_i|^2) over the entries `idx` only, in their order: a
+/// part's share (`Backend::restrict_sums`).
+pub fn dot_over(a: &[Vec3], b: &[Vec3], idx: &[u32]) -> (f64, f64) {
+    let (mut s, mut m) = (0.0, 0.0f64);
+    for &i in idx {
+        let (x, y) = (&a[i as usize], &b[i as usize]);
+        s += x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+        m = m.max(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+    }
+    (s, m)
+}

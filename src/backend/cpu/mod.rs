@@ -12,6 +12,8 @@ pub mod constrain;
 pub mod constrain_blocks;
 pub mod dot;
 pub mod gradient_gather;
+pub mod halo_gather;
+pub mod halo_scatter;
 pub mod hessian_assemble;
 pub mod hessian_gather;
 pub mod inversion;
@@ -25,7 +27,7 @@ pub mod reference_position;
 pub mod set_slot;
 pub mod sym_hessian;
 
-use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector, Visit, guard_passes};
+use super::{Backend, Coef, Entries, EvalSlots, N_SLOTS, Points, Slot, Vector, Visit, guard_passes};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
@@ -53,6 +55,14 @@ pub struct CpuBackend<'p> {
     hessian: Option<SymHessian>,
     precond: Option<BlockJacobi>,
     preconditioner: Preconditioner,
+    /// What `evaluate` and `dot` sum over when restricted (`restrict_sums`).
+    share: Option<Share>,
+}
+
+/// A part's owned share: free-vector indices and corners, ascending.
+struct Share {
+    free: Vec<u32>,
+    corners: Vec<u32>,
 }
 
 impl<'p> CpuBackend<'p> {
@@ -79,6 +89,7 @@ impl<'p> CpuBackend<'p> {
             hessian: None,
             precond: None,
             preconditioner: Preconditioner::Jacobi,
+            share: None,
         })
     }
 
@@ -99,6 +110,7 @@ impl<'p> CpuBackend<'p> {
             hessian: None,
             precond: None,
             preconditioner: Preconditioner::Jacobi,
+            share: None,
         }
     }
 
@@ -149,35 +161,6 @@ impl<'p> CpuBackend<'p> {
     }
 }
 
-/// What the distributed backend, which wraps this one, reaches inside for.
-#[cfg(feature = "mpi")]
-impl CpuBackend<'_> {
-    /// A position set, for a wrapping backend that overwrites ghost positions.
-    pub(crate) fn points_mut(&mut self, at: Points) -> &mut [Vec3] {
-        match at {
-            Points::Current => &mut self.x,
-            Points::Trial => &mut self.trial,
-        }
-    }
-
-    pub(crate) fn points_ref(&self, at: Points) -> &[Vec3] {
-        self.points(at)
-    }
-
-    /// A vector's storage, for a wrapping backend's halo exchanges and reductions.
-    pub(crate) fn vector_mut(&mut self, v: Vector) -> &mut [Vec3] {
-        &mut self.vectors[v.0 as usize]
-    }
-
-    pub(crate) fn vector_ref(&self, v: Vector) -> &[Vec3] {
-        &self.vectors[v.0 as usize]
-    }
-
-    pub(crate) fn slot(&self, s: Slot) -> f64 {
-        self.slots[s.0 as usize]
-    }
-}
-
 impl Backend for CpuBackend<'_> {
     fn describe(&self) -> String {
         format!("cpu (f64, {} threads)", rayon::current_num_threads())
@@ -219,6 +202,25 @@ impl Backend for CpuBackend<'_> {
 
     fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
         let (p, x) = (self.problem()?, self.points(at));
+        if let Some(share) = &self.share {
+            let (f, bad) = objective::partial_value(p, x, &share.corners);
+            let min_det = out.min_det.map(|_| objective::min_det(p, x));
+            // where the part is feasible; elsewhere the whole is not either
+            if let Some(v) = gradient
+                && let Some((_, mut g)) = objective::free_gradient(p, x)
+            {
+                if let Some(s) = &p.sliding {
+                    constrain::constrain(&s.projector, &p.free_vertices, &mut g);
+                }
+                self.vectors[v.0 as usize] = g;
+            }
+            self.set(out.value, f);
+            self.set(out.infeasible, bad);
+            if let (Some(s), Some(d)) = (out.min_det, min_det) {
+                self.set(s, d);
+            }
+            return Ok(());
+        }
         let value = match gradient {
             Some(_) => objective::free_gradient(p, x),
             None => objective::value(p, x).map(|f| (f, Vec::new())),
@@ -391,7 +393,11 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
-        let (s, m) = dot::dot(&self.vectors[a.0 as usize], &self.vectors[b.0 as usize], max.is_some());
+        let (va, vb) = (&self.vectors[a.0 as usize], &self.vectors[b.0 as usize]);
+        let (s, m) = match &self.share {
+            Some(share) => dot::dot_over(va, vb, &share.free),
+            None => dot::dot(va, vb, max.is_some()),
+        };
         self.set(sum, s);
         if let Some(slot) = max {
             self.set(slot, m);
@@ -420,6 +426,45 @@ impl Backend for CpuBackend<'_> {
 
     fn flush(&mut self) -> Result<[f64; N_SLOTS]> {
         Ok(self.slots)
+    }
+
+    // in place: no copy beyond the exchange's own buffers
+    fn read_entries(&mut self, of: Entries, idx: &[u32], out: &mut Vec<f64>) -> Result<()> {
+        let free = &self.problem()?.free_vertices;
+        match of {
+            Entries::Points(at) => halo_gather::gather(self.points(at), idx, |i| free[i as usize] as usize, out),
+            Entries::Vector(v) => halo_gather::gather(&self.vectors[v.0 as usize], idx, |i| i as usize, out),
+        }
+        Ok(())
+    }
+
+    fn write_entries(&mut self, of: Entries, idx: &[u32], data: &[f64]) -> Result<()> {
+        let free = &self.problem()?.free_vertices;
+        if data.len() != 3 * idx.len() {
+            return Err(Error::InvalidArgument(format!(
+                "{} reals for {} entries",
+                data.len(),
+                idx.len()
+            )));
+        }
+        match of {
+            Entries::Points(Points::Current) => {
+                halo_scatter::scatter(&mut self.x, idx, |i| free[i as usize] as usize, data)
+            }
+            Entries::Points(Points::Trial) => {
+                halo_scatter::scatter(&mut self.trial, idx, |i| free[i as usize] as usize, data)
+            }
+            Entries::Vector(v) => halo_scatter::scatter(&mut self.vectors[v.0 as usize], idx, |i| i as usize, data),
+        }
+        Ok(())
+    }
+
+    fn restrict_sums(&mut self, free: &[u32], corners: &[u32]) -> Result<()> {
+        self.share = Some(Share {
+            free: free.to_vec(),
+            corners: corners.to_vec(),
+        });
+        Ok(())
     }
 
     fn bytes(&self) -> usize {

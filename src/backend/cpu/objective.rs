@@ -73,3 +73,20 @@ pub fn min_det(p: &Problem, x: &[Vec3]) -> f64 {
         })
         .reduce(|| f64::INFINITY, f64::min)
 }
+
+/// F over the corners `corners` only, infeasible ones counted as 0, and how
+/// many of them are infeasible: a part's share of F (`Backend::restrict_sums`).
+pub fn partial_value(p: &Problem, x: &[Vec3], corners: &[u32]) -> (f64, f64) {
+    // fixed chunks added in order: the partial sum does not depend on the thread count
+    let partial: Vec<(f64, f64)> = corners
+        .par_chunks(CHUNK)
+        .map(|cs| {
+            cs.iter()
+                .fold((0.0, 0.0), |(f, bad), &c| match p.corner_term(x, c as usize) {
+                    Some(t) => (f + t, bad),
+                    None => (f, bad + 1.0),
+                })
+        })
+        .collect();
+    partial.iter().fold((0.0, 0.0), |(f, b), &(pf, pb)| (f + pf, b + pb))
+}

@@ -5,7 +5,6 @@
 //! timing (an MPI sum would be free to pick its own order). Time and bytes
 //! are counted for the report.
 
-use crate::metric::mat3::Vec3;
 use crate::partition::Exchange;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -74,48 +73,48 @@ impl<'w> Comm<'w> {
         value
     }
 
-    /// Overwrites the ghost entries of `data` (indexed through `at`, from a
-    /// free-vector index) with their owners' values.
-    pub fn exchange(&mut self, halo: &[Exchange], data: &mut [Vec3], at: impl Fn(u32) -> usize) {
+    /// Sends each neighbour its entries of `send` (3 reals per entry of the
+    /// neighbours' `send` lists, concatenated in `halo` order) and returns
+    /// what they sent back, concatenated in the order of the `recv` lists.
+    pub fn exchange(&mut self, halo: &[Exchange], send: &[f64]) -> Vec<f64> {
+        let mut recv = vec![0.0; 3 * halo.iter().map(|h| h.recv.len()).sum::<usize>()];
         if halo.is_empty() {
-            return;
+            return recv;
         }
         let start = Instant::now();
-        let sends: Vec<(i32, Vec<f64>)> = halo
-            .iter()
-            .filter(|h| !h.send.is_empty())
-            .map(|h| (h.rank as i32, h.send.iter().flat_map(|&i| data[at(i)]).collect()))
-            .collect();
-        let mut recvs: Vec<Vec<f64>> = halo.iter().map(|h| vec![0.0; 3 * h.recv.len()]).collect();
         let world = self.world;
         mpi::request::scope(|scope| {
-            let pending: Vec<_> = sends
-                .iter()
-                .map(|(r, buf)| {
-                    world
-                        .process_at_rank(*r)
-                        .immediate_send_with_tag(scope, &buf[..], HALO_TAG)
-                })
-                .collect();
-            for (h, buf) in halo.iter().zip(recvs.iter_mut()) {
-                if !h.recv.is_empty() {
+            let mut rest = send;
+            let mut pending = Vec::with_capacity(halo.len());
+            for h in halo {
+                let (mine, tail) = rest.split_at(3 * h.send.len());
+                rest = tail;
+                if !mine.is_empty() {
+                    pending.push(
+                        world
+                            .process_at_rank(h.rank as i32)
+                            .immediate_send_with_tag(scope, mine, HALO_TAG),
+                    );
+                }
+            }
+            let mut rest = &mut recv[..];
+            for h in halo {
+                let (theirs, tail) = rest.split_at_mut(3 * h.recv.len());
+                rest = tail;
+                if !theirs.is_empty() {
                     world
                         .process_at_rank(h.rank as i32)
-                        .receive_into_with_tag(&mut buf[..], HALO_TAG);
+                        .receive_into_with_tag(theirs, HALO_TAG);
                 }
             }
             for p in pending {
                 p.wait();
             }
         });
-        for (h, buf) in halo.iter().zip(&recvs) {
-            for (k, &i) in h.recv.iter().enumerate() {
-                data[at(i)] = [buf[3 * k], buf[3 * k + 1], buf[3 * k + 2]];
-            }
-        }
         self.stats.halo_exchanges += 1;
-        self.stats.halo_bytes += sends.iter().map(|(_, b)| 8 * b.len()).sum::<usize>();
+        self.stats.halo_bytes += 8 * send.len();
         self.stats.seconds += start.elapsed().as_secs_f64();
+        recv
     }
 }
 

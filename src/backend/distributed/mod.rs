@@ -1,6 +1,10 @@
 //! The distributed backend: one rank's part of a partitioned problem
-//! (`partition::Part`) on a CPU backend, with the reductions and halo
-//! exchanges that make the solvers — unchanged — solve the whole problem.
+//! (`partition::Part`) on an inner backend (the CPU one, or a GPU per rank),
+//! with the reductions and halo exchanges that make the solvers — unchanged
+//! — solve the whole problem. It reaches the inner backend only
+//! through the `Backend` contract: `restrict_sums` once, `read_entries` and
+//! `write_entries` per exchange (on a GPU one gather and one read-back, then
+//! one upload and one scatter), `flush` per reduction.
 //!
 //! - **Vectors** cover the part's free vertices, owned and ghost. Owned
 //!   entries are exact; ghost entries may hold anything (partial Hessian
@@ -20,35 +24,55 @@
 
 pub mod comm;
 
-use super::cpu::reduce::CHUNK;
-use super::cpu::{CpuBackend, objective};
-use super::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
+use super::{Backend, Coef, Entries, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::Result;
 use crate::metric::mat3::Vec3;
 use crate::partition::{Exchange, Part};
-use crate::solve::line_search::LineSearch;
 use comm::{Comm, CommStats};
 use mpi::topology::SimpleCommunicator;
-use rayon::prelude::*;
 
-pub struct DistributedBackend<'p> {
-    part: &'p Part,
-    inner: CpuBackend<'p>,
-    comm: Comm<'p>,
-    /// Per colour, the halo of that colour's vertices: a colour of a sweep
-    /// moves only them, so only they are sent.
-    colour_halos: Vec<Vec<Exchange>>,
+/// A halo with its send and receive lists concatenated in neighbour order,
+/// so one exchange is one `read_entries` and one `write_entries`.
+struct Halo {
+    exchanges: Vec<Exchange>,
+    send: Vec<u32>,
+    recv: Vec<u32>,
 }
 
-impl<'p> DistributedBackend<'p> {
-    pub fn new(part: &'p Part, world: &'p SimpleCommunicator, ls: &LineSearch) -> Result<Self> {
+impl Halo {
+    fn new(exchanges: Vec<Exchange>) -> Halo {
+        Halo {
+            send: exchanges.iter().flat_map(|h| h.send.iter().copied()).collect(),
+            recv: exchanges.iter().flat_map(|h| h.recv.iter().copied()).collect(),
+            exchanges,
+        }
+    }
+}
+
+pub struct DistributedBackend<'p, B> {
+    inner: B,
+    comm: Comm<'p>,
+    halo: Halo,
+    /// Per colour, the halo of that colour's vertices: a colour of a sweep
+    /// moves only them, so only they are sent.
+    colour_halos: Vec<Halo>,
+    /// The send side of an exchange, kept to reuse its allocation.
+    send: Vec<f64>,
+}
+
+impl<'p, B: Backend> DistributedBackend<'p, B> {
+    /// `inner` holds `part`'s problem and start; its sums are restricted
+    /// here to what the part owns.
+    pub fn new(part: &'p Part, world: &'p SimpleCommunicator, mut inner: B) -> Result<Self> {
+        inner.restrict_sums(&part.owned_free, &part.owned_corners)?;
         Ok(DistributedBackend {
-            part,
-            inner: CpuBackend::new(&part.problem, &part.x, ls)?,
+            inner,
             comm: Comm::new(world),
+            halo: Halo::new(part.halo.clone()),
             colour_halos: (0..part.problem.colors.len() as u32)
-                .map(|c| part.colour_halo(c))
+                .map(|c| Halo::new(part.colour_halo(c)))
                 .collect(),
+            send: Vec::new(),
         })
     }
 
@@ -56,20 +80,36 @@ impl<'p> DistributedBackend<'p> {
         self.comm.stats
     }
 
-    fn exchange_points(&mut self, at: Points) {
-        let free = &self.part.problem.free_vertices;
-        self.comm.exchange(&self.part.halo, self.inner.points_mut(at), |i| {
-            free[i as usize] as usize
-        });
+    /// Overwrites the ghost entries of `of` named by `halo` (a colour's, or
+    /// the whole one) with their owners' values.
+    fn exchange(&mut self, of: Entries, colour: Option<usize>) -> Result<()> {
+        let halo = match colour {
+            Some(c) => &self.colour_halos[c],
+            None => &self.halo,
+        };
+        if halo.exchanges.is_empty() {
+            return Ok(());
+        }
+        self.send.clear();
+        self.inner.read_entries(of, &halo.send, &mut self.send)?;
+        let recv = self.comm.exchange(&halo.exchanges, &self.send);
+        self.inner.write_entries(of, &halo.recv, &recv)
     }
 
-    fn exchange_vector(&mut self, v: Vector) {
-        self.comm
-            .exchange(&self.part.halo, self.inner.vector_mut(v), |i| i as usize);
+    /// The partial values of `slots` on this rank, combined over the ranks
+    /// (`combine` per slot), written back to the same slots on every rank.
+    fn reduce(&mut self, slots: &[Slot], combine: &[fn(f64, f64) -> f64]) -> Result<Vec<f64>> {
+        let local = self.inner.flush()?;
+        let mine: Vec<f64> = slots.iter().map(|s| local[s.0 as usize]).collect();
+        let global = self.comm.reduce(&mine, combine);
+        for (s, &v) in slots.iter().zip(&global) {
+            self.inner.set_slot(*s, Coef::value(v), None)?;
+        }
+        Ok(global)
     }
 }
 
-impl Backend for DistributedBackend<'_> {
+impl<B: Backend> Backend for DistributedBackend<'_, B> {
     fn describe(&self) -> String {
         format!("mpi ({} ranks) x {}", self.comm.size(), self.inner.describe())
     }
@@ -101,42 +141,26 @@ impl Backend for DistributedBackend<'_> {
     }
 
     fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
-        let p = &self.part.problem;
-        let x = self.inner.points_ref(at);
-        // fixed chunks added in order: the partial sum does not depend on the thread count
-        let partial: Vec<(f64, f64)> = self
-            .part
-            .owned_corners
-            .par_chunks(CHUNK)
-            .map(|cs| {
-                cs.iter()
-                    .fold((0.0, 0.0), |(f, bad), &c| match p.corner_term(x, c as usize) {
-                        Some(t) => (f + t, bad),
-                        None => (f, bad + 1.0),
-                    })
-            })
-            .collect();
-        let (f, bad) = partial.iter().fold((0.0, 0.0), |(f, b), &(pf, pb)| (f + pf, b + pb));
-        // every corner of the part is a real corner with current ghosts, so
-        // the minimum over parts is the minimum over the whole
-        let det = out.min_det.map_or(f64::INFINITY, |_| objective::min_det(p, x));
-        let global = self.comm.reduce(&[f, bad, det], &[comm::sum, comm::sum, comm::min]);
-        let feasible = global[1] == 0.0;
-        if let (Some(g), true) = (gradient, feasible) {
-            self.inner.evaluate(at, out, Some(g))?;
-        }
-        self.inner.set(out.value, if feasible { global[0] } else { f64::NAN });
-        self.inner.set(out.infeasible, global[1]);
+        // the inner sums cover the owned corners; its minimum covers every
+        // corner of the part, each a real corner with current ghosts, so the
+        // minimum over parts is the minimum over the whole
+        self.inner.evaluate(at, out, gradient)?;
+        let mut slots = vec![out.value, out.infeasible];
+        let mut combine: Vec<fn(f64, f64) -> f64> = vec![comm::sum, comm::sum];
         if let Some(s) = out.min_det {
-            self.inner.set(s, global[2]);
+            slots.push(s);
+            combine.push(comm::min);
+        }
+        let global = self.reduce(&slots, &combine)?;
+        if global[1] != 0.0 {
+            self.inner.set_slot(out.value, Coef::value(f64::NAN), None)?;
         }
         Ok(())
     }
 
     fn trial(&mut self, alpha: Coef, d: Vector) -> Result<()> {
         self.inner.trial(alpha, d)?;
-        self.exchange_points(Points::Trial);
-        Ok(())
+        self.exchange(Entries::Points(Points::Trial), None)
     }
 
     fn accept_trial(&mut self) -> Result<()> {
@@ -144,20 +168,10 @@ impl Backend for DistributedBackend<'_> {
     }
 
     fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
-        let p = &self.part.problem;
-        let (x, y) = (
-            self.inner.points_ref(Points::Current),
-            self.inner.points_ref(Points::Trial),
-        );
-        // a minimum: the same on any partition and in any order
-        let local = self
-            .part
-            .owned_corners
-            .par_iter()
-            .map(|&c| super::cpu::inversion::corner_first_inversion(p, x, y, c as usize))
-            .reduce(|| f64::INFINITY, f64::min);
-        let global = self.comm.reduce(&[local], &[comm::min]);
-        self.inner.set(out, global[0]);
+        // a minimum over the part's corners, all real corners with current
+        // ghosts: the same on any partition and in any order
+        self.inner.inversion_fraction(out)?;
+        self.reduce(&[out], &[comm::min])?;
         Ok(())
     }
 
@@ -170,18 +184,12 @@ impl Backend for DistributedBackend<'_> {
 
     fn bcd_color(&mut self, color: usize) -> Result<()> {
         self.inner.bcd_color(color)?;
-        let free = &self.part.problem.free_vertices;
-        self.comm
-            .exchange(&self.colour_halos[color], self.inner.points_mut(Points::Current), |i| {
-                free[i as usize] as usize
-            });
-        Ok(())
+        self.exchange(Entries::Points(Points::Current), Some(color))
     }
 
     fn max_move(&mut self, out: Slot) -> Result<()> {
         self.inner.max_move(out)?;
-        let m = self.comm.reduce(&[self.inner.slot(out)], &[comm::max])[0];
-        self.inner.set(out, m);
+        self.reduce(&[out], &[comm::max])?;
         Ok(())
     }
 
@@ -194,7 +202,7 @@ impl Backend for DistributedBackend<'_> {
     }
 
     fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()> {
-        self.exchange_vector(x);
+        self.exchange(Entries::Vector(x), None)?;
         self.inner.hess_mul(x, y)
     }
 
@@ -207,18 +215,11 @@ impl Backend for DistributedBackend<'_> {
     }
 
     fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
-        let (va, vb) = (self.inner.vector_ref(a), self.inner.vector_ref(b));
-        let (mut s, mut m) = (0.0, 0.0f64);
-        for &i in &self.part.owned_free {
-            let (x, y) = (&va[i as usize], &vb[i as usize]);
-            s += x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
-            m = m.max(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
-        }
-        let global = self.comm.reduce(&[s, m], &[comm::sum, comm::max]);
-        self.inner.set(sum, global[0]);
-        if let Some(slot) = max {
-            self.inner.set(slot, global[1]);
-        }
+        self.inner.dot(a, b, sum, max)?;
+        match max {
+            Some(m) => self.reduce(&[sum, m], &[comm::sum, comm::max])?,
+            None => self.reduce(&[sum], &[comm::sum])?,
+        };
         Ok(())
     }
 

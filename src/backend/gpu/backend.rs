@@ -11,7 +11,7 @@ use super::layout::{CORNER_STRIDE, ELEM_STRIDE, ModelUniform, Op, corner_tables}
 use super::shader::{Access, Elem, Form, Kernel, MAX_SPLIT, Variant};
 use super::sweep_layout::SweepLayout;
 use crate::backend::cpu::hessian_assemble::HessianPattern;
-use crate::backend::{Backend, Coef, EvalSlots, N_SLOTS, Points, Slot, Vector};
+use crate::backend::{Backend, Coef, Entries, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
@@ -57,6 +57,23 @@ enum Buf {
     SlideIdx,
     /// Step 1 of rezoning's output.
     Reference,
+    /// The records of a part's owned corners (`restrict_sums`).
+    OwnedCorners,
+    /// Zeros for a part's ghost entries, masking them out of `dot`.
+    GhostZeros,
+    /// A halo list's device indices, and its values in list order.
+    HaloIdx(u32),
+    HaloData(u32),
+}
+
+/// What a part's sums cover (`Backend::restrict_sums`): the owned corners
+/// (their records in `Buf::OwnedCorners`); the owned free entries, by
+/// zeroing the ghost entries (halo list `ghosts`) of copies in `temps`.
+struct Share {
+    corners: usize,
+    /// The halo list of the ghost entries and its length.
+    ghosts: Option<(u32, usize)>,
+    temps: [Vector; 2],
 }
 
 /// Operations recorded between two submissions (the `Op` buffer's capacity).
@@ -93,6 +110,10 @@ pub struct GpuBackend<'c> {
     submissions: usize,
     /// Dispatches recorded one window of parts at a time.
     window_dispatches: usize,
+    /// Uploaded halo lists by (positions?, free-vector indices): the
+    /// `k` of `Buf::HaloIdx(k)` and `Buf::HaloData(k)`.
+    halo_lists: HashMap<(bool, Vec<u32>), u32>,
+    share: Option<Share>,
 }
 
 fn groups_of(n: usize) -> usize {
@@ -222,6 +243,8 @@ impl<'c> GpuBackend<'c> {
             layout,
             submissions: 0,
             window_dispatches: 0,
+            halo_lists: HashMap::new(),
+            share: None,
         })
     }
 
@@ -506,6 +529,74 @@ impl<'c> GpuBackend<'c> {
         )
     }
 
+    /// The halo list `idx` (free-vector indices into positions or a
+    /// vector), uploaded on first use with a values buffer of its length.
+    fn halo_list(&mut self, points: bool, idx: &[u32]) -> u32 {
+        let key = (points, idx.to_vec());
+        if let Some(&k) = self.halo_lists.get(&key) {
+            return k;
+        }
+        let k = self.halo_lists.len() as u32;
+        let ids: Vec<u32> = match points {
+            true => idx
+                .iter()
+                .map(|&i| self.layout.vertex[self.problem.free_vertices[i as usize] as usize])
+                .collect(),
+            false => idx.to_vec(),
+        };
+        let (index, values) = (
+            self.ctx.storage_u32("halo entries", &ids),
+            self.ctx.zeros_real("halo values", 3 * idx.len()),
+        );
+        self.bufs.insert(Buf::HaloIdx(k), vec![index]);
+        self.bufs.insert(Buf::HaloData(k), vec![values]);
+        self.halo_lists.insert(key, k);
+        k
+    }
+
+    fn entries(of: Entries) -> (bool, Buf) {
+        match of {
+            Entries::Points(Points::Current) => (true, Buf::X),
+            Entries::Points(Points::Trial) => (true, Buf::Trial),
+            Entries::Vector(v) => (false, Buf::Vector(v.0)),
+        }
+    }
+
+    /// `t` = `v` with the ghost entries of the share zeroed.
+    fn owned_copy(&mut self, v: Vector, t: Vector, ghosts: Option<(u32, usize)>) -> Result<()> {
+        self.axpby(Coef::value(1.0), v, Coef::value(0.0), t, None)?;
+        match ghosts {
+            Some((k, n)) => self.record(
+                Kernel::HaloScatter.plain(),
+                &[Buf::Ops, Buf::HaloIdx(k), Buf::GhostZeros, Buf::Vector(t.0)],
+                Op::n(n),
+                n,
+            ),
+            None => Ok(()),
+        }
+    }
+
+    /// Records the objective kernel over the `n` corner records of `corners`.
+    fn objective(&mut self, x: Buf, corners: Buf, n: usize) -> Result<()> {
+        self.record_windowed(
+            Kernel::Objective.with(self.form),
+            &[
+                Buf::Model,
+                Buf::Ops,
+                x,
+                corners,
+                Buf::Shapes,
+                Buf::CornerGrad,
+                Buf::Partials,
+            ],
+            Op::n(n),
+            n,
+            &[(corners, CORNER_STRIDE as usize), (Buf::CornerGrad, 12)],
+            64,
+            corner_window,
+        )
+    }
+
     /// Command buffers submitted so far (read-backs of vectors and
     /// positions submit their own copies besides).
     pub fn submissions(&self) -> usize {
@@ -719,24 +810,29 @@ impl Backend for GpuBackend<'_> {
             Points::Trial => Buf::Trial,
         };
         let nc = self.n_corners;
-        self.record_windowed(
-            Kernel::Objective.with(self.form),
-            &[
-                Buf::Model,
-                Buf::Ops,
-                x,
-                Buf::Corners,
-                Buf::Shapes,
-                Buf::CornerGrad,
-                Buf::Partials,
-            ],
-            Op::n(nc),
-            nc,
-            &[(Buf::Corners, CORNER_STRIDE as usize), (Buf::CornerGrad, 12)],
-            64,
-            corner_window,
-        )?;
-        self.reduce(Some(out.value), out.min_det, None, Some(out.infeasible), groups_of(nc))?;
+        let owned = self.share.as_ref().map(|s| s.corners);
+        // a part's sums over its owned corners first: the whole pass after
+        // it overwrites their gradients with the part's own, where wanted
+        match owned {
+            Some(0) => {
+                self.set_slot(out.value, Coef::value(0.0), None)?;
+                self.set_slot(out.infeasible, Coef::value(0.0), None)?;
+                if let Some(s) = out.min_det {
+                    self.set_slot(s, Coef::value(f64::INFINITY), None)?;
+                }
+            }
+            Some(n) => {
+                self.objective(x, Buf::OwnedCorners, n)?;
+                self.reduce(Some(out.value), out.min_det, None, Some(out.infeasible), groups_of(n))?;
+            }
+            None => {}
+        }
+        if owned.is_none() || gradient.is_some() {
+            self.objective(x, Buf::Corners, nc)?;
+        }
+        if owned.is_none() {
+            self.reduce(Some(out.value), out.min_det, None, Some(out.infeasible), groups_of(nc))?;
+        }
         if let Some(g) = gradient {
             self.gradient_gather(Buf::CornerGrad, 12, g)?;
             self.constrain(g)?;
@@ -993,6 +1089,19 @@ impl Backend for GpuBackend<'_> {
 
     fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
         let nf = self.n_free;
+        let (a, b) = match self.share.as_ref().map(|s| (s.temps, s.ghosts)) {
+            // ghost entries zeroed add exact zeros to the sum and the max
+            Some(([ta, tb], ghosts)) => {
+                self.owned_copy(a, ta, ghosts)?;
+                if b == a {
+                    (ta, ta)
+                } else {
+                    self.owned_copy(b, tb, ghosts)?;
+                    (ta, tb)
+                }
+            }
+            None => (a, b),
+        };
         self.record(
             Kernel::Dot.plain(),
             &[Buf::Ops, Buf::Vector(a.0), Buf::Vector(b.0), Buf::Partials],
@@ -1039,6 +1148,83 @@ impl Backend for GpuBackend<'_> {
         let mut out = [0.0; N_SLOTS];
         out.copy_from_slice(&v);
         Ok(out)
+    }
+
+    fn read_entries(&mut self, of: Entries, idx: &[u32], out: &mut Vec<f64>) -> Result<()> {
+        if idx.is_empty() {
+            return Ok(());
+        }
+        let (points, src) = Self::entries(of);
+        let k = self.halo_list(points, idx);
+        let n = idx.len();
+        self.record(
+            Kernel::HaloGather.plain(),
+            &[Buf::Ops, Buf::HaloIdx(k), src, Buf::HaloData(k)],
+            Op::n(n),
+            n,
+        )?;
+        self.submit()?;
+        out.extend(self.ctx.read_real(&self.buf(Buf::HaloData(k))[0], 3 * n)?);
+        Ok(())
+    }
+
+    fn write_entries(&mut self, of: Entries, idx: &[u32], data: &[f64]) -> Result<()> {
+        if data.len() != 3 * idx.len() {
+            return Err(Error::InvalidArgument(format!(
+                "{} reals for {} entries",
+                data.len(),
+                idx.len()
+            )));
+        }
+        if idx.is_empty() {
+            return Ok(());
+        }
+        let (points, dst) = Self::entries(of);
+        let k = self.halo_list(points, idx);
+        // the upload lands after everything recorded (which may read the values buffer)
+        self.submit()?;
+        self.ctx.write_real(&self.buf(Buf::HaloData(k))[0], data);
+        let n = idx.len();
+        self.record(
+            Kernel::HaloScatter.plain(),
+            &[Buf::Ops, Buf::HaloIdx(k), Buf::HaloData(k), dst],
+            Op::n(n),
+            n,
+        )
+    }
+
+    fn restrict_sums(&mut self, free: &[u32], corners: &[u32]) -> Result<()> {
+        let p = self.problem;
+        let (problem_corners, _) = corner_tables(p);
+        let stride = CORNER_STRIDE as usize;
+        let records: Vec<u32> = corners
+            .iter()
+            .flat_map(|&c| {
+                let rec = &problem_corners[stride * c as usize..stride * (c as usize + 1)];
+                rec[..4].iter().map(|&v| self.layout.vertex[v as usize]).chain([rec[4]])
+            })
+            .collect();
+        if !records.is_empty() {
+            self.bufs
+                .insert(Buf::OwnedCorners, self.ctx.split_u32("owned corners", &records));
+        }
+        let mut owned = vec![false; self.n_free];
+        for &i in free {
+            owned[i as usize] = true;
+        }
+        let ghosts: Vec<u32> = (0..self.n_free as u32).filter(|&i| !owned[i as usize]).collect();
+        let ghosts = (!ghosts.is_empty()).then(|| {
+            let zeros = self.ctx.zeros_real("ghost zeros", 3 * ghosts.len());
+            self.bufs.insert(Buf::GhostZeros, vec![zeros]);
+            (self.halo_list(false, &ghosts), ghosts.len())
+        });
+        let temps = [self.vector()?, self.vector()?];
+        self.share = Some(Share {
+            corners: corners.len(),
+            ghosts,
+            temps,
+        });
+        self.ctx.check()
     }
 
     fn bytes(&self) -> usize {

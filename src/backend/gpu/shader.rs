@@ -200,6 +200,8 @@ kernels! {
     Axpby = "axpby", variants: false, [OP, SCALARS_R, s("x", R, Re), s("y", RW, Re)];
     SetSlot = "set_slot", variants: false, [OP, SCALARS_RW];
     Dot = "dot", variants: false, [OP, s("a", R, Re), s("b", R, Re), b("partials", RW, V4)];
+    HaloGather = "halo_gather", variants: false, [OP, b("idx", R, Ui), s("src", R, Re), b("dst", RW, Re)];
+    HaloScatter = "halo_scatter", variants: false, [OP, b("idx", R, Ui), b("data", R, Re), s("dst", RW, Re)];
     LineSearch = "line_search", variants: false, [
         OP, SCALARS_R, b("free_vertices", R, Ui), s("x", R, Re), s("d", R, Re), s("trial", RW, Re),
     ];
