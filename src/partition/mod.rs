@@ -17,6 +17,7 @@
 //! graph where built in (feature `metis`, which `mpi` enables), else the
 //! built-in recursive coordinate bisection.
 
+pub mod local;
 #[cfg(feature = "metis")]
 mod metis;
 mod quality;
@@ -41,6 +42,9 @@ pub enum Partitioner {
     Metis,
     /// Recursive coordinate bisection of the vertex positions (no library needed).
     Rcb,
+    /// The input's .pvtu pieces as they are (under mpirun): each rank sets up
+    /// its own part from the pieces it reads; no rank holds the whole mesh.
+    Pieces,
 }
 
 impl Default for Partitioner {
@@ -58,6 +62,7 @@ impl Partitioner {
         match self {
             Partitioner::Metis => "metis",
             Partitioner::Rcb => "rcb",
+            Partitioner::Pieces => "pieces",
         }
     }
 
@@ -74,6 +79,9 @@ impl Partitioner {
                 "--partitioner metis: this build has no METIS (build with --features metis or mpi); use rcb".into(),
             )),
             Partitioner::Rcb => Ok(rcb(x, parts)),
+            Partitioner::Pieces => Err(crate::error::Error::Unsupported(
+                "--partitioner pieces takes the parts from a .pvtu input's pieces under mpirun; it cannot split a whole mesh (use metis or rcb)".into(),
+            )),
         }
     }
 }

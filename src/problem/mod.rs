@@ -26,6 +26,7 @@ mod corners;
 mod numbering;
 
 pub use adjacency::{Adjacency, adjacency, colours};
+pub(crate) use adjacency::sharing_neighbours;
 pub use boundary::{Boundary, BoundaryMode, Sliding};
 pub use check::check;
 pub use corners::{Corners, corners, element_vertices};

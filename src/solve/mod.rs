@@ -7,6 +7,8 @@
 pub mod bcd;
 #[cfg(feature = "mpi")]
 pub mod distributed;
+#[cfg(feature = "mpi")]
+pub mod pieces;
 #[cfg(test)]
 mod function_backend;
 pub mod history;
