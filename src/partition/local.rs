@@ -202,12 +202,13 @@ pub fn build(net: &dyn Network, mesh: &Mesh, ids: Option<&[i64]>, opts: &Problem
         .filter(|&i| owned[p.free_vertices[i as usize] as usize])
         .collect();
     // an element is counted by the owner of its first vertex (as in `split`)
-    let owned_corners = (0..p.num_corners() as u32)
+    let owned_corners: Vec<u32> = (0..p.num_corners() as u32)
         .filter(|&c| {
             let e = p.elem_order[p.corner_element[c as usize] as usize] as usize;
             lowner[local.element(e)[0] as usize] == me32
         })
         .collect();
+    reweigh(net, &mut p, &owned_corners, opts.metric.every_corner());
     let x = p.gather(&local.points);
     // each edge once, by the owner of its lower-id end (whose edges are all here)
     let (mut length, mut edges, mut cut) = (0.0, 0usize, 0usize);
@@ -269,6 +270,35 @@ pub fn build(net: &dyn Network, mesh: &Mesh, ids: Option<&[i64]>, opts: &Problem
         total_vertices,
         quality,
     })
+}
+
+/// The corner weights of the whole mesh: `corners` built them from the
+/// local mesh's counts (F is a mean over the elements, or over all corners
+/// for the metrics that use every corner); the global counts are the owned ones summed.
+fn reweigh(net: &dyn Network, p: &mut Problem, owned_corners: &[u32], every: bool) {
+    let mut per_element = vec![0u32; p.num_elements()];
+    for &e in &p.corner_element {
+        per_element[e as usize] += 1;
+    }
+    let mut owned_elements = vec![false; p.num_elements()];
+    for &c in owned_corners {
+        owned_elements[p.corner_element[c as usize] as usize] = true;
+    }
+    let local = [
+        owned_elements.iter().filter(|&&o| o).count() as f64,
+        owned_corners.len() as f64,
+    ];
+    let all = net.all_gather(&local);
+    let elements: f64 = all.iter().step_by(2).sum();
+    let corners: f64 = all.iter().skip(1).step_by(2).sum();
+    for (w, &e) in p.corner_weight.iter_mut().zip(&p.corner_element) {
+        // the expressions of `corners`, so the bits of one process
+        *w = if every {
+            1.0 / corners
+        } else {
+            1.0 / (elements * f64::from(per_element[e as usize]))
+        };
+    }
 }
 
 /// Step 1: the global id and the owner of each point of `mesh`, and the

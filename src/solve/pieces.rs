@@ -56,6 +56,11 @@ pub struct PiecesOutcome {
 impl Cluster {
     /// Rank 0: smooths the pieces of `job.index` on all ranks, each setting up its own part.
     pub fn smooth_pieces(&self, job: &PiecesJob, progress: &mut dyn FnMut(&Record) -> bool) -> Result<PiecesOutcome> {
+        if job.method == Method::Laplace {
+            return Err(Error::Unsupported(
+                "method 'laplace' (sequential by nature) is not available under MPI (partitioned runs)".into(),
+            ));
+        }
         if job.sources.len() < self.size() {
             return Err(Error::Unsupported(format!(
                 "--partitioner pieces: {} has {} pieces for {} ranks; run with at most as many ranks as pieces",
@@ -169,7 +174,12 @@ pub(super) fn run_pieces(
             )))
         },
     )?;
-    let (result, outcome) = run_part(world, part, job.method, &job.params, progress);
+    // cancelling on one rank would leave the others waiting for it
+    let mut report_progress = |r: &Record| {
+        progress(r);
+        true
+    };
+    let (result, outcome) = run_part(world, part, job.method, &job.params, &mut report_progress);
     // the ranks' reports, at rank 0
     let to_root: Vec<Vec<_>> = (0..size).map(|r| if r == 0 { vec![outcome.rank] } else { Vec::new() }).collect();
     let ranks: Vec<_> = swap(&net, &to_root)?.into_iter().flatten().collect();
