@@ -656,7 +656,9 @@ fn list(items: &[usize]) -> String {
 fn smooth_pieces(a: &SmoothArgs, pieces: Option<Option<usize>>, format: Format) -> Result<()> {
     let refuse = |what: &str| Err(Error::Unsupported(format!("--partitioner pieces: {what}")));
     let Some(cluster) = super::ranks::cluster().filter(|c| c.size() > 1 && is_pvtu(&a.input)) else {
-        return refuse("the parts are a .pvtu input's pieces: give a .pvtu input and run under mpirun on 2 or more ranks");
+        return refuse(
+            "the parts are a .pvtu input's pieces: give a .pvtu input and run under mpirun on 2 or more ranks",
+        );
     };
     let data = std::fs::read(&a.input).map_err(|e| Error::io(&a.input, e))?;
     let sources = io::piece_paths(&a.input, &data)?;

@@ -36,8 +36,8 @@
 
 use super::{Exchange, Part, Quality};
 use crate::error::{Error, Result};
-use crate::mesh::{ElementKind, Mesh};
 use crate::mesh::topology::Csr;
+use crate::mesh::{ElementKind, Mesh};
 use crate::metric::mat3::{Vec3, sub};
 use crate::problem::{BoundaryMode, Problem, ProblemOptions, sharing_neighbours};
 use serde::Serialize;
@@ -305,7 +305,10 @@ fn reweigh(net: &dyn Network, p: &mut Problem, owned_corners: &[u32], every: boo
 /// number of vertices in all.
 fn owners_and_ids(net: &dyn Network, mesh: &Mesh, ids: Option<&[i64]>) -> Result<(Vec<u32>, Vec<u32>, usize)> {
     let size = net.size();
-    let with_ids = net.all_gather(&[f64::from(u8::from(ids.is_some()))]).iter().all(|&f| f == 1.0);
+    let with_ids = net
+        .all_gather(&[f64::from(u8::from(ids.is_some()))])
+        .iter()
+        .all(|&f| f == 1.0);
     let key = |l: usize| -> [u64; 3] {
         match ids.filter(|_| with_ids) {
             Some(ids) => [ids[l] as u64, 0, 0],
@@ -392,7 +395,13 @@ fn ghost_layer(net: &dyn Network, mesh: &Mesh, gid: &[u32], owner: &[u32]) -> Re
     };
     let out: Vec<Vec<Layer>> = to
         .iter()
-        .map(|elems| if elems.is_empty() { Vec::new() } else { vec![layer(elems)] })
+        .map(|elems| {
+            if elems.is_empty() {
+                Vec::new()
+            } else {
+                vec![layer(elems)]
+            }
+        })
         .collect();
     let mut layers = vec![layer(&keep)];
     layers.extend(swap(net, &out)?.into_iter().flatten());
@@ -467,7 +476,11 @@ fn colour(
         }
         left.retain(|&v| colour[v as usize] == NONE);
         for (i, &v) in p.free_vertices.iter().enumerate() {
-            data[i][0] = if colour[v as usize] == NONE { -1.0 } else { f64::from(colour[v as usize]) };
+            data[i][0] = if colour[v as usize] == NONE {
+                -1.0
+            } else {
+                f64::from(colour[v as usize])
+            };
         }
         net.exchange(halo, &mut data);
         for (i, &v) in p.free_vertices.iter().enumerate() {

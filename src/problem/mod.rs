@@ -25,8 +25,8 @@ mod check;
 mod corners;
 mod numbering;
 
-pub use adjacency::{Adjacency, adjacency, colours};
 pub(crate) use adjacency::sharing_neighbours;
+pub use adjacency::{Adjacency, adjacency, colours};
 pub use boundary::{Boundary, BoundaryMode, Sliding};
 pub use check::check;
 pub use corners::{Corners, corners, element_vertices};

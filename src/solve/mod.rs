@@ -7,8 +7,6 @@
 pub mod bcd;
 #[cfg(feature = "mpi")]
 pub mod distributed;
-#[cfg(feature = "mpi")]
-pub mod pieces;
 #[cfg(test)]
 mod function_backend;
 pub mod history;
@@ -17,6 +15,8 @@ pub mod line_search;
 pub mod newton;
 pub mod nlcg;
 pub mod pcg;
+#[cfg(feature = "mpi")]
+pub mod pieces;
 pub mod reorder;
 pub mod rezone;
 pub mod untangle;

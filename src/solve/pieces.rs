@@ -71,7 +71,9 @@ impl Cluster {
         }
         let bytes = encode_job(job);
         for r in 1..self.size() {
-            self.world().process_at_rank(r as i32).send_with_tag(&bytes[..], super::distributed::JOB_TAG);
+            self.world()
+                .process_at_rank(r as i32)
+                .send_with_tag(&bytes[..], super::distributed::JOB_TAG);
         }
         let (outcome, report) = run_pieces(self.world(), job, progress)?;
         *self.report_slot() = Some(report.clone());
@@ -181,7 +183,9 @@ pub(super) fn run_pieces(
     };
     let (result, outcome) = run_part(world, part, job.method, &job.params, &mut report_progress);
     // the ranks' reports, at rank 0
-    let to_root: Vec<Vec<_>> = (0..size).map(|r| if r == 0 { vec![outcome.rank] } else { Vec::new() }).collect();
+    let to_root: Vec<Vec<_>> = (0..size)
+        .map(|r| if r == 0 { vec![outcome.rank] } else { Vec::new() })
+        .collect();
     let ranks: Vec<_> = swap(&net, &to_root)?.into_iter().flatten().collect();
     let info = agree(&net, result)?;
     if let Some((r, o)) = ranks.iter().enumerate().find(|(_, o)| o.iterations != info.iterations) {
@@ -208,7 +212,9 @@ pub(super) fn run_pieces(
     let written = if job.pieces {
         write_pieces(&net, job, &mine, &moved)?
     } else {
-        let to_root: Vec<Vec<Mesh>> = (0..size).map(|r| if r == 0 { moved.clone() } else { Vec::new() }).collect();
+        let to_root: Vec<Vec<Mesh>> = (0..size)
+            .map(|r| if r == 0 { moved.clone() } else { Vec::new() })
+            .collect();
         let all: Vec<Mesh> = swap(&net, &to_root)?.into_iter().flatten().collect();
         if me == 0 {
             // the memory of one process holding the whole mesh, at the end only
@@ -296,7 +302,11 @@ fn write_pieces(net: &dyn Network, job: &PiecesJob, mine: &[usize], moved: &[Mes
     if net.rank() == 0 {
         let sources: Vec<String> = paths
             .iter()
-            .map(|p| p.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default())
+            .map(|p| {
+                p.file_name()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            })
             .collect();
         let eta = cell(&moved[0]);
         io::write_index(&job.output, &moved[0], &[eta_data(&eta)], &sources)?;
