@@ -507,3 +507,194 @@ fn colour(
     let free_colour = p.free_vertices.iter().map(|&v| colour[v as usize]).collect();
     (classes, free_colour)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::{mixed_block, tet_box};
+    use std::sync::{Barrier, Mutex};
+
+    /// Ranks as threads of this process: a mailbox per (from, to) pair and
+    /// a barrier between posting and collecting.
+    struct Threads<'a> {
+        rank: usize,
+        size: usize,
+        barrier: &'a Barrier,
+        mail: &'a Mutex<Vec<Vec<Vec<u8>>>>,
+    }
+
+    impl Network for Threads<'_> {
+        fn rank(&self) -> usize {
+            self.rank
+        }
+
+        fn size(&self) -> usize {
+            self.size
+        }
+
+        fn all_to_all(&self, out: Vec<Vec<u8>>) -> Vec<Vec<u8>> {
+            self.mail.lock().unwrap()[self.rank] = out;
+            self.barrier.wait();
+            let got = (0..self.size)
+                .map(|s| self.mail.lock().unwrap()[s][self.rank].clone())
+                .collect();
+            self.barrier.wait();
+            got
+        }
+
+        fn all_gather(&self, local: &[f64]) -> Vec<f64> {
+            let bytes: Vec<u8> = local.iter().flat_map(|v| v.to_le_bytes()).collect();
+            self.all_to_all(vec![bytes; self.size])
+                .concat()
+                .chunks(8)
+                .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+                .collect()
+        }
+
+        fn exchange(&self, halo: &[Exchange], data: &mut [Vec3]) {
+            let mut out = vec![Vec::new(); self.size];
+            for h in halo {
+                out[h.rank as usize] = h.send.iter().map(|&i| data[i as usize]).collect();
+            }
+            let got: Vec<Vec<Vec3>> = swap(self, &out).unwrap();
+            for h in halo {
+                for (&i, &v) in h.recv.iter().zip(&got[h.rank as usize]) {
+                    data[i as usize] = v;
+                }
+            }
+        }
+    }
+
+    /// `mesh` cut into `size` pieces by coordinate bisection (an element to
+    /// the owner of its first vertex, as the pieces are written), each set
+    /// up on its own thread, with or without the pieces' global ids.
+    fn set_up(mesh: &Mesh, size: usize, ids: bool) -> Vec<Local> {
+        let owner = super::super::rcb(&mesh.points, size);
+        let barrier = Barrier::new(size);
+        let mail = Mutex::new(vec![Vec::new(); size]);
+        std::thread::scope(|s| {
+            let handles: Vec<_> = (0..size)
+                .map(|rank| {
+                    let (barrier, mail, owner) = (&barrier, &mail, &owner);
+                    s.spawn(move || {
+                        let elems: Vec<usize> = (0..mesh.num_elements())
+                            .filter(|&e| owner[mesh.element(e)[0] as usize] as usize == rank)
+                            .collect();
+                        let mut verts: Vec<usize> = elems
+                            .iter()
+                            .flat_map(|&e| mesh.element(e).iter().map(|&v| v as usize))
+                            .collect();
+                        verts.sort_unstable();
+                        verts.dedup();
+                        let piece = mesh.cut(&verts, &elems);
+                        let gid: Vec<i64> = verts.iter().map(|&v| v as i64).collect();
+                        let net = Threads {
+                            rank,
+                            size,
+                            barrier,
+                            mail,
+                        };
+                        build(&net, &piece, ids.then_some(&gid[..]), &ProblemOptions::default()).unwrap()
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        })
+    }
+
+    /// The parts together are the whole problem's data model: each vertex
+    /// owned once; free exactly where one process frees it (a vertex on a
+    /// piece's cut is no boundary vertex); the corners' weights summing to
+    /// one; each vertex one colour wherever it is, and no element holding
+    /// two free vertices of one colour; the halos pairing up.
+    #[test]
+    fn parts_set_up_on_their_ranks_make_the_whole_problem() {
+        for (name, mesh) in [
+            ("tets", tet_box(5, 4, 3, [1.0, 1.0, 1.0])),
+            ("mixed", mixed_block(4, 2)),
+        ] {
+            let whole = Problem::new(&mesh).unwrap();
+            let mut free = vec![false; mesh.num_points()];
+            for (new, &old) in whole.order.iter().enumerate() {
+                free[old as usize] = whole.free[new];
+            }
+            for size in [2, 3] {
+                for ids in [true, false] {
+                    let what = format!("{name} on {size} ranks, ids {ids}");
+                    let parts = set_up(&mesh, size, ids);
+                    let n = parts[0].total_vertices;
+                    assert_eq!(n, mesh.num_points(), "{what}");
+                    // global ids are the mesh's with ids, else a numbering of the points
+                    let mut point_of = vec![usize::MAX; n];
+                    let mut owners = vec![0; n];
+                    let mut colour = vec![u32::MAX; n];
+                    let mut weight = 0.0;
+                    for q in &parts {
+                        let part = &q.part;
+                        let p = &part.problem;
+                        for (l, &g) in part.global.iter().enumerate() {
+                            let at = mesh
+                                .points
+                                .iter()
+                                .position(|x| *x == part.x[l])
+                                .expect("a point of the mesh");
+                            assert!(
+                                point_of[g as usize] == usize::MAX || point_of[g as usize] == at,
+                                "{what}"
+                            );
+                            point_of[g as usize] = at;
+                            if ids {
+                                assert_eq!(g as usize, at, "{what}");
+                            }
+                            assert_eq!(p.free[l], free[at], "{what}: vertex {at} free on rank {}", part.rank);
+                            owners[g as usize] += usize::from(part.owned[l]);
+                        }
+                        for (i, &v) in p.free_vertices.iter().enumerate() {
+                            let g = part.global[v as usize] as usize;
+                            let c = part.free_colour[i];
+                            assert_ne!(c, u32::MAX, "{what}: vertex {g} uncoloured");
+                            assert!(
+                                colour[g] == u32::MAX || colour[g] == c,
+                                "{what}: vertex {g} two colours"
+                            );
+                            colour[g] = c;
+                        }
+                        let coloured: usize = (0..p.colors.len()).map(|c| p.colors.of(c).len()).sum();
+                        assert_eq!(coloured, part.owned_free.len(), "{what}");
+                        weight += part
+                            .owned_corners
+                            .iter()
+                            .map(|&c| p.corner_weight[c as usize])
+                            .sum::<f64>();
+                        for h in &part.halo {
+                            let other = &parts[h.rank as usize].part;
+                            let back = other.halo.iter().find(|o| o.rank == part.rank).unwrap();
+                            let g = |q: &Part, i: u32| q.global[q.problem.free_vertices[i as usize] as usize];
+                            let here: Vec<u32> = h.recv.iter().map(|&i| g(part, i)).collect();
+                            let there: Vec<u32> = back.send.iter().map(|&i| g(other, i)).collect();
+                            assert_eq!(here, there, "{what}");
+                        }
+                    }
+                    assert!(owners.iter().all(|&k| k == 1), "{what}: owners {owners:?}");
+                    assert!((weight - 1.0).abs() < 1e-12, "{what}: weights sum to {weight}");
+                    for q in &parts {
+                        let p = &q.part.problem;
+                        for e in 0..p.num_elements() {
+                            let mut cs: Vec<u32> = p
+                                .elements
+                                .of(e)
+                                .iter()
+                                .filter(|&&v| p.free[v as usize])
+                                .map(|&v| colour[q.part.global[v as usize] as usize])
+                                .collect();
+                            let k = cs.len();
+                            cs.sort_unstable();
+                            cs.dedup();
+                            assert_eq!(cs.len(), k, "{what}: an element with two free vertices of one colour");
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
