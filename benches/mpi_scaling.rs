@@ -59,7 +59,15 @@ fn pieces(input: &str, parts: usize) -> String {
     let o = Command::new(BIN)
         .args(["smooth", input, "-o"])
         .arg(&index)
-        .args(["--pieces", &parts.to_string(), "--partitioner", "rcb", "--max-iter", "0", "--quiet"])
+        .args([
+            "--pieces",
+            &parts.to_string(),
+            "--partitioner",
+            "rcb",
+            "--max-iter",
+            "0",
+            "--quiet",
+        ])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
