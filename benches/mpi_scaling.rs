@@ -105,8 +105,8 @@ fn run(ranks: usize, input: &str, method: &str, partitioner: &str) -> Measured {
         halo_values: number_after(&text, "(corners),"),
         edge_cut: number_after(&text, "edge cut"),
         largest_part: number_after(&text, "largest part"),
-        rss_rank0: number_after(&text, "peak RSS"),
-        rss_max: number_after(&text, "at most"),
+        rss_rank0: number_after(&text, "peak RSS per rank (MiB)"),
+        rss_max: number_after(&text, "(max"),
     }
 }
 

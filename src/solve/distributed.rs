@@ -193,8 +193,8 @@ impl fmt::Display for Report {
         )?;
         let rss = max(&|r| r.peak_rss_mib);
         if rss > 0.0 {
-            let rss0 = self.ranks.first().map_or(0.0, |r| r.peak_rss_mib);
-            write!(f, "; peak RSS {rss0:.1} MiB on rank 0, at most {rss:.1} MiB per rank")?;
+            let each: Vec<String> = self.ranks.iter().map(|r| format!("{:.1}", r.peak_rss_mib)).collect();
+            write!(f, "; peak RSS per rank (MiB) {} (max {rss:.1})", each.join(", "))?;
         }
         Ok(())
     }
