@@ -17,6 +17,8 @@
 //! graph where built in (feature `metis`, which `mpi` enables), else the
 //! built-in recursive coordinate bisection.
 
+// its messages are serialised with ciborium, which comes with `mpi`
+#[cfg(feature = "mpi")]
 pub mod local;
 #[cfg(feature = "metis")]
 mod metis;
