@@ -12,6 +12,10 @@
 //! are refused (Laplace; `bcd` runs colour by colour, as on a GPU). Sliding
 //! vertices carry their constraints into the parts (`Sliding::restrict`):
 //! projecting is per vertex, so it gives the single-process bits.
+//!
+//! `--partitioner pieces` takes another road to the same `run_part`: the
+//! ranks set up their own parts from a `.pvtu` input's pieces, and no rank
+//! holds the whole problem (`super::pieces`).
 
 use super::{Info, Method, Options, Params, Record, Scale, run_scaled};
 use crate::backend::distributed::DistributedBackend;
