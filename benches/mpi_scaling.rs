@@ -10,7 +10,11 @@
 //!
 //! Newton runs on both partitioners (METIS on the vertex graph, recursive
 //! coordinate bisection), so their cuts and traffic compare; the traffic
-//! model uses METIS's ghosts.
+//! model uses METIS's ghosts. It runs a third time from the box written as
+//! P pieces (RCB), each rank setting up its own part (`--partitioner
+//! pieces`), where rank 0 never holds the whole mesh: the memory columns
+//! (the largest part's vertices, owned and ghosts; each rank's peak RSS)
+//! show what that saves rank 0.
 //!
 //! Run: cargo bench --features mpi --bench mpi_scaling [-- --cells N]
 //! (default N = 16: a perturbed box of 6 N^3 tetrahedra). Times are wall
@@ -34,6 +38,9 @@ struct Measured {
     ghost_fraction: f64,
     halo_values: f64,
     edge_cut: f64,
+    largest_part: f64,
+    rss_rank0: f64,
+    rss_max: f64,
 }
 
 fn number_after(text: &str, key: &str) -> f64 {
@@ -44,6 +51,27 @@ fn number_after(text: &str, key: &str) -> f64 {
         .take_while(|c| c.is_ascii_digit() || *c == '.' || *c == 'e' || *c == '-')
         .collect();
     s.parse().unwrap_or_else(|_| panic!("'{key}' followed by '{s}'"))
+}
+
+/// `input` written as `parts` pieces (RCB, no iteration); the index.
+fn pieces(input: &str, parts: usize) -> String {
+    let index = std::env::temp_dir().join(format!("mpi_scaling_pieces_{parts}.pvtu"));
+    let o = Command::new(BIN)
+        .args(["smooth", input, "-o"])
+        .arg(&index)
+        .args([
+            "--pieces",
+            &parts.to_string(),
+            "--partitioner",
+            "rcb",
+            "--max-iter",
+            "0",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    index.to_string_lossy().into_owned()
 }
 
 fn run(ranks: usize, input: &str, method: &str, partitioner: &str) -> Measured {
@@ -76,6 +104,9 @@ fn run(ranks: usize, input: &str, method: &str, partitioner: &str) -> Measured {
         ghost_fraction: number_after(&text, "ghost fraction"),
         halo_values: number_after(&text, "(corners),"),
         edge_cut: number_after(&text, "edge cut"),
+        largest_part: number_after(&text, "largest part"),
+        rss_rank0: number_after(&text, "peak RSS per rank (MiB)"),
+        rss_max: number_after(&text, "(max"),
     }
 }
 
@@ -109,17 +140,36 @@ fn main() {
     let tets = 6 * cells * cells * cells;
     println!("# MPI strong scaling: perturbed tet box, {tets} tetrahedra, {cells}^3 cubes\n");
     println!(
-        "| method | partitioner | ranks | iterations | wall s | speed-up | comm % | edge cut | ghost fraction | free ghosts | halo bytes per iteration | halo bytes per exchange | exchanges | reductions |"
+        "| method | partitioner | ranks | iterations | wall s | speed-up | comm % | edge cut | ghost fraction | free ghosts | halo bytes per iteration | halo bytes per exchange | exchanges | reductions | largest part (vertices) | peak RSS rank 0 / max MiB |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut ghost_model = Vec::new();
-    for (method, partitioner) in [("bcd-colored", "metis"), ("newton", "metis"), ("newton", "rcb")] {
+    let mut newton_one = None;
+    for (method, partitioner) in [
+        ("bcd-colored", "metis"),
+        ("newton", "metis"),
+        ("newton", "rcb"),
+        ("newton", "pieces"),
+    ] {
         let mut base = None;
-        for ranks in 1..=4 {
-            let m = run(ranks, input, method, partitioner);
-            let t1 = *base.get_or_insert(m.wall);
+        // pieces need 2 ranks at least; their speed-up is against Newton on one
+        for ranks in if partitioner == "pieces" { 2..=4 } else { 1..=4 } {
+            let from = if partitioner == "pieces" {
+                pieces(input, ranks)
+            } else {
+                input.to_string()
+            };
+            let m = run(ranks, &from, method, partitioner);
+            if method == "newton" && ranks == 1 {
+                newton_one.get_or_insert(m.wall);
+            }
+            let t1 = *base.get_or_insert(if partitioner == "pieces" {
+                newton_one.unwrap_or(m.wall)
+            } else {
+                m.wall
+            });
             println!(
-                "| {method} | {partitioner} | {ranks} | {:.0} | {:.3} | {:.2} | {:.0} | {:.0} | {:.3} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
+                "| {method} | {partitioner} | {ranks} | {:.0} | {:.3} | {:.2} | {:.0} | {:.0} | {:.3} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.1} / {:.1} |",
                 m.iterations,
                 m.wall,
                 t1 / m.wall,
@@ -130,7 +180,10 @@ fn main() {
                 m.bytes / m.iterations.max(1.0),
                 m.bytes / m.exchanges.max(1.0),
                 m.exchanges,
-                m.reductions
+                m.reductions,
+                m.largest_part,
+                m.rss_rank0,
+                m.rss_max
             );
             if method == "newton" && partitioner == "metis" && ranks > 1 {
                 ghost_model.push((ranks, m.halo_values));

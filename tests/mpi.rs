@@ -420,9 +420,11 @@ fn a_time_limit_stops_every_rank_at_the_same_iteration() {
             "generate",
             "box",
             "--cells",
-            "16",
-            "16",
-            "16",
+            // large enough that no method stops before the limit on a quiet
+            // machine (Newton took 1.0 s on 16^3 and 5.3 s here to stall)
+            "24",
+            "24",
+            "24",
             "--perturb",
             "random:0.3",
             "-o",
@@ -584,4 +586,180 @@ fn nlcg_sliding_and_planar_with_a_gpu_per_rank_match_one_gpu_process() {
         let dx = max_rel(&one.points, &two.points);
         assert!(dx <= 1e-9, "{what}: iterates differ by {dx:e}");
     }
+}
+
+/// `input` written as `parts` .pvtu pieces (RCB, one process, no iteration):
+/// the pieces carry `GlobalPointIds`; with `ids` false they are rewritten
+/// without any id array, so the ranks must match points by coordinates.
+fn pieces_of(input: &Path, parts: usize, ids: bool) -> PathBuf {
+    let stem = input.file_stem().unwrap().to_string_lossy();
+    let index = input.with_file_name(format!("{stem}-{parts}{}.pvtu", if ids { "" } else { "-noids" }));
+    let o = Command::new(BIN)
+        .arg("smooth")
+        .arg(input)
+        .arg("-o")
+        .arg(&index)
+        .args([
+            "--pieces",
+            &parts.to_string(),
+            "--partitioner",
+            "rcb",
+            "--max-iter",
+            "0",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    if !ids {
+        for r in 0..parts {
+            let path = meshsmooth::io::piece_path(&index, r);
+            let mut piece = meshsmooth::io::read(&path).unwrap();
+            piece.data.point.retain(|a| a.name != meshsmooth::io::GLOBAL_POINT_IDS);
+            piece.data.cell.retain(|a| a.name != meshsmooth::io::GLOBAL_CELL_IDS);
+            meshsmooth::io::write(&path, &piece, meshsmooth::io::Format::VtuAscii, &[]).unwrap();
+        }
+    }
+    index
+}
+
+/// The largest part's vertex count and the mesh's, from the report's memory line.
+fn part_and_whole(stdout: &str) -> (usize, usize) {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("mpi memory: largest part "))
+        .unwrap_or_else(|| panic!("no memory line:\n{stdout}"));
+    let numbers: Vec<usize> = line
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    (numbers[0], numbers[2])
+}
+
+/// `--partitioner pieces`: each rank sets up its part from the pieces it
+/// read (3 pieces on 3 ranks, and on 2 ranks, rank 0 reading two), with its
+/// own colouring and vertex order, and no rank holds the whole mesh. Newton
+/// gives the single-process F at every iteration to 1e-10 with the same
+/// iteration count; coloured BCD, whose colours differ from one process's,
+/// the same optimum to 1e-8; both feasible, with the fixed vertices unmoved.
+/// A tet box, a tet/prism/hex mesh and a triangle grid (z = 0), with global
+/// ids in the pieces and without them (points matched by their coordinates).
+#[test]
+fn ranks_setting_up_their_own_parts_from_pieces_match_one_process() {
+    let dir = tempfile::tempdir().unwrap();
+    let all = meshes(dir.path());
+    for input in [&all[0], &all[2], &all[3]] {
+        for ids in [true, false] {
+            let pvtu = pieces_of(input, 3, ids);
+            let mesh = meshsmooth::io::read(&pvtu).unwrap();
+            // BCD's colours take another path to the optimum: both runs stop
+            // near enough to it for 1e-8 at 1e-9 (at the default 1e-6 the tet
+            // box's stop 5e-7 apart; at 1e-8 the triangle grid's 1.8e-8)
+            for (method, extra) in [("newton", &[][..]), ("bcd-colored", &["--tol", "1e-9"][..])] {
+                let one = smooth_with(None, &pvtu, dir.path(), method, "metis", extra);
+                assert!(one.objective.len() > 2, "{}: the plain run did nothing", pvtu.display());
+                for ranks in [2, 3] {
+                    let what = format!("{} {method} on {ranks} ranks", pvtu.display());
+                    let many = smooth_with(Some(ranks), &pvtu, dir.path(), method, "pieces", extra);
+                    assert!(
+                        many.stdout.contains("no rank held the whole mesh"),
+                        "{what}:\n{}",
+                        many.stdout
+                    );
+                    let (largest, whole) = part_and_whole(&many.stdout);
+                    assert_eq!(whole, mesh.num_points(), "{what}: the mesh's vertex count");
+                    assert!(largest < whole, "{what}: a part of {largest} of {whole} vertices");
+                    let (a, b) = (one.objective.last().unwrap(), many.objective.last().unwrap());
+                    if method == "newton" {
+                        assert_eq!(many.objective.len(), one.objective.len(), "{what}: iteration count");
+                        for (k, (a, b)) in one.objective.iter().zip(&many.objective).enumerate() {
+                            assert!(
+                                (a - b).abs() <= 1e-10 * a.abs(),
+                                "{what}: F at iteration {k}: {a} vs {b}"
+                            );
+                        }
+                    } else {
+                        assert!((a - b).abs() <= 1e-8 * a.abs(), "{what}: F {a} vs {b}");
+                    }
+                    let dx = max_rel(&one.points, &many.points);
+                    assert!(dx <= 1e-8, "{what}: iterates differ by {dx:e}");
+                    assert!(inverted_elements(&mesh, &many.points).is_empty(), "{what}: infeasible");
+                    assert_fixed_unmoved(&mesh, &many.points, &what);
+                }
+            }
+        }
+    }
+}
+
+/// The ranks write back the pieces they read (piece r by its reader) and
+/// they read back as the mesh the same run gathers into one file; pieces VTK
+/// wrote (no global ids, single-precision points, ghost cells) smooth to the
+/// single-process F too. What cannot come from pieces is refused.
+#[test]
+fn pieces_set_up_on_the_ranks_are_written_back_by_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = &meshes(dir.path())[0];
+    let pvtu = pieces_of(input, 3, true);
+    let run = |ranks: usize, from: &Path, to: &Path, extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "smooth".as_ref(),
+            from.as_os_str(),
+            "-o".as_ref(),
+            to.as_os_str(),
+            "--device".as_ref(),
+            "cpu".as_ref(),
+            "--partitioner".as_ref(),
+            "pieces".as_ref(),
+        ];
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        mpirun(ranks, &args)
+    };
+    let out = dir.path().join("back.pvtu");
+    let log = run(2, &pvtu, &out, &[]);
+    assert!(log.contains("wrote 3 pieces"), "{log}");
+    assert!(
+        log.contains("pieces written by ranks 0, 0, 1; the index by rank 0"),
+        "{log}"
+    );
+    let gathered = dir.path().join("back.vtu");
+    run(2, &pvtu, &gathered, &[]);
+    let back = meshsmooth::io::read(&out).unwrap();
+    assert_eq!(back, meshsmooth::io::read(&gathered).unwrap());
+    assert_ne!(
+        back.points,
+        meshsmooth::io::read(&pvtu).unwrap().points,
+        "nothing moved"
+    );
+
+    let vtk = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop/pvtu/vtk_ghost1.pvtu");
+    let one = smooth(None, &vtk, dir.path(), "newton");
+    let many = smooth_by(Some(3), &vtk, dir.path(), "newton", "pieces");
+    assert_eq!(many.objective.len(), one.objective.len(), "VTK pieces: iteration count");
+    for (a, b) in one.objective.iter().zip(&many.objective) {
+        assert!((a - b).abs() <= 1e-10 * a.abs(), "VTK pieces: F {a} vs {b}");
+    }
+
+    let refused = |ranks: usize, from: &Path, extra: &[&str], says: &str| {
+        let o = Command::new("mpirun")
+            .args([
+                "--allow-run-as-root",
+                "--oversubscribe",
+                "-np",
+                &ranks.to_string(),
+                BIN,
+                "smooth",
+            ])
+            .arg(from)
+            .arg("-o")
+            .arg(dir.path().join("refused.vtu"))
+            .args(["--partitioner", "pieces"])
+            .args(extra)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{extra:?}: {err}");
+    };
+    refused(2, input, &[], "give a .pvtu input");
+    refused(2, &pvtu, &["--boundary", "slide"], "only the fixed boundary");
+    refused(4, &pvtu, &[], "3 pieces for 4 ranks");
 }

@@ -497,6 +497,10 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         }
     }
     #[cfg(feature = "mpi")]
+    if a.partitioner == Partitioner::Pieces {
+        return smooth_pieces(a, pieces, format);
+    }
+    #[cfg(feature = "mpi")]
     let mut mesh = read_on_ranks(&a.input, a.quiet)?;
     #[cfg(not(feature = "mpi"))]
     let mut mesh = io::read(&a.input)?;
@@ -638,6 +642,93 @@ fn piece_owners(mesh: &Mesh, count: Option<usize>, partitioner: Partitioner) -> 
 /// Numbers separated by commas.
 fn list(items: &[usize]) -> String {
     items.iter().map(usize::to_string).collect::<Vec<_>>().join(", ")
+}
+
+/// `smooth --partitioner pieces`: the ranks smooth the input's pieces, each
+/// setting up its own part (`Cluster::smooth_pieces`); rank 0 never holds
+/// the whole mesh unless the output is one file.
+#[cfg(feature = "mpi")]
+fn smooth_pieces(a: &SmoothArgs, pieces: Option<Option<usize>>, format: Format) -> Result<()> {
+    let refuse = |what: &str| Err(Error::Unsupported(format!("--partitioner pieces: {what}")));
+    let Some(cluster) = super::ranks::cluster().filter(|c| c.size() > 1 && is_pvtu(&a.input)) else {
+        return refuse(
+            "the parts are a .pvtu input's pieces: give a .pvtu input and run under mpirun on 2 or more ranks",
+        );
+    };
+    let data = std::fs::read(&a.input).map_err(|e| Error::io(&a.input, e))?;
+    let sources = io::piece_paths(&a.input, &data)?;
+    if let Some(Some(c)) = pieces
+        && c != sources.len()
+    {
+        return refuse(&format!(
+            "the output has the input's {} pieces (--pieces {c} needs --partitioner metis or rcb)",
+            sources.len()
+        ));
+    }
+    let rules = a.solver.boundary.rules()?;
+    let boundary = a.solver.boundary.boundary()?;
+    if boundary.mode != BoundaryMode::Fixed
+        || a.solver.objective.reference.is_some()
+        || !(rules.fix_groups.is_empty() && rules.fixed_arrays.is_empty() && rules.fixed_ids.is_empty())
+        || a.drop_data
+        || a.save_partial
+    {
+        return refuse(
+            "only the fixed boundary, the ideal targets and the file's own fixed flags (no --boundary slide, --reference, --fix-*, --drop-data or --save-partial)",
+        );
+    }
+    let objective = a.solver.objective.options(None)?;
+    let params = a.solver.params()?;
+    let choice = device::choose(a.solver.device, &a.solver.gpu, &[a.solver.method])?;
+    let job = solve::pieces::PiecesJob {
+        index: a.input.clone(),
+        sources,
+        method: a.solver.method,
+        params: params.clone(),
+        metric: objective.metric,
+        template: objective.template,
+        ordering: objective.ordering.to_string(),
+        order_seed: objective.order_seed,
+        output: a.output.clone(),
+        format,
+        pieces: pieces.is_some(),
+        // each rank on its own GPU context when rank 0's choice is a GPU
+        gpu: matches!(choice, device::Choice::Gpu(_)).then(|| solve::distributed::RankGpu {
+            adapter: a.solver.gpu.adapter.clone(),
+            precision: a.solver.gpu.precision,
+        }),
+    };
+    let mut progress = Progress::new(params.max_iter, !a.quiet);
+    let result = cluster.smooth_pieces(&job, &mut |r| progress.update(r));
+    progress.finish(result.as_ref().ok().and_then(|o| o.info.history.last()));
+    let out = result.map_err(|e| io::in_file(&a.input, e))?;
+    if !a.quiet {
+        let f0 = out.info.history.first().map_or(out.info.objective, |r| r.objective);
+        println!(
+            "note: the {} pieces of {} were read by ranks {} (in piece order); each rank set up its own part from them",
+            out.readers.len(),
+            a.input.display(),
+            list(&out.readers)
+        );
+        println!("{}", summary(&out.info, f0));
+        println!("\n{}", out.report);
+        if pieces.is_some() {
+            println!(
+                "wrote {} pieces ({} to {})",
+                out.written.len() - 1,
+                out.written[0].display(),
+                out.written[out.written.len() - 2].display()
+            );
+            println!("pieces written by ranks {}; the index by rank 0", list(&out.readers));
+        }
+    }
+    if let Some(h) = &a.history {
+        io::write_atomic(h, |w| Ok(w.write_all(out.info.history.to_csv().as_bytes())?))?;
+    }
+    if !a.quiet {
+        println!("wrote {}", a.output.display());
+    }
+    Ok(())
 }
 
 /// The input; under mpirun a .pvtu's pieces are read by the ranks (see

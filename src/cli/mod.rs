@@ -183,8 +183,10 @@ pub struct SmoothArgs {
     #[arg(long)]
     pub no_untangle: bool,
     /// How the vertices are shared out among MPI ranks (under mpirun) and among --pieces:
-    /// metis (METIS 5 on the vertex graph: fewest cut edges; built with --features mpi) or
-    /// rcb (recursive coordinate bisection).
+    /// metis (METIS 5 on the vertex graph: fewest cut edges; built with --features mpi),
+    /// rcb (recursive coordinate bisection) or pieces (a .pvtu input's own pieces under
+    /// mpirun: each rank sets up its part from the pieces it reads, and writes them back;
+    /// no rank holds the whole mesh).
     #[arg(long, value_enum, default_value_t = Partitioner::default())]
     pub partitioner: Partitioner,
     /// Write the output as a ParaView .pvtu index (-o NAME.pvtu) and N .vtu pieces beside it

@@ -31,8 +31,8 @@ mod vtu;
 
 pub use atomic::{same_file, same_target, write_atomic};
 pub use pvtu::{
-    GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, piece_error, piece_path, piece_paths, write_pieces,
-    write_pieces_with,
+    GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, merge_pieces, merge_share, piece_error, piece_path,
+    piece_paths, point_ids, write_index, write_pieces, write_pieces_with,
 };
 pub use smoothed::{eta_field, write_mesh, write_mesh_pieces, write_mesh_pieces_with};
 

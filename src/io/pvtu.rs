@@ -117,7 +117,38 @@ pub(crate) fn read_with(
             format!("{} pieces read of {}", pieces.len(), sources.len()),
         ));
     }
-    merge(path, &pieces, &sources)
+    merge(path, &pieces, &sources, false)
+}
+
+/// An index's pieces (`names` their files) merged into the whole mesh, as [`read`] merges them.
+pub fn merge_pieces(index: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<Mesh> {
+    merge(index, pieces, names, false)
+}
+
+/// Writes the index `path` over pieces shaped like `piece` (the same
+/// arrays, plus `cell_data`), named `sources` beside it: for pieces written
+/// elsewhere, e.g. by the ranks that hold them.
+pub fn write_index(path: &Path, piece: &Mesh, cell_data: &[CellData], sources: &[String]) -> Result<()> {
+    write_atomic(path, |w| vtu::write_index(w, piece, cell_data, sources))
+}
+
+/// Some of an index's pieces (`names` their files) merged as [`read`] merges
+/// all of them, with the global id of each merged point when every piece
+/// carries `GlobalPointIds` or `GlobalNodeIds`: a rank's share of a
+/// partitioned input, which the other ranks' shares meet at those ids (or,
+/// without them, at bitwise-equal coordinates).
+pub fn merge_share(index: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<(Mesh, Option<Vec<i64>>)> {
+    let mut mesh = merge(index, pieces, names, true)?;
+    let ids = POINT_ID_NAMES
+        .iter()
+        .find_map(|&n| mesh.data.point.iter().find(|a| a.name == n))
+        .filter(|_| pieces.iter().all(|p| point_ids(p).is_some()))
+        .map(|a| (0..mesh.num_points()).map(|l| a.get_i64(l)).collect());
+    // the rank's own numbering of its cells is no global id
+    if pieces.iter().any(|p| cell_ids(p).is_none()) {
+        mesh.data.cell.retain(|a| a.name != GLOBAL_CELL_IDS);
+    }
+    Ok((mesh, ids))
 }
 
 /// Piece `i` (file `piece`) of the index `index`, unmerged; errors name both.
@@ -136,7 +167,8 @@ enum Key {
     Bits([u64; 3]),
 }
 
-fn point_ids(piece: &Mesh) -> Option<&DataArray> {
+/// A piece's global point ids, if it carries them.
+pub fn point_ids(piece: &Mesh) -> Option<&DataArray> {
     POINT_ID_NAMES.iter().find_map(|&n| {
         piece
             .data
@@ -155,7 +187,8 @@ fn cell_ids(piece: &Mesh) -> Option<&DataArray> {
 }
 
 /// The pieces as one mesh (see the module documentation).
-fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<Mesh> {
+/// `keep_ids`: keep id arrays that merely count (on a share of the pieces they are still ids).
+fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf], keep_ids: bool) -> Result<Mesh> {
     let err = |i: usize, msg: String| Error::parse(path, None, format!("piece {i} ({}): {msg}", names[i].display()));
     let ids: Option<Vec<&DataArray>> = pieces.iter().map(point_ids).collect();
     // the first (piece, point) of each merged point
@@ -328,8 +361,10 @@ fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<Mesh> {
     mesh.data.point = concat_select(&point_arrays, &point_rows);
     mesh.data.cell = concat_select(&cell_arrays, &cell_rows);
     mesh.data.field = pieces[0].data.field.clone();
-    drop_counting_ids(&mut mesh.data.point, &POINT_ID_NAMES);
-    drop_counting_ids(&mut mesh.data.cell, &[GLOBAL_CELL_IDS]);
+    if !keep_ids {
+        drop_counting_ids(&mut mesh.data.point, &POINT_ID_NAMES);
+        drop_counting_ids(&mut mesh.data.cell, &[GLOBAL_CELL_IDS]);
+    }
     Ok(mesh)
 }
 
@@ -517,32 +552,14 @@ pub fn write_pieces_with(
             path.display()
         )));
     };
-    write_atomic(path, |w| {
-        vtu::write_index(w, &piece, &with_names(cell_data, &data), &sources)
-    })?;
+    write_index(path, &piece, &with_names(cell_data, &data), &sources)?;
     Ok(paths)
 }
 
 /// The part of `mesh` on vertices `verts` and elements `elems` (both
 /// ascending), with their global ids.
 fn piece_mesh(mesh: &Mesh, verts: &[usize], elems: &[usize]) -> Mesh {
-    let mut local = HashMap::with_capacity(verts.len());
-    for (l, &v) in verts.iter().enumerate() {
-        local.insert(v as u32, l as u32);
-    }
-    let mut piece = Mesh::new(verts.iter().map(|&v| mesh.points[v]).collect());
-    for &e in elems {
-        let vs: Vec<u32> = mesh.element(e).iter().map(|v| local[v]).collect();
-        if mesh.kinds[e] == ElementKind::Polyhedron {
-            let faces: Vec<Vec<u32>> = mesh.faces.of(e).map(|f| f.iter().map(|v| local[v]).collect()).collect();
-            piece.push_polyhedron(&vs, faces.iter().map(Vec::as_slice));
-        } else {
-            piece.push_element(mesh.kinds[e], &vs);
-        }
-    }
-    if !mesh.fixed.is_empty() {
-        piece.fixed = verts.iter().map(|&v| mesh.fixed[v]).collect();
-    }
+    let mut piece = mesh.cut(verts, elems);
     let ids = |name: &str, rows: &[usize]| {
         DataArray::new(
             name,

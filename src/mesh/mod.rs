@@ -154,6 +154,30 @@ impl Mesh {
         if self.kinds.iter().any(|k| k.dim() == 3) { 3 } else { 2 }
     }
 
+    /// The elements `elems` and the vertices `verts` (both ascending; `verts`
+    /// must hold every vertex of `elems`) as a mesh of their own, numbered in
+    /// that order, with their fixed flags; no arrays.
+    pub fn cut(&self, verts: &[usize], elems: &[usize]) -> Mesh {
+        let mut local = std::collections::HashMap::with_capacity(verts.len());
+        for (l, &v) in verts.iter().enumerate() {
+            local.insert(v as u32, l as u32);
+        }
+        let mut piece = Mesh::new(verts.iter().map(|&v| self.points[v]).collect());
+        for &e in elems {
+            let vs: Vec<u32> = self.element(e).iter().map(|v| local[v]).collect();
+            if self.kinds[e] == ElementKind::Polyhedron {
+                let faces: Vec<Vec<u32>> = self.faces.of(e).map(|f| f.iter().map(|v| local[v]).collect()).collect();
+                piece.push_polyhedron(&vs, faces.iter().map(Vec::as_slice));
+            } else {
+                piece.push_element(self.kinds[e], &vs);
+            }
+        }
+        if !self.fixed.is_empty() {
+            piece.fixed = verts.iter().map(|&v| self.fixed[v]).collect();
+        }
+        piece
+    }
+
     pub fn is_fixed(&self, v: usize) -> bool {
         self.fixed.get(v).copied().unwrap_or(false)
     }

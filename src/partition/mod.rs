@@ -11,12 +11,17 @@
 //! the whole problem gives. Its colour classes hold only owned vertices, taken
 //! from the whole problem's colouring, so a coloured sweep visits exactly what
 //! one process visits. Nothing here needs MPI: the split runs on one process
-//! (rank 0) and the parts are shipped.
+//! (rank 0) and the parts are shipped. `local` builds the same kind of part
+//! on each rank from the mesh pieces it read, without the whole problem,
+//! talking to the other ranks through its `Network`.
 //!
 //! Who owns which vertex comes from a [`Partitioner`]: METIS on the vertex
 //! graph where built in (feature `metis`, which `mpi` enables), else the
 //! built-in recursive coordinate bisection.
 
+// its messages are serialised with ciborium, which comes with `mpi`
+#[cfg(feature = "mpi")]
+pub mod local;
 #[cfg(feature = "metis")]
 mod metis;
 mod quality;
@@ -41,6 +46,9 @@ pub enum Partitioner {
     Metis,
     /// Recursive coordinate bisection of the vertex positions (no library needed).
     Rcb,
+    /// The input's .pvtu pieces as they are (under mpirun): each rank sets up
+    /// its own part from the pieces it reads; no rank holds the whole mesh.
+    Pieces,
 }
 
 impl Default for Partitioner {
@@ -58,6 +66,7 @@ impl Partitioner {
         match self {
             Partitioner::Metis => "metis",
             Partitioner::Rcb => "rcb",
+            Partitioner::Pieces => "pieces",
         }
     }
 
@@ -74,6 +83,9 @@ impl Partitioner {
                 "--partitioner metis: this build has no METIS (build with --features metis or mpi); use rcb".into(),
             )),
             Partitioner::Rcb => Ok(rcb(x, parts)),
+            Partitioner::Pieces => Err(crate::error::Error::Unsupported(
+                "--partitioner pieces takes the parts from a .pvtu input's pieces under mpirun; it cannot split a whole mesh (use metis or rcb)".into(),
+            )),
         }
     }
 }
@@ -125,7 +137,8 @@ pub struct Part {
     pub problem: Problem,
     /// Positions of the part's vertices (part numbering).
     pub x: Vec<Vec3>,
-    /// Global id (the whole problem's numbering) of each vertex, ascending.
+    /// Global id of each vertex: the whole problem's numbering, ascending, in
+    /// a [`split`] part; in a `local` one, in the part's own vertex order.
     pub global: Vec<u32>,
     /// Per vertex: does this part own it?
     pub owned: Vec<bool>,
@@ -141,7 +154,7 @@ pub struct Part {
     pub free_colour: Vec<u32>,
     /// Mean edge length of the whole start, the scale of the stopping test.
     pub edge: f64,
-    /// Setup time of the whole problem plus the split.
+    /// Setup time of the whole problem plus the split (of the part, for a `local` one).
     pub setup: Duration,
 }
 

@@ -99,7 +99,7 @@ pub fn colours(adj: &Adjacency) -> Csr {
 }
 
 /// Per vertex: the other vertices of its elements, sorted, each once.
-fn sharing_neighbours(elements: &Csr, n: usize) -> Csr {
+pub(crate) fn sharing_neighbours(elements: &Csr, n: usize) -> Csr {
     let vertex_elements = Csr::from_pairs(
         n,
         (0..elements.len()).flat_map(|e| elements.of(e).iter().map(move |&v| (v, e as u32))),

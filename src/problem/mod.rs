@@ -25,6 +25,8 @@ mod check;
 mod corners;
 mod numbering;
 
+#[cfg(feature = "mpi")]
+pub(crate) use adjacency::sharing_neighbours;
 pub use adjacency::{Adjacency, adjacency, colours};
 pub use boundary::{Boundary, BoundaryMode, Sliding};
 pub use check::check;

@@ -14,6 +14,10 @@
 //! are refused (Laplace; `bcd` runs colour by colour, as on a GPU). Sliding
 //! vertices carry their constraints into the parts (`Sliding::restrict`):
 //! projecting is per vertex, so it gives the single-process bits.
+//!
+//! `--partitioner pieces` takes another road to the same `run_part`: the
+//! ranks set up their own parts from a `.pvtu` input's pieces, and no rank
+//! holds the whole problem (`super::pieces`).
 
 use super::{Info, Method, Options, Params, Record, Scale, run_scaled};
 use crate::backend::Backend;
@@ -36,7 +40,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-const JOB_TAG: i32 = 3;
+pub(super) const JOB_TAG: i32 = 3;
 const RESULT_TAG: i32 = 4;
 
 /// The MPI job this process is a rank of.
@@ -102,6 +106,14 @@ impl Cluster {
         self.report.borrow().clone()
     }
 
+    pub(super) fn world(&self) -> &SimpleCommunicator {
+        &self.world
+    }
+
+    pub(super) fn report_slot(&self) -> std::cell::RefMut<'_, Option<Report>> {
+        self.report.borrow_mut()
+    }
+
     /// Rank 0 releases the waiting ranks; then MPI is finalised. Call once, at the end.
     pub fn finish(&self) {
         if self.rank() == 0 {
@@ -126,6 +138,11 @@ pub struct RankReport {
     /// Wall time of the solver loop on this rank.
     pub seconds: f64,
     pub comm: CommStats,
+    /// Vertices (owned and ghosts) and elements of this rank's part.
+    pub vertices: usize,
+    pub elements: usize,
+    /// Peak resident memory of this rank's process (VmHWM), MiB; 0 where unknown.
+    pub peak_rss_mib: f64,
 }
 
 /// What a partitioned solve reports besides `Info`.
@@ -136,8 +153,13 @@ pub struct Report {
     /// Why it is not the one asked for, if it is not.
     pub fallback: Option<String>,
     /// The owning rank of each vertex of the mesh (mesh numbering, as
-    /// `Problem::order` maps it), so outputs can be written per rank.
+    /// `Problem::order` maps it), so outputs can be written per rank; empty
+    /// when the ranks set up their own parts (no rank holds the mesh).
     pub owner: Vec<u32>,
+    /// Vertices of the whole mesh.
+    pub vertices: usize,
+    /// Did rank 0 hold and split the whole problem (else each rank set up its own part)?
+    pub whole_on_rank0: bool,
     pub quality: Quality,
     pub ranks: Vec<RankReport>,
     pub iterations: usize,
@@ -181,6 +203,24 @@ impl fmt::Display for Report {
             // one exchange per product; the rest are the line searches' trial points
             write!(f, ", {} CG iterations", self.cg_iterations)?;
         }
+        let most = |g: &dyn Fn(&RankReport) -> usize| self.ranks.iter().map(g).max().unwrap_or(0);
+        write!(
+            f,
+            "\nmpi memory: largest part {} vertices (owned and ghosts) and {} elements, of the mesh's {} vertices; {}",
+            most(&|r| r.vertices),
+            most(&|r| r.elements),
+            self.vertices,
+            if self.whole_on_rank0 {
+                "rank 0 also held the whole mesh and problem"
+            } else {
+                "no rank held the whole mesh (parts set up on the ranks)"
+            }
+        )?;
+        let rss = max(&|r| r.peak_rss_mib);
+        if rss > 0.0 {
+            let each: Vec<String> = self.ranks.iter().map(|r| format!("{:.1}", r.peak_rss_mib)).collect();
+            write!(f, "; peak RSS per rank (MiB) {} (max {rss:.1})", each.join(", "))?;
+        }
         Ok(())
     }
 }
@@ -196,6 +236,9 @@ enum Job {
     /// Write this piece atomically, with these cell arrays; answered with
     /// the error, if any.
     Write(PathBuf, Box<Mesh>, Format, Vec<(String, Vec<f64>)>),
+    /// Smooth the pieces of an index, each rank setting up its own part
+    /// (`Cluster::smooth_pieces`); every rank takes part, none answers.
+    Pieces(Box<super::pieces::PiecesJob>),
 }
 
 /// `Job` as rank 0 sends it: borrowing what it sends (the same encoding).
@@ -205,15 +248,21 @@ enum JobRef<'a> {
     Solve(&'a Part, Method, &'a Params, Option<&'a RankGpu>),
     Read(&'a [(usize, PathBuf)]),
     Write(&'a Path, &'a Mesh, Format, Vec<(&'a str, &'a [f64])>),
+    Pieces(&'a super::pieces::PiecesJob),
+}
+
+/// The job that starts a pieces solve on a rank, encoded.
+pub(super) fn encode_job(job: &super::pieces::PiecesJob) -> Vec<u8> {
+    encode(&JobRef::Pieces(job))
 }
 
 /// What a rank sends back after a solve.
 #[derive(serde::Serialize, serde::Deserialize)]
-struct Outcome {
+pub(super) struct Outcome {
     /// Global ids and positions of the owned vertices.
-    global: Vec<u32>,
-    x: Vec<Vec3>,
-    rank: RankReport,
+    pub(super) global: Vec<u32>,
+    pub(super) x: Vec<Vec3>,
+    pub(super) rank: RankReport,
     error: Option<String>,
 }
 
@@ -290,6 +339,8 @@ pub fn lead(
         partitioner,
         fallback,
         owner: mesh_owner,
+        vertices: p.num_vertices(),
+        whole_on_rank0: true,
         quality,
         ranks: outcomes.iter().map(|o| o.rank).collect(),
         iterations: info.iterations,
@@ -343,6 +394,11 @@ pub fn follow(cluster: &Cluster) -> Result<()> {
                 encode(&run_part(&cluster.world, &part, method, &params, gpu.as_deref(), &mut |_| true).1)
             }
             Job::Read(pieces) => encode(&read_own(&pieces)),
+            Job::Pieces(job) => {
+                // every rank learns the outcome in the collective steps; rank 0 reports it
+                let _ = super::pieces::run_pieces(&cluster.world, &job, &mut |_| true);
+                continue;
+            }
             Job::Write(path, piece, format, cells) => {
                 let cell_data: Vec<CellData> = cells.iter().map(|(name, values)| CellData { name, values }).collect();
                 encode(
@@ -469,7 +525,7 @@ impl io::PieceWriter for RankPieces<'_> {
     }
 }
 
-fn run_part(
+pub(super) fn run_part(
     world: &SimpleCommunicator,
     part: &Part,
     method: Method,
@@ -523,6 +579,9 @@ fn run_part(
             iterations: result.as_ref().map_or(0, |i| i.iterations),
             seconds: start.elapsed().as_secs_f64(),
             comm,
+            vertices: part.owned.len(),
+            elements: part.problem.num_elements(),
+            peak_rss_mib: super::pieces::peak_rss_mib(),
         },
         error: result.as_ref().err().map(|e| e.to_string()),
     };

@@ -15,6 +15,8 @@ pub mod line_search;
 pub mod newton;
 pub mod nlcg;
 pub mod pcg;
+#[cfg(feature = "mpi")]
+pub mod pieces;
 pub mod reorder;
 pub mod rezone;
 pub mod untangle;
