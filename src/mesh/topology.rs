@@ -247,12 +247,14 @@ fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
             || (Vec::<[u32; 4]>::new(), Vec::<u32>::new()),
             |(mut keys, mut skin), v| {
                 keys.clear();
+                let v32 = v as u32;
                 for &e in ve.of(v) {
                     let vs = mesh.element(e as usize);
                     for f in mesh.kinds[e as usize].facets() {
-                        let k = key(vs, f);
-                        if k[0] == v as u32 {
-                            keys.push(k);
+                        // only the facets v is lowest on: tested before the
+                        // key is sorted, which most facets never need
+                        if f.iter().all(|&l| vs[l] >= v32) && f.iter().any(|&l| vs[l] == v32) {
+                            keys.push(key(vs, f));
                         }
                     }
                 }
