@@ -500,15 +500,7 @@ fn newton_with_a_gpu_per_rank_matches_one_gpu_process() {
     for (input, ranks) in [(&all[0], 2), (&all[0], 3), (&all[2], 2)] {
         let (one, two) = gpu_pair(dir.path(), input, "newton", "f64", ranks, &[]);
         let what = format!("{} on {ranks} ranks", input.display());
-        assert_eq!(two.objective.len(), one.objective.len(), "{what}: iteration count");
-        for (k, (a, b)) in one.objective.iter().zip(&two.objective).enumerate() {
-            assert!(
-                (a - b).abs() <= 1e-10 * a.abs(),
-                "{what}: F at iteration {k}: {a} vs {b}"
-            );
-        }
-        let dx = max_rel(&one.points, &two.points);
-        assert!(dx <= 1e-9, "{what}: iterates differ by {dx:e}");
+        assert_same_run(&one, &two, &what, 1e-10, 1e-9);
         let cpu = smooth(None, input, dir.path(), "newton");
         let (a, b) = (cpu.objective.last().unwrap(), two.objective.last().unwrap());
         assert!(
@@ -576,16 +568,22 @@ fn nlcg_sliding_and_planar_with_a_gpu_per_rank_match_one_gpu_process() {
     ] {
         let (one, two) = gpu_pair(dir.path(), input, method, "f64", 2, extra);
         let what = format!("{} {method} {extra:?}", input.display());
-        assert_eq!(two.objective.len(), one.objective.len(), "{what}: iteration count");
-        for (k, (a, b)) in one.objective.iter().zip(&two.objective).enumerate() {
-            assert!(
-                (a - b).abs() <= 1e-9 * a.abs(),
-                "{what}: F at iteration {k}: {a} vs {b}"
-            );
-        }
-        let dx = max_rel(&one.points, &two.points);
-        assert!(dx <= 1e-9, "{what}: iterates differ by {dx:e}");
+        assert_same_run(&one, &two, &what, 1e-9, 1e-9);
     }
+}
+
+/// Two runs with the same iteration count, F at every iteration within
+/// `f_tol` (relative) and final iterates within `x_tol`.
+fn assert_same_run(one: &Run, two: &Run, what: &str, f_tol: f64, x_tol: f64) {
+    assert_eq!(two.objective.len(), one.objective.len(), "{what}: iteration count");
+    for (k, (a, b)) in one.objective.iter().zip(&two.objective).enumerate() {
+        assert!(
+            (a - b).abs() <= f_tol * a.abs(),
+            "{what}: F at iteration {k}: {a} vs {b}"
+        );
+    }
+    let dx = max_rel(&one.points, &two.points);
+    assert!(dx <= x_tol, "{what}: iterates differ by {dx:e}");
 }
 
 /// `input` written as `parts` .pvtu pieces (RCB, one process, no iteration):

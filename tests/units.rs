@@ -7,7 +7,7 @@ use common::{context, options, perturbed_box};
 
 use meshsmooth::Mesh;
 use meshsmooth::backend::gpu::Precision;
-use meshsmooth::solve::{self, Device, Info, Method, Params};
+use meshsmooth::solve::{self, Device, Info, Method, Params, StopReason};
 
 /// A perturbed box whose coordinates are multiples of 1/64, so that shifting
 /// by 1e9 is exact and the shifted mesh is the same mesh.
@@ -57,7 +57,14 @@ fn check(device: Device, label: &str) {
                 base.objective
             );
             assert!(info.iterations.abs_diff(base.iterations) <= 1, "{case}: iterations");
-            assert_eq!(info.stop, base.stop, "{case}");
+            // NLCG one iteration from |grad F| < tol may find no decrease
+            // of F above its rounding (the line search's floor): a small
+            // step there is the same end as converging
+            let near = |s: StopReason| match (method, s) {
+                (Method::Nlcg, StopReason::SmallStep) => StopReason::Converged,
+                _ => s,
+            };
+            assert_eq!(near(info.stop), near(base.stop), "{case}");
             // the same mesh in the new units: vertex by vertex, to the rounding of the
             // new coordinates and the solver's tolerance
             let edge = scale;

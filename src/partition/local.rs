@@ -381,12 +381,7 @@ fn ghost_layer(net: &dyn Network, mesh: &Mesh, gid: &[u32], owner: &[u32]) -> Re
         }
     }
     let layer = |elems: &[usize]| {
-        let mut verts: Vec<usize> = elems
-            .iter()
-            .flat_map(|&e| mesh.element(e).iter().map(|&v| v as usize))
-            .collect();
-        verts.sort_unstable();
-        verts.dedup();
+        let verts = vertices_of(mesh, elems);
         Layer {
             mesh: mesh.cut(&verts, elems),
             gid: verts.iter().map(|&v| gid[v]).collect(),
@@ -508,6 +503,17 @@ fn colour(
     (classes, free_colour)
 }
 
+/// The vertices of `elems`, ascending, each once.
+fn vertices_of(mesh: &Mesh, elems: &[usize]) -> Vec<usize> {
+    let mut verts: Vec<usize> = elems
+        .iter()
+        .flat_map(|&e| mesh.element(e).iter().map(|&v| v as usize))
+        .collect();
+    verts.sort_unstable();
+    verts.dedup();
+    verts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -580,12 +586,7 @@ mod tests {
                         let elems: Vec<usize> = (0..mesh.num_elements())
                             .filter(|&e| owner[mesh.element(e)[0] as usize] as usize == rank)
                             .collect();
-                        let mut verts: Vec<usize> = elems
-                            .iter()
-                            .flat_map(|&e| mesh.element(e).iter().map(|&v| v as usize))
-                            .collect();
-                        verts.sort_unstable();
-                        verts.dedup();
+                        let verts = super::vertices_of(mesh, &elems);
                         let piece = mesh.cut(&verts, &elems);
                         let gid: Vec<i64> = verts.iter().map(|&v| v as i64).collect();
                         let net = Threads {
