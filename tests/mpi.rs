@@ -689,6 +689,33 @@ fn ranks_setting_up_their_own_parts_from_pieces_match_one_process() {
     }
 }
 
+/// Parts set up on the ranks from pieces run on a GPU per rank too: Newton
+/// in f64 on 2 ranks gives one GPU process's F at every iteration to 1e-10
+/// with the same iteration count, feasible, fixed vertices unmoved.
+#[test]
+fn parts_set_up_on_the_ranks_run_on_a_gpu_per_rank() {
+    if !gpu_ranks_possible(Precision::F64) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let input = &meshes(dir.path())[0];
+    let pvtu = pieces_of(input, 2, true);
+    let gpu = ["--device", "gpu", "--precision", "f64"];
+    let one = smooth_with(None, &pvtu, dir.path(), "newton", "metis", &gpu);
+    let two = smooth_with(Some(2), &pvtu, dir.path(), "newton", "pieces", &gpu);
+    let what = format!("{} on 2 GPU ranks from pieces", pvtu.display());
+    assert!(one.objective.len() > 2, "{what}: the plain run did nothing");
+    assert!(
+        two.stdout.contains("on mpi (2 ranks) x gpu") && two.stdout.contains("no rank held the whole mesh"),
+        "{what}: not parts set up on GPU ranks:\n{}",
+        two.stdout
+    );
+    assert_same_run(&one, &two, &what, 1e-10, 1e-8);
+    let mesh = meshsmooth::io::read(&pvtu).unwrap();
+    assert!(inverted_elements(&mesh, &two.points).is_empty(), "{what}: infeasible");
+    assert_fixed_unmoved(&mesh, &two.points, &what);
+}
+
 /// The ranks write back the pieces they read (piece r by its reader) and
 /// they read back as the mesh the same run gathers into one file; pieces VTK
 /// wrote (no global ids, single-precision points, ghost cells) smooth to the
