@@ -33,7 +33,7 @@ pub struct BlockFactors {
 
 impl BlockFactors {
     /// The Hessian block (k, l), k <= l, of the corner `shape`.
-    #[inline]
+    #[inline(always)]
     pub fn block(&self, shape: &TetShape, k: usize, l: usize) -> Mat3 {
         let (u, c, v) = (&self.u, &self.c, &self.v);
         let mut blk = [[0.0; 3]; 3];

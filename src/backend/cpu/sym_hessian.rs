@@ -535,7 +535,7 @@ impl Rows<'_> {
     /// rows of this range; `block(a, b)` gives the element's block (a, b)
     /// for a <= b only.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn scatter(
         &self,
         fi: &[u32; 4],
@@ -580,7 +580,7 @@ impl Rows<'_> {
     }
 }
 
-#[inline]
+#[inline(always)]
 fn add(blk: &mut Mat3, h: &Mat3, scale: f64) {
     for c in 0..3 {
         for q in 0..3 {
@@ -589,7 +589,7 @@ fn add(blk: &mut Mat3, h: &Mat3, scale: f64) {
     }
 }
 
-#[inline]
+#[inline(always)]
 fn add_transposed(blk: &mut Mat3, h: &Mat3, scale: f64) {
     for c in 0..3 {
         for q in 0..3 {
