@@ -15,6 +15,7 @@ use meshsmooth::metric::inverted_elements;
 use meshsmooth::metric::mat3::Vec3;
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::{Problem, ProblemOptions};
+use meshsmooth::solve::pcg::Preconditioner;
 use meshsmooth::solve::untangle::{UntangleParams, untangle, untangling_model};
 use meshsmooth::solve::{Device, Method, Options, Params};
 
@@ -158,7 +159,10 @@ fn untangle_on_gpu(precision: Precision, tol: f64) {
         generate::perturb_unguarded(&mut mesh, &opts).unwrap();
         let p = Problem::new(&mesh).unwrap();
         let x0 = p.gather(&mesh.points);
-        let params = Params::default();
+        // the GPU's preconditioner on both (auto takes Gauss-Seidel for a
+        // planar mesh on the CPU)
+        let mut params = Params::default();
+        params.newton.preconditioner = Preconditioner::Jacobi;
         let run = |device: Device| {
             let mut x = x0.clone();
             let o = Options {

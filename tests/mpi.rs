@@ -65,6 +65,11 @@ fn smooth_with(ranks: Option<usize>, input: &Path, dir: &Path, method: &str, par
     if !extra.contains(&"--device") {
         cmd.args(["--device", "cpu"]);
     }
+    // partitioned runs precondition with block Jacobi (auto's Gauss-Seidel on
+    // a planar mesh is one process's): the single run here must do the same
+    if method == "newton" && !extra.contains(&"--preconditioner") {
+        cmd.args(["--preconditioner", "jacobi"]);
+    }
     if extra.contains(&"gpu") {
         // a waiting rank yields its core to the others' (software) GPU instead of spinning
         cmd.env("OMPI_MCA_mpi_yield_when_idle", "1");

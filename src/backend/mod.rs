@@ -224,7 +224,8 @@ pub trait Backend {
     /// Jacobi, the paper's, is the default and the only one every backend has.
     fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
         match kind {
-            Preconditioner::Jacobi => Ok(()),
+            // auto: block Jacobi unless a backend says otherwise
+            Preconditioner::Jacobi | Preconditioner::Auto => Ok(()),
             other => Err(crate::error::Error::InvalidArgument(format!(
                 "preconditioner '{other}' has no version on {} (use jacobi)",
                 self.describe()

@@ -243,9 +243,10 @@ pub struct SolverArgs {
     /// Newton; fewer iterations on the test meshes) or the direction itself (the paper's).
     #[arg(long, value_enum, default_value_t = NewtonParams::default().negative_curvature)]
     pub negative_curvature: NegativeCurvature,
-    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device) or symmetric block
-    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer).
-    #[arg(long, value_enum, default_value_t = NewtonParams::default().preconditioner)]
+    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device), symmetric block
+    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer) or auto (Gauss-Seidel for
+    /// planar meshes on the CPU, block Jacobi elsewhere).
+    #[arg(long, value_enum, default_value_t = Preconditioner::Auto)]
     pub preconditioner: Preconditioner,
     /// Newton: after a trial step that inverts an element, try this fraction of the distance
     /// at which the first corner inverts (from the corners' determinant polynomials); 0 halves
@@ -358,9 +359,10 @@ pub struct CompareArgs {
     pub gpu: GpuArgs,
     #[command(flatten)]
     pub stop: StopArgs,
-    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device) or symmetric block
-    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer).
-    #[arg(long, value_enum, default_value_t = NewtonParams::default().preconditioner)]
+    /// Newton: CG's preconditioner: block Jacobi (the paper's; every device), symmetric block
+    /// Gauss-Seidel (CPU only; fewer CG iterations, each dearer) or auto (Gauss-Seidel for
+    /// planar meshes on the CPU, block Jacobi elsewhere).
+    #[arg(long, value_enum, default_value_t = Preconditioner::Auto)]
     pub preconditioner: Preconditioner,
     /// Write the merged histories as CSV.
     #[arg(long, value_name = "FILE.csv")]

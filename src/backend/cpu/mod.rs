@@ -358,7 +358,11 @@ impl Backend for CpuBackend<'_> {
     }
 
     fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
-        self.preconditioner = kind;
+        self.preconditioner = match kind {
+            Preconditioner::Auto if self.p.is_some_and(|p| p.dim == 2) => Preconditioner::Sgs,
+            Preconditioner::Auto => Preconditioner::Jacobi,
+            k => k,
+        };
         Ok(())
     }
 
@@ -377,7 +381,7 @@ impl Backend for CpuBackend<'_> {
         let (h, sys) = (self.hessian.take(), self.system.take());
         let (xs, ys) = self.pair(x, y);
         let result = match (kind, h.as_ref().map(|h| &h.matrix).or(sys.as_ref())) {
-            (Preconditioner::Jacobi, _) => {
+            (Preconditioner::Jacobi | Preconditioner::Auto, _) => {
                 m.apply(xs, ys);
                 Ok(())
             }
