@@ -10,6 +10,7 @@
 //! (DIR defaults to ../shared/meshes next to this repository).
 
 use meshsmooth::io;
+use meshsmooth::solve::pcg::Preconditioner;
 use meshsmooth::solve::{self, Info, Method, Params};
 use std::path::PathBuf;
 
@@ -59,6 +60,9 @@ fn main() {
         } else {
             &[(Method::Newton, 1), (Method::Newton, all)]
         };
+        // the command line's preconditioner, as in the README's table
+        let mut params = Params::default();
+        params.newton.preconditioner = Preconditioner::Auto;
         for &(method, threads) in runs {
             let run = || -> Info {
                 // best of three: the machine may be shared
@@ -68,7 +72,7 @@ fn main() {
                         solve::smooth_mesh(
                             &mut m,
                             &Default::default(),
-                            &solve::Options::cpu(method, &Params::default()),
+                            &solve::Options::cpu(method, &params),
                             &mut |_| true,
                         )
                         .unwrap()
