@@ -178,15 +178,7 @@ fn compare(method: &str, partitioner: &str, ranks: std::ops::RangeInclusive<usiz
                 "{what}: the report does not name the partitioner:\n{}",
                 many.stdout
             );
-            assert_eq!(many.objective.len(), one.objective.len(), "{what}: iteration count");
-            for (k, (a, b)) in one.objective.iter().zip(&many.objective).enumerate() {
-                assert!(
-                    (a - b).abs() <= f_tol * a.abs(),
-                    "{what}: F at iteration {k}: {a} vs {b}"
-                );
-            }
-            let dx = max_rel(&one.points, &many.points);
-            assert!(dx <= x_tol, "{what}: iterates differ by {dx:e}");
+            assert_same_run(&one, &many, &what, f_tol, x_tol);
             assert!(inverted_elements(&mesh, &many.points).is_empty(), "{what}: infeasible");
             assert_fixed_unmoved(&mesh, &many.points, &what);
         }
