@@ -7,7 +7,7 @@
 //! papers' main case) takes the closed forms of `TetShape`; everything else
 //! contracts the structured S-Hessian of `smetric` (`shess`) with the rows.
 
-use super::mat3::{Mat3, Vec3, inverse, mul_vec};
+use super::mat3::{Mat3, Vec3, inverse, mul_vec, transpose};
 use super::mean_ratio::TetShape;
 use super::planar;
 use super::reference_jacobian;
@@ -251,10 +251,6 @@ impl Model {
         }
         Some((v, grad))
     }
-}
-
-fn transpose(b: &Mat3) -> Mat3 {
-    std::array::from_fn(|i| std::array::from_fn(|q| b[q][i]))
 }
 
 /// `Model::upper_blocks` for a planar corner (3 vertices) through `planar.rs`.

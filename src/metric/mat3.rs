@@ -29,6 +29,10 @@ pub fn cofactor(m: &Mat3) -> Mat3 {
     ]
 }
 
+pub fn transpose(m: &Mat3) -> Mat3 {
+    std::array::from_fn(|i| std::array::from_fn(|q| m[q][i]))
+}
+
 /// sum_ij a[i][j] b[i][j] in row order (CPU twin of WGSL `frob_dot`).
 pub fn frob_dot(a: &Mat3, b: &Mat3) -> f64 {
     a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| x * y).sum()

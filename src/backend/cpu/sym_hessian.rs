@@ -15,7 +15,7 @@
 use super::block_jacobi_factor::BlockJacobi;
 use super::bsr_spmv::BlockCsr;
 use super::project_boundary::mul3;
-use crate::metric::mat3::{Mat3, Vec3};
+use crate::metric::mat3::{Mat3, Vec3, transpose};
 use crate::problem::Problem;
 use rayon::prelude::*;
 
@@ -312,14 +312,6 @@ impl SymBlockCsr {
     }
 }
 
-fn transpose(b: &Mat3) -> Mat3 {
-    [
-        [b[0][0], b[1][0], b[2][0]],
-        [b[0][1], b[1][1], b[2][1]],
-        [b[0][2], b[1][2], b[2][2]],
-    ]
-}
-
 #[inline]
 fn mv(b: &Mat3, x: &Vec3) -> Vec3 {
     [0, 1, 2].map(|r| b[r][0] * x[0] + b[r][1] * x[1] + b[r][2] * x[2])
@@ -468,6 +460,13 @@ impl SymHessian {
             diags.iter_mut().for_each(|b| *b = [[0.0; 3]; 3]);
             grads.iter_mut().for_each(|g| *g = [0.0; 3]);
             let mut h = [[[[0.0; 3]; 3]; 4]; 4];
+            let rows = Rows {
+                start,
+                end,
+                offsets,
+                cols,
+                base: offsets[start as usize] as usize,
+            };
             for &e in &r.2 {
                 let e = e as usize;
                 let (shape, xe) = (p.shape(e), p.corner_points(x, e));
@@ -479,13 +478,6 @@ impl SymHessian {
                         u32::MAX
                     }
                 });
-                let rows = Rows {
-                    start,
-                    end,
-                    offsets,
-                    cols,
-                    base: offsets[start as usize] as usize,
-                };
                 let scale = p.corner_weight[e];
                 // the tetrahedral mean ratio builds only the blocks this
                 // range stores, in the same arithmetic as `upper_blocks`
@@ -573,7 +565,7 @@ impl Rows<'_> {
                 if a < b {
                     add(dest, &block(a, b), scale);
                 } else {
-                    add_transposed(dest, &block(b, a), scale);
+                    add(dest, &transpose(&block(b, a)), scale);
                 }
             }
         }
@@ -585,15 +577,6 @@ fn add(blk: &mut Mat3, h: &Mat3, scale: f64) {
     for c in 0..3 {
         for q in 0..3 {
             blk[c][q] += h[c][q] * scale;
-        }
-    }
-}
-
-#[inline(always)]
-fn add_transposed(blk: &mut Mat3, h: &Mat3, scale: f64) {
-    for c in 0..3 {
-        for q in 0..3 {
-            blk[c][q] += h[q][c] * scale;
         }
     }
 }
