@@ -692,11 +692,7 @@ fn smooth_pieces(a: &SmoothArgs, pieces: Option<Option<usize>>, format: Format) 
         output: a.output.clone(),
         format,
         pieces: pieces.is_some(),
-        // each rank on its own GPU context when rank 0's choice is a GPU
-        gpu: matches!(choice, device::Choice::Gpu(_)).then(|| solve::distributed::RankGpu {
-            adapter: a.solver.gpu.adapter.clone(),
-            precision: a.solver.gpu.precision,
-        }),
+        gpu: super::ranks::rank_gpu(&choice, &a.solver.gpu),
     };
     let mut progress = Progress::new(params.max_iter, !a.quiet);
     let result = cluster.smooth_pieces(&job, &mut |r| progress.update(r));

@@ -84,11 +84,16 @@ pub fn set_partitioner(partitioner: Partitioner) {
 /// GPU (`choice`), else on the CPU.
 pub fn set_gpu(choice: &Choice, gpu: &GpuArgs) {
     if let Some(c) = CLUSTER.with(|c| c.get()) {
-        c.set_gpu(matches!(choice, Choice::Gpu(_)).then(|| RankGpu {
-            adapter: gpu.adapter.clone(),
-            precision: gpu.precision,
-        }));
+        c.set_gpu(rank_gpu(choice, gpu));
     }
+}
+
+/// Each rank's GPU options when rank 0's choice is a GPU, else `None` (the CPU).
+pub fn rank_gpu(choice: &Choice, gpu: &GpuArgs) -> Option<RankGpu> {
+    matches!(choice, Choice::Gpu(_)).then(|| RankGpu {
+        adapter: gpu.adapter.clone(),
+        precision: gpu.precision,
+    })
 }
 
 /// The partition and communication report of the last solve, if it was partitioned.

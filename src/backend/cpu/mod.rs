@@ -202,42 +202,35 @@ impl Backend for CpuBackend<'_> {
 
     fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
         let (p, x) = (self.problem()?, self.points(at));
-        if let Some(share) = &self.share {
-            let (f, bad) = objective::partial_value(p, x, &share.corners);
-            let min_det = out.min_det.map(|_| objective::min_det(p, x));
-            // where the part is feasible; elsewhere the whole is not either
-            if let Some(v) = gradient
-                && let Some((_, mut g)) = objective::free_gradient(p, x)
-            {
-                if let Some(s) = &p.sliding {
-                    constrain::constrain(&s.projector, &p.free_vertices, &mut g);
-                }
-                self.vectors[v.0 as usize] = g;
-            }
-            self.set(out.value, f);
-            self.set(out.infeasible, bad);
-            if let (Some(s), Some(d)) = (out.min_det, min_det) {
-                self.set(s, d);
-            }
-            return Ok(());
-        }
-        let value = match gradient {
-            Some(_) => objective::free_gradient(p, x),
-            None => objective::value(p, x).map(|f| (f, Vec::new())),
-        };
         let min_det = out.min_det.map(|_| objective::min_det(p, x));
-        let (f, bad) = match value {
-            Some((f, mut g)) => {
-                if let Some(v) = gradient {
-                    if let Some(s) = &p.sliding {
-                        constrain::constrain(&s.projector, &p.free_vertices, &mut g);
-                    }
-                    self.vectors[v.0 as usize] = g;
-                }
-                (f, 0.0)
+        let (f, bad, g) = match &self.share {
+            // a part sums its owned corners only; its gradient is written
+            // where the part is feasible (elsewhere the whole is not either)
+            Some(share) => {
+                let (f, bad) = objective::partial_value(p, x, &share.corners);
+                (
+                    f,
+                    bad,
+                    gradient.and_then(|_| objective::free_gradient(p, x)).map(|(_, g)| g),
+                )
             }
-            None => (f64::NAN, objective::infeasible_corners(p, x) as f64),
+            None => {
+                let value = match gradient {
+                    Some(_) => objective::free_gradient(p, x),
+                    None => objective::value(p, x).map(|f| (f, Vec::new())),
+                };
+                match value {
+                    Some((f, g)) => (f, 0.0, gradient.map(|_| g)),
+                    None => (f64::NAN, objective::infeasible_corners(p, x) as f64, None),
+                }
+            }
         };
+        if let (Some(v), Some(mut g)) = (gradient, g) {
+            if let Some(s) = &p.sliding {
+                constrain::constrain(&s.projector, &p.free_vertices, &mut g);
+            }
+            self.vectors[v.0 as usize] = g;
+        }
         self.set(out.value, f);
         self.set(out.infeasible, bad);
         if let (Some(s), Some(d)) = (out.min_det, min_det) {
