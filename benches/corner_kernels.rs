@@ -8,14 +8,16 @@
 //! #14's target for lavapipe is a ratio of at least 1/3 in every row.
 //!
 //! Run: `cargo bench --bench corner_kernels [-- --quick] [--adapter NAME]
-//! [--kinds triangle,tetrahedron,...] [--general]` (`--kinds`: only those
-//! rows; `--general`: also the general kernels where a closed form applies,
-//! `GpuOptions::general_only`, as "GPU f32 general" and so on). The CPU and
+//! [--kinds triangle,tetrahedron,...] [--closed] [--general]` (`--kinds`: only
+//! those rows; the plain GPU columns are `KernelForms::Auto`'s choice for the
+//! adapter; `--closed` / `--general`: also every closed form / only the general
+//! kernels where a closed form applies, `GpuOptions::forms`, as "GPU f32
+//! closed", "GPU f32 general" and so on). The CPU and
 //! the GPU sweeps of a row are timed in turn, rep by rep, so that a change
 //! of load hits all of them alike.
 
 use meshsmooth::backend::cpu::bcd;
-use meshsmooth::backend::gpu::{GpuBackend, GpuOptions};
+use meshsmooth::backend::gpu::{GpuBackend, GpuOptions, KernelForms};
 use meshsmooth::backend::{Backend, Slot};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation, VoronoiOptions};
 use meshsmooth::metric::corner_model::Template;
@@ -79,13 +81,19 @@ fn main() {
         adapter: adapter.clone(),
         ..Default::default()
     });
-    if common::flag("--general") {
-        let general = gpu_contexts(&GpuOptions {
-            adapter,
-            general_only: true,
-            ..Default::default()
-        });
-        gpus.extend(general.into_iter().map(|(p, c)| (format!("{p} general"), c)));
+    // the default columns are `KernelForms::Auto`'s choice on this adapter
+    for (flag, forms, name) in [
+        ("--closed", KernelForms::Closed, "closed"),
+        ("--general", KernelForms::General, "general"),
+    ] {
+        if common::flag(flag) {
+            let more = gpu_contexts(&GpuOptions {
+                adapter: adapter.clone(),
+                forms,
+                ..Default::default()
+            });
+            gpus.extend(more.into_iter().map(|(p, c)| (format!("{p} {name}"), c)));
+        }
     }
     if let Some((_, ctx)) = gpus.first() {
         println!("GPU: {}", ctx.adapter_name());
@@ -134,7 +142,7 @@ fn main() {
             let mut backends: Vec<Option<GpuBackend>> = Vec::new();
             let mut cells: Vec<String> = Vec::new();
             for (name, ctx) in &gpus {
-                if name.ends_with("general") && !closed {
+                if (name.ends_with("general") || name.ends_with("closed")) && !closed {
                     // the same kernels as the column without "general"
                     backends.push(None);
                     cells.push(" - | - |".into());

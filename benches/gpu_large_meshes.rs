@@ -6,18 +6,19 @@
 //!
 //! Run: `cargo bench --bench gpu_large_meshes [-- --sizes 20,55,80,100,120] [--iters 2]
 //! [--precision f32|f64] [--method bcd|newton] [--alpha 0.3] [--max-binding-mib M]
-//! [--max-storage-buffers K] [--adapter NAME]` (both precisions and methods unless
+//! [--max-storage-buffers K] [--forms auto|closed|general] [--adapter NAME]` (both precisions and methods unless
 //! named; `--alpha`: the random perturbation, in edge lengths; `--max-binding-mib`: cap
 //! a binding, to see what splitting into more parts costs; `--max-storage-buffers`: cap
 //! the storage buffers a kernel binds, so that the corner kernels run in windows of
-//! fewer parts)
+//! fewer parts; `--forms`: which corner kernels, `GpuOptions::forms`)
 //!
 //! Time per iteration = (time at the last iterate - time at the start) /
 //! iterations, from the solver's history (setup and upload excluded, shown
 //! apart): a BCD iteration is one coloured sweep, a Newton iteration one
 //! assembly, PCG solve and line search.
 
-use meshsmooth::backend::gpu::{GpuContext, GpuOptions, Precision};
+use clap::ValueEnum;
+use meshsmooth::backend::gpu::{GpuContext, GpuOptions, KernelForms, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::problem::Problem;
 use meshsmooth::solve::{self, Device, Method, Options, Params};
@@ -37,6 +38,9 @@ fn main() {
     let alpha: f64 = arg("--alpha").map_or(0.3, |s| s.parse().expect("--alpha A"));
     let max_binding_bytes = arg("--max-binding-mib").map(|s| s.parse::<u64>().expect("--max-binding-mib M") << 20);
     let max_storage_buffers = arg("--max-storage-buffers").map(|s| s.parse().expect("--max-storage-buffers K"));
+    let forms = arg("--forms").map_or(KernelForms::Auto, |s| {
+        KernelForms::from_str(&s, true).expect("--forms auto|closed|general")
+    });
     let precisions = match arg("--precision").as_deref() {
         Some("f32") => vec![Precision::F32],
         Some("f64") => vec![Precision::F64],
@@ -55,6 +59,7 @@ fn main() {
                 precision,
                 max_binding_bytes,
                 max_storage_buffers,
+                forms,
                 ..Default::default()
             })
             .map_err(|e| eprintln!("no {precision:?} context: {e}"))

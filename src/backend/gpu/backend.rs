@@ -226,11 +226,7 @@ impl<'c> GpuBackend<'c> {
             n_corners: nc,
             n_free: nf,
             colors,
-            form: if ctx.general_only {
-                Form::general(&model)
-            } else {
-                Form::of(&model)
-            },
+            form: Form::on(&model, ctx),
             max_backtracks: ls.max_backtracks as u32,
             bufs,
             vectors: Vec::new(),

@@ -33,9 +33,27 @@ pub struct GpuOptions {
     pub max_storage_buffers: Option<u32>,
     /// How vertices and corners are numbered on the device.
     pub layout: DeviceLayout,
-    /// Every model through the structured general kernels, the closed forms
-    /// (`shader::Form::Fast`, `Form::Planar`) unused: for comparisons.
-    pub general_only: bool,
+    /// Which corner kernels a model gets: closed forms or the general ones.
+    pub forms: KernelForms,
+}
+
+/// Which compiled instance of the corner kernels (`shader::Form`) a model
+/// gets where a closed form applies. The answer is the same either way
+/// (within rounding: `tests/kernels.rs`); only the speed differs, and it
+/// differs by adapter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum KernelForms {
+    /// Closed forms where they were measured to pay on this kind of adapter:
+    /// every one on a software adapter (lavapipe), every one but the
+    /// tetrahedral inverse mean ratio in f32 on a hardware GPU, where the
+    /// general kernel swept tetrahedra and hexahedra 1.6x faster in two runs
+    /// on an H200 (README, "On a hardware GPU").
+    #[default]
+    Auto,
+    /// Every closed form that applies (`shader::Form::Fast`, `Form::Planar`).
+    Closed,
+    /// Every model through the structured general kernels: for comparisons.
+    General,
 }
 
 /// The device numbering of vertices and corners (`sweep_layout.rs`); what
@@ -132,8 +150,8 @@ pub struct GpuContext {
     pub(crate) limits: wgpu::Limits,
     /// `GpuOptions::layout`.
     pub(crate) layout: DeviceLayout,
-    /// `GpuOptions::general_only`.
-    pub(crate) general_only: bool,
+    /// `GpuOptions::forms`.
+    pub(crate) forms: KernelForms,
     info: wgpu::AdapterInfo,
     /// Built on first use: a run needs the instances of one metric only, and
     /// compiling all of them costs seconds on a software adapter.
@@ -241,7 +259,7 @@ impl GpuContext {
             real,
             limits,
             layout: opts.layout,
-            general_only: opts.general_only,
+            forms: opts.forms,
             info: adapter.get_info(),
             pipelines: Mutex::new(HashMap::new()),
             errors,

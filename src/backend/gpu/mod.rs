@@ -13,5 +13,5 @@ pub(crate) mod sweep_layout;
 
 pub use backend::GpuBackend;
 pub use buffers::{BindingLimits, check_bindings};
-pub use context::{AdapterSummary, DeviceLayout, GpuContext, GpuOptions, Precision, list_adapters};
+pub use context::{AdapterSummary, DeviceLayout, GpuContext, GpuOptions, KernelForms, Precision, list_adapters};
 pub use mean_ratio_eval::{ElementEval, cbrt_eval, mean_ratio_eval};

@@ -6,6 +6,7 @@
 //! once, with its bindings and variants: pipelines and bind-group layouts are
 //! built from it, and a test checks it against naga's reflection of the WGSL.
 
+use super::context::{GpuContext, KernelForms};
 use super::layout::{CLOSED_PLANAR, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_TMP, ModelUniform};
 use std::collections::HashSet;
 
@@ -244,6 +245,18 @@ impl Form {
             _ => {}
         }
         Form::general(model)
+    }
+
+    /// The instance a context compiles for the model (`GpuOptions::forms`).
+    pub(crate) fn on(model: &ModelUniform, ctx: &GpuContext) -> Form {
+        match ctx.forms {
+            KernelForms::Closed => Form::of(model),
+            KernelForms::General => Form::general(model),
+            KernelForms::Auto => match Form::of(model) {
+                Form::Fast if !ctx.is_software() && !ctx.is_f64() => Form::general(model),
+                form => form,
+            },
+        }
     }
 
     /// The general instance of the model's metric, closed forms or not.
