@@ -99,3 +99,30 @@ impl Error {
         }
     }
 }
+
+/// Parses a `clap::ValueEnum` in any case; an unknown name is an error that
+/// says which option it was for (`what`) and lists the names it takes.
+pub fn parse_value_enum<T: clap::ValueEnum>(what: &str, s: &str) -> Result<T> {
+    T::from_str(s, true).map_err(|_| {
+        let names: Vec<String> = T::value_variants()
+            .iter()
+            .filter_map(|v| v.to_possible_value())
+            .map(|p| format!("'{}'", p.get_name()))
+            .collect();
+        Error::InvalidArgument(format!("{what} must be one of {}, got {s:?}", names.join(", ")))
+    })
+}
+
+/// `FromStr` for option enums through [`parse_value_enum`], as the Python
+/// API and configuration files name them.
+macro_rules! from_str_by_name {
+    ($($t:ty: $what:literal),* $(,)?) => {$(
+        impl std::str::FromStr for $t {
+            type Err = $crate::Error;
+            fn from_str(s: &str) -> $crate::Result<Self> {
+                $crate::error::parse_value_enum($what, s)
+            }
+        }
+    )*};
+}
+pub(crate) use from_str_by_name;

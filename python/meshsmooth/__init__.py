@@ -274,6 +274,9 @@ def smooth(
     reorder_every: Optional[int] = None,
     inner_iterations: int = 1,
     target_objective: Optional[float] = None,
+    preconditioner: str = "auto",
+    negative_curvature: str = "iterate",
+    inversion_fraction: float = 0.7,
 ) -> Result:
     """Smooths a mesh: moves its free vertices to minimise the objective F.
     A mesh with inverted elements is untangled first (as the CLI's ``smooth``;
@@ -328,6 +331,15 @@ def smooth(
             this many sweeps (dynamic); None orders it once (static).
         inner_iterations: Newton steps per vertex visit of the sequential sweep.
         target_objective: also stop as soon as F is at or below this.
+        preconditioner: Newton's CG preconditioner: "auto" (the CLI's default:
+            symmetric block Gauss-Seidel for planar meshes on the CPU, block
+            Jacobi elsewhere), "jacobi" (block Jacobi, the Newton paper's; every
+            device) or "sgs" (symmetric block Gauss-Seidel; CPU only).
+        negative_curvature: what Newton's CG returns on negative curvature:
+            "iterate" (the CG iterate so far) or "direction" (the paper's).
+        inversion_fraction: after a Newton trial step that inverts an element,
+            try this fraction (0 <= f < 1) of the distance at which the first
+            corner inverts; 0 halves the step as the paper's Armijo search does.
 
     Returns:
         A :class:`Result`; ``Result.points`` is a new float64 array.
@@ -378,6 +390,9 @@ def smooth(
         None if reorder_every is None else int(reorder_every),
         int(inner_iterations),
         None if target_objective is None else float(target_objective),
+        str(preconditioner),
+        str(negative_curvature),
+        float(inversion_fraction),
     )
     return Result(np.ascontiguousarray(out[:, : p.shape[1]]), info)
 

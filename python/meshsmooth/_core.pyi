@@ -33,6 +33,9 @@ def smooth(
     reorder_every: Optional[int] = None,
     inner_iterations: int = 1,
     target_objective: Optional[float] = None,
+    preconditioner: str = "auto",
+    negative_curvature: str = "iterate",
+    inversion_fraction: float = 0.7,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def quality(
     points: npt.NDArray[np.float64],

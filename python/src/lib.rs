@@ -9,6 +9,7 @@ use meshsmooth::io::{self, Format};
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::problem::{Boundary, ProblemOptions};
 use meshsmooth::report::quality_report;
+use meshsmooth::solve::newton::NewtonParams;
 use meshsmooth::solve::{self, Device, Method, Options, Params, Record, StopReason};
 use meshsmooth::{ElementKind, Error, Mesh, metric_report};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
@@ -119,7 +120,7 @@ fn report_dict<'py>(py: Python<'py>, mesh: &Mesh) -> PyResult<Bound<'py, PyAny>>
 
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false, order="rbfs", order_seed=0, reorder_every=None, inner_iterations=1, target_objective=None))]
+#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false, order="rbfs", order_seed=0, reorder_every=None, inner_iterations=1, target_objective=None, preconditioner="auto", negative_curvature="iterate", inversion_fraction=0.7))]
 fn smooth<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -146,6 +147,9 @@ fn smooth<'py>(
     reorder_every: Option<usize>,
     inner_iterations: usize,
     target_objective: Option<f64>,
+    preconditioner: &str,
+    negative_curvature: &str,
+    inversion_fraction: f64,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
     let mut mesh = build_mesh(&points, &kinds, &offsets, &conn, fixed.as_ref())?;
     let method: Method = parse(method)?;
@@ -208,6 +212,13 @@ fn smooth<'py>(
             "time_limit must be a non-negative number of seconds, got {t}"
         )));
     }
+    let newton = NewtonParams {
+        preconditioner: parse(preconditioner)?,
+        negative_curvature: parse(negative_curvature)?,
+        inversion_fraction,
+        ..Default::default()
+    };
+    newton.check().map_err(py_err)?;
     let params = Params {
         tol,
         max_iter,
@@ -219,6 +230,7 @@ fn smooth<'py>(
             inner_iterations,
             ..Default::default()
         },
+        newton,
         ..Default::default()
     };
     // the first exception raised by the callback or a signal handler (Ctrl-C)

@@ -316,3 +316,49 @@ def test_target_objective_stops_at_the_first_sweep_below_it(hex_box):
     r = ms.smooth(points, hexes, method="bcd", order="d-lng", target_objective=target)
     assert r.stop == "target_reached"
     assert r.objective <= target < r.history["objective"][-2]
+
+
+@pytest.mark.parametrize(
+    "options, flags",
+    [
+        ({}, []),
+        ({"preconditioner": "jacobi", "inversion_fraction": 0.0},
+         ["--preconditioner", "jacobi", "--inversion-fraction", "0"]),
+        ({"preconditioner": "sgs", "negative_curvature": "direction"},
+         ["--preconditioner", "sgs", "--negative-curvature", "direction"]),
+    ],
+)
+def test_newton_options_match_the_cli(tmp_path, options, flags):
+    points, quads, _ = grid(n=14, alpha=0.3, seed=5)
+    planar = np.c_[points, np.zeros(len(points))]
+    write_vtk(tmp_path / "g.vtk", planar, "quad", quads)
+    out = subprocess.run(
+        [str(cli()), "smooth", str(tmp_path / "g.vtk"), "-o", str(tmp_path / "out.vtk"), "--device", "cpu",
+         "--method", "newton", "--history", str(tmp_path / "h.csv"), "--quiet", *flags],
+        capture_output=True, text=True,
+    )
+    assert out.returncode == 0, out.stderr
+    rows = list(csv.DictReader((tmp_path / "h.csv").open()))
+    r = ms.smooth(points, quads, method="newton", **options)
+    assert r.stop == "converged"
+    assert r.iterations == int(rows[-1]["iteration"])
+    np.testing.assert_allclose(r.history["objective"], [float(x["objective"]) for x in rows], rtol=0, atol=1e-12)
+    # whatever the options, the same optimum: the squares of the grid
+    assert r.objective < 1 + 1e-9
+
+
+def test_newton_defaults_follow_the_cli_and_bad_options_are_refused(quad_grid):
+    points, quads, _ = quad_grid
+    auto = ms.smooth(points, quads)
+    # planar on the CPU, "auto" is symmetric Gauss-Seidel, as on the command line
+    sgs = ms.smooth(points, quads, preconditioner="sgs")
+    jacobi = ms.smooth(points, quads, preconditioner="jacobi")
+    assert auto.info["cg_iterations"] == sgs.info["cg_iterations"] != jacobi.info["cg_iterations"]
+    np.testing.assert_array_equal(auto.points, sgs.points)
+    assert abs(jacobi.objective - auto.objective) < 1e-9
+    with pytest.raises(ValueError, match="preconditioner must be one of 'auto', 'jacobi', 'sgs', got \"ilu\""):
+        ms.smooth(points, quads, preconditioner="ilu")
+    with pytest.raises(ValueError, match="negative_curvature must be one of"):
+        ms.smooth(points, quads, negative_curvature="none")
+    with pytest.raises(ValueError, match="inversion fraction 1 must be at least 0 and below 1"):
+        ms.smooth(points, quads, inversion_fraction=1.0)

@@ -25,13 +25,8 @@ impl SolverArgs {
         p.newton.negative_curvature = self.negative_curvature;
         self.objective.sweep_params(&mut p)?;
         p.newton.preconditioner = self.preconditioner;
-        if !(0.0..1.0).contains(&self.inversion_fraction) {
-            return Err(Error::InvalidArgument(format!(
-                "--inversion-fraction {} must be at least 0 and below 1",
-                self.inversion_fraction
-            )));
-        }
         p.newton.inversion_fraction = self.inversion_fraction;
+        p.newton.check()?;
         Ok(p)
     }
 }

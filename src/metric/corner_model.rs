@@ -26,12 +26,7 @@ pub enum Template {
     Average,
 }
 
-impl std::str::FromStr for Template {
-    type Err = crate::Error;
-    fn from_str(s: &str) -> crate::Result<Self> {
-        <Self as clap::ValueEnum>::from_str(s, true).map_err(crate::Error::InvalidArgument)
-    }
-}
+crate::error::from_str_by_name!(Template: "template");
 
 /// A corner's reference: the B rows (vertex 0 = the corner, 1..=n its
 /// neighbours; row n+1.. zero) and the dimension.

@@ -54,12 +54,7 @@ impl MetricKind {
     }
 }
 
-impl std::str::FromStr for MetricKind {
-    type Err = crate::Error;
-    fn from_str(s: &str) -> crate::Result<Self> {
-        <Self as clap::ValueEnum>::from_str(s, true).map_err(crate::Error::InvalidArgument)
-    }
-}
+crate::error::from_str_by_name!(MetricKind: "metric");
 
 impl std::fmt::Display for MetricKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

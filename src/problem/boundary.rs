@@ -48,14 +48,7 @@ pub enum BoundaryMode {
     Slide,
 }
 
-impl std::str::FromStr for BoundaryMode {
-    type Err = crate::error::Error;
-    fn from_str(s: &str) -> crate::error::Result<Self> {
-        <BoundaryMode as clap::ValueEnum>::from_str(s, true).map_err(|_| {
-            crate::error::Error::InvalidArgument(format!("boundary must be 'fixed' or 'slide', got '{s}'"))
-        })
-    }
-}
+crate::error::from_str_by_name!(BoundaryMode: "boundary");
 
 /// How the boundary is treated.
 #[derive(Clone, Copy, Debug, PartialEq)]

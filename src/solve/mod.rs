@@ -74,12 +74,7 @@ impl std::fmt::Display for Method {
     }
 }
 
-impl std::str::FromStr for Method {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        <Method as clap::ValueEnum>::from_str(s, true).map_err(Error::InvalidArgument)
-    }
-}
+crate::error::from_str_by_name!(Method: "method");
 
 /// Block coordinate descent's settings.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -241,6 +236,7 @@ pub(crate) fn check_start(p: &Problem, x: &[Vec3], params: &Params) -> Result<()
             params.tol
         )));
     }
+    params.newton.check()?;
     p.check_feasible(x)
 }
 

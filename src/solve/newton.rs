@@ -43,6 +43,25 @@ pub struct NewtonParams {
     pub inversion_fraction: f64,
 }
 
+impl NewtonParams {
+    /// Settings outside their ranges as an error naming the setting (the
+    /// command line's and the Python API's names are the same).
+    pub fn check(&self) -> crate::Result<()> {
+        let bad =
+            |what: &str, v: f64, range: &str| Err(crate::Error::InvalidArgument(format!("{what} {v} must be {range}")));
+        if !(0.0..1.0).contains(&self.inversion_fraction) {
+            return bad("inversion fraction", self.inversion_fraction, "at least 0 and below 1");
+        }
+        if !(self.forcing_max > 0.0 && self.forcing_max < 1.0) {
+            return bad("forcing term", self.forcing_max, "above 0 and below 1");
+        }
+        if self.cg_max_iter == 0 {
+            return bad("CG iteration limit", 0.0, "at least 1");
+        }
+        Ok(())
+    }
+}
+
 fn default_forcing_convex() -> f64 {
     NewtonParams::default().forcing_convex
 }

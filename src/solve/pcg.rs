@@ -58,6 +58,8 @@ pub enum Preconditioner {
     Sgs,
 }
 
+crate::error::from_str_by_name!(Preconditioner: "preconditioner", NegativeCurvature: "negative_curvature");
+
 impl std::fmt::Display for Preconditioner {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
