@@ -251,6 +251,31 @@ def _check_fixed(fixed: Optional[npt.ArrayLike], n: int) -> Optional[np.ndarray]
     raise TypeError(f"fixed must be a boolean mask or an integer index array, got dtype {a.dtype}")
 
 
+def _checked(
+    points: npt.ArrayLike,
+    cells: CellsLike,
+    fixed: Optional[npt.ArrayLike],
+    boundary: str,
+    method: str,
+    metric: str,
+    template: str,
+    device: str,
+    precision: str,
+) -> Tuple[np.ndarray, Tuple[np.ndarray, ...]]:
+    """The checks :func:`smooth` and :func:`untangle` share: the points, and
+    the mesh as ``_core.smooth``'s first five arguments."""
+    p = _check_points(points)
+    blocks = _check_cells(cells, p)
+    mask = _check_fixed(fixed, p.shape[0])
+    if boundary not in ("fixed", "slide"):
+        raise ValueError(f"boundary must be 'fixed' or 'slide', got {boundary!r}")
+    for arg, value in (("method", method), ("metric", metric), ("template", template), ("device", device), ("precision", precision)):
+        if not isinstance(value, str):
+            raise TypeError(f"{arg} must be a string, got {type(value).__name__}")
+    kinds, offsets, conn = _flatten(blocks)
+    return p, (_as3(p), kinds, offsets, conn, mask)
+
+
 def smooth(
     points: npt.ArrayLike,
     cells: CellsLike,
@@ -352,47 +377,27 @@ def smooth(
         RuntimeError: the GPU failed (no adapter, device lost).
         KeyboardInterrupt: Ctrl-C during the solve.
     """
-    p = _check_points(points)
-    blocks = _check_cells(cells, p)
-    mask = _check_fixed(fixed, p.shape[0])
-    if boundary not in ("fixed", "slide"):
-        raise ValueError(f"boundary must be 'fixed' or 'slide', got {boundary!r}")
     if callback is not None and not callable(callback):
         raise TypeError(f"callback must be callable, got {type(callback).__name__}")
-    for arg, value in (("method", method), ("metric", metric), ("template", template), ("device", device), ("precision", precision)):
-        if not isinstance(value, str):
-            raise TypeError(f"{arg} must be a string, got {type(value).__name__}")
+    p, mesh = _checked(points, cells, fixed, boundary, method, metric, template, device, precision)
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 0:
         raise ValueError(f"max_iter must be a non-negative integer, got {max_iter!r}")
-    kinds, offsets, conn = _flatten(blocks)
     out, info = _core.smooth(
-        _as3(p),
-        kinds,
-        offsets,
-        conn,
-        mask,
-        method,
-        metric,
-        template,
-        boundary,
-        float(feature_angle),
-        device,
-        precision,
-        adapter,
+        *mesh,
+        method, metric, template, boundary, float(feature_angle), device, precision, adapter,
         float(tol),
         int(max_iter),
         None if time_limit is None else float(time_limit),
         callback,
-        bool(untangle),
-        False,
-        str(order),
-        int(order_seed),
-        None if reorder_every is None else int(reorder_every),
-        int(inner_iterations),
-        None if target_objective is None else float(target_objective),
-        str(preconditioner),
-        str(negative_curvature),
-        float(inversion_fraction),
+        untangle=bool(untangle),
+        order=str(order),
+        order_seed=int(order_seed),
+        reorder_every=None if reorder_every is None else int(reorder_every),
+        inner_iterations=int(inner_iterations),
+        target_objective=None if target_objective is None else float(target_objective),
+        preconditioner=str(preconditioner),
+        negative_curvature=str(negative_curvature),
+        inversion_fraction=float(inversion_fraction),
     )
     return Result(np.ascontiguousarray(out[:, : p.shape[1]]), info)
 
@@ -450,35 +455,12 @@ def untangle(
             (the message counts them).
         RuntimeError: the GPU failed.
     """
-    p = _check_points(points)
-    blocks = _check_cells(cells, p)
-    mask = _check_fixed(fixed, p.shape[0])
-    if boundary not in ("fixed", "slide"):
-        raise ValueError(f"boundary must be 'fixed' or 'slide', got {boundary!r}")
-    for arg, value in (("method", method), ("metric", metric), ("template", template), ("device", device), ("precision", precision)):
-        if not isinstance(value, str):
-            raise TypeError(f"{arg} must be a string, got {type(value).__name__}")
-    kinds, offsets, conn = _flatten(blocks)
+    p, mesh = _checked(points, cells, fixed, boundary, method, metric, template, device, precision)
     out, info = _core.smooth(
-        _as3(p),
-        kinds,
-        offsets,
-        conn,
-        mask,
-        method,
-        metric,
-        template,
-        boundary,
-        float(feature_angle),
-        device,
-        precision,
-        adapter,
-        1e-6,
-        1000,
-        None,
-        None,
-        True,
-        True,
+        *mesh,
+        method, metric, template, boundary, float(feature_angle), device, precision, adapter,
+        1e-6, 1000, None, None,
+        untangle_only=True,
     )
     return UntangleResult(np.ascontiguousarray(out[:, : p.shape[1]]), info)
 
