@@ -104,13 +104,23 @@ pub fn vertex_elements(mesh: &Mesh) -> Csr {
 /// entry `i`'s items to `out`. Chunks of entries are built independently and
 /// concatenated, so no global sort of (entry, item) pairs is needed.
 pub fn build_par(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Csr {
+    build_par_with(n, || (), |_, i, out| fill(i, out))
+}
+
+/// [`build_par`] with a scratch value per task (`init` makes one), which
+/// `fill` may use but must not let change what it appends.
+pub fn build_par_with<S>(
+    n: usize,
+    init: impl Fn() -> S + Sync + Send,
+    fill: impl Fn(&mut S, usize, &mut Vec<u32>) + Sync,
+) -> Csr {
     const CHUNK: usize = 1 << 14;
     let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
-        .map(|c| {
+        .map_init(init, |scratch, c| {
             let (mut ends, mut items) = (Vec::new(), Vec::new());
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                fill(i, &mut items);
+                fill(scratch, i, &mut items);
                 ends.push(items.len() as u32);
             }
             (ends, items)
@@ -139,42 +149,48 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
 /// has them already (ids must be in range).
 pub fn vertex_neighbours_with(mesh: &Mesh, ve: &Csr) -> Csr {
     // each vertex gathers its own edges from its elements: linear, and no
-    // sort of all (vertex, neighbour) pairs (1 GB for 10M tetrahedra)
-    build_par(mesh.num_points(), |v, out| {
-        let from = out.len();
-        let v32 = v as u32;
-        for &e in ve.of(v) {
-            let e = e as usize;
-            let vs = mesh.element(e);
-            if mesh.kinds[e] == ElementKind::Polyhedron {
-                for [a, b] in mesh.element_edges(e) {
-                    if a == v32 {
-                        out.push(b);
+    // sort of all (vertex, neighbour) pairs (1 GB for 10M tetrahedra). A
+    // task's marks (`mark[w] == v + 1`: w is listed for v) drop the repeats
+    // as they come, so only the distinct neighbours (14 on a tet box, of 72
+    // edge ends) are sorted
+    let n = mesh.num_points();
+    build_par_with(
+        n,
+        || vec![0u32; n],
+        |mark, v, out| {
+            let from = out.len();
+            let v32 = v as u32;
+            let mut add = |w: u32| {
+                if mark[w as usize] != v32 + 1 {
+                    mark[w as usize] = v32 + 1;
+                    out.push(w);
+                }
+            };
+            for &e in ve.of(v) {
+                let e = e as usize;
+                let vs = mesh.element(e);
+                if mesh.kinds[e] == ElementKind::Polyhedron {
+                    for [a, b] in mesh.element_edges(e) {
+                        if a == v32 {
+                            add(b);
+                        }
+                        if b == v32 {
+                            add(a);
+                        }
                     }
-                    if b == v32 {
-                        out.push(a);
+                }
+                for [a, b] in mesh.kinds[e].edges() {
+                    if vs[*a] == v32 {
+                        add(vs[*b]);
+                    }
+                    if vs[*b] == v32 {
+                        add(vs[*a]);
                     }
                 }
             }
-            for [a, b] in mesh.kinds[e].edges() {
-                if vs[*a] == v32 {
-                    out.push(vs[*b]);
-                }
-                if vs[*b] == v32 {
-                    out.push(vs[*a]);
-                }
-            }
-        }
-        out[from..].sort_unstable();
-        let mut keep = from;
-        for i in from..out.len() {
-            if i == from || out[i] != out[keep - 1] {
-                out[keep] = out[i];
-                keep += 1;
-            }
-        }
-        out.truncate(keep);
-    })
+            out[from..].sort_unstable();
+        },
+    )
 }
 
 /// The pair-sorting construction, for meshes whose ids are out of range.
