@@ -1,7 +1,7 @@
 //! Stage 4, adjacency (elements, corner incidence, vertex neighbours and the
 //! free vertices in the problem's numbering), and stage 5, colours.
 
-use super::corners::{Corners, element_vertices};
+use super::corners::{Corners, push_element_vertices};
 use super::numbering::{MeshGraph, Numbering};
 use crate::mesh::topology::{self, Csr};
 use crate::mesh::{ElementKind, Mesh, color};
@@ -31,12 +31,11 @@ pub fn adjacency(mesh: &Mesh, graph: &MeshGraph, numbering: &Numbering, corners:
     let n = order.len();
     let dim = corners.dim;
     let elements = topology::build_par(numbering.elem_order.len(), |new_e, out| {
-        let old_e = numbering.elem_order[new_e] as usize;
-        out.extend(
-            element_vertices(mesh, old_e, corners.flip)
-                .into_iter()
-                .map(|v| inv[v as usize]),
-        );
+        let from = out.len();
+        push_element_vertices(mesh, numbering.elem_order[new_e] as usize, corners.flip, out);
+        for v in &mut out[from..] {
+            *v = inv[*v as usize];
+        }
     });
     // a sequential counting sort: linear, and faster on two shared cores
     // than a parallel one with atomics (see `topology::vertex_elements`)

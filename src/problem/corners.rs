@@ -43,8 +43,13 @@ pub fn element_vertices(mesh: &Mesh, e: usize, flip: bool) -> Vec<u32> {
 
 /// [`element_vertices`] into a buffer the caller reuses (no allocation per element).
 fn element_vertices_into(mesh: &Mesh, e: usize, flip: bool, out: &mut Vec<u32>) {
-    let vs = mesh.element(e);
     out.clear();
+    push_element_vertices(mesh, e, flip, out);
+}
+
+/// [`element_vertices`] appended to `out`.
+pub(crate) fn push_element_vertices(mesh: &Mesh, e: usize, flip: bool, out: &mut Vec<u32>) {
+    let vs = mesh.element(e);
     match (flip, mesh.kinds[e]) {
         (true, ElementKind::Triangle) => out.extend_from_slice(&[vs[0], vs[2], vs[1]]),
         (true, ElementKind::Quadrilateral) => out.extend_from_slice(&[vs[0], vs[3], vs[2], vs[1]]),
