@@ -147,7 +147,8 @@ impl HessianPattern {
                 for a in (0..nslots).filter(|&a| f[a] != u32::MAX) {
                     let from = row_offsets[f[a] as usize];
                     let row = &cols[from as usize..row_offsets[f[a] as usize + 1] as usize];
-                    for b in (0..nslots).filter(|&b| f[b] != u32::MAX) {
+                    s[4 * a + a] = diag[f[a] as usize];
+                    for b in (0..nslots).filter(|&b| b != a && f[b] != u32::MAX) {
                         let at = row.binary_search(&f[b]).expect("pattern holds every element pair");
                         s[4 * a + b] = from + at as u32;
                     }
