@@ -1,8 +1,10 @@
 //! Vertex orderings for locality of reference, and the element numbering that
 //! follows a vertex order.
 
+use super::Mesh;
 use super::sweep_order::SweepOrder;
 use super::topology::Csr;
+use rayon::prelude::*;
 
 /// The vertex order a problem is built in, and its sweep order. Three are
 /// numberings of the graph (`rbfs`, `cuthill-mckee`, `red-black`): the
@@ -137,26 +139,28 @@ pub fn reverse_bfs(points: &[[f64; 3]], neighbours: &Csr, boundary: &[bool]) -> 
     // distances from the bounding-box centre, so that the order does not
     // depend on where the mesh sits
     let center = crate::mesh::frame::Frame::of(points).center;
-    let dist2 = |v: usize| (0..3).map(|k| (points[v][k] - center[k]).powi(2)).sum::<f64>();
-    // candidates for BFS roots: boundary vertices first, farthest first
-    let mut roots: Vec<u32> = (0..n as u32).collect();
-    roots.sort_by(|&a, &b| {
-        let (a, b) = (a as usize, b as usize);
+    let dist2: Vec<f64> = points
+        .par_iter()
+        .map(|p| (0..3).map(|k| (p[k] - center[k]).powi(2)).sum::<f64>())
+        .collect();
+    // candidates for BFS roots: boundary vertices first, farthest first; a
+    // strict total order (ids break ties), so any sort gives the same list
+    let before = |a: &u32, b: &u32| {
+        let (a, b) = (*a as usize, *b as usize);
         boundary[b]
             .cmp(&boundary[a])
-            .then(dist2(b).total_cmp(&dist2(a)))
+            .then(dist2[b].total_cmp(&dist2[a]))
             .then(a.cmp(&b))
-    });
+    };
     let mut seen = vec![false; n];
     let mut order = Vec::with_capacity(n);
-    for &root in &roots {
-        if seen[root as usize] {
-            continue;
+    // breadth-first from `root` if unseen; returns how many are seen
+    let mut search_from = |root: u32| {
+        if std::mem::replace(&mut seen[root as usize], true) {
+            return order.len();
         }
-        seen[root as usize] = true;
-        let start = order.len();
+        let mut head = order.len();
         order.push(root);
-        let mut head = start;
         while head < order.len() {
             let v = order[head] as usize;
             head += 1;
@@ -166,6 +170,17 @@ pub fn reverse_bfs(points: &[[f64; 3]], neighbours: &Csr, boundary: &[bool]) -> 
                     order.push(w);
                 }
             }
+        }
+        order.len()
+    };
+    // a connected mesh needs only the first root (a linear search): the
+    // whole list is sorted only for a mesh in several parts
+    let first = (0..n as u32).into_par_iter().min_by(before);
+    if first.is_some_and(|r| search_from(r) < n) {
+        let mut roots: Vec<u32> = (0..n as u32).collect();
+        roots.par_sort_unstable_by(before);
+        for r in roots {
+            search_from(r);
         }
     }
     order.reverse();
@@ -205,21 +220,23 @@ pub fn cuthill_mckee(neighbours: &Csr) -> Vec<u32> {
     order
 }
 
-/// Elements numbered in the order a sweep over `order` first touches them:
-/// `elem_order[new] = old`. `vertex_elements` lists each vertex's elements
-/// (mesh numbering) and must cover all `num_elements`.
-pub fn elements_by_first_touch(order: &[u32], vertex_elements: &Csr, num_elements: usize) -> Vec<u32> {
-    let mut touched = vec![false; num_elements];
-    let mut elem_order = Vec::with_capacity(num_elements);
-    for &v in order {
-        for &e in vertex_elements.of(v as usize) {
-            if !touched[e as usize] {
-                touched[e as usize] = true;
-                elem_order.push(e);
-            }
-        }
-    }
-    elem_order
+/// Elements numbered in the order a sweep over the vertices first touches
+/// them: `elem_order[new] = old`, for the vertex numbering `inv[old] = new`.
+///
+/// A vertex touches its elements in ascending id, and an element is first
+/// touched by its earliest vertex: so the numbering is the elements sorted by
+/// (earliest vertex, id). The keys are found in parallel and sorted by one
+/// counting sort, linear, with no sequential walk of every vertex's elements.
+pub fn elements_by_first_touch(inv: &[u32], mesh: &Mesh) -> Vec<u32> {
+    let first: Vec<u32> = (0..mesh.num_elements())
+        .into_par_iter()
+        .with_min_len(1 << 12)
+        .map(|e| {
+            let vs = mesh.element(e).iter();
+            vs.map(|&v| inv[v as usize]).min().expect("an element has vertices")
+        })
+        .collect();
+    Csr::from_pairs(inv.len(), first.iter().enumerate().map(|(e, &k)| (k, e as u32))).items
 }
 
 /// Inverse of a permutation: `inv[perm[i]] = i`.
@@ -307,11 +324,119 @@ mod tests {
         assert!(err.contains("d-lng"), "{err}");
     }
 
+    /// Reverse BFS as first written: every vertex sorted as a root.
+    fn reverse_bfs_sorting_every_root(points: &[[f64; 3]], neighbours: &Csr, boundary: &[bool]) -> Vec<u32> {
+        let center = crate::mesh::frame::Frame::of(points).center;
+        let dist2 = |v: usize| (0..3).map(|k| (points[v][k] - center[k]).powi(2)).sum::<f64>();
+        let mut roots: Vec<u32> = (0..points.len() as u32).collect();
+        roots.sort_by(|&a, &b| {
+            let (a, b) = (a as usize, b as usize);
+            boundary[b]
+                .cmp(&boundary[a])
+                .then(dist2(b).total_cmp(&dist2(a)))
+                .then(a.cmp(&b))
+        });
+        let mut seen = vec![false; points.len()];
+        let mut order = Vec::new();
+        for root in roots {
+            if std::mem::replace(&mut seen[root as usize], true) {
+                continue;
+            }
+            let mut head = order.len();
+            order.push(root);
+            while head < order.len() {
+                let v = order[head] as usize;
+                head += 1;
+                for &w in neighbours.of(v) {
+                    if !std::mem::replace(&mut seen[w as usize], true) {
+                        order.push(w);
+                    }
+                }
+            }
+        }
+        order.reverse();
+        order
+    }
+
+    #[test]
+    fn reverse_bfs_is_the_one_that_sorted_every_root_on_any_thread_count() {
+        // connected, and in two parts (a box beside a shifted copy)
+        let one = crate::generate::tet_box(6, 5, 4, [6.0, 5.0, 4.0]);
+        let mut two = one.clone();
+        let n = one.num_points() as u32;
+        two.points.extend(one.points.iter().map(|p| [p[0] + 9.0, p[1], p[2]]));
+        for e in 0..one.num_elements() {
+            let vs: Vec<u32> = one.element(e).iter().map(|&v| v + n).collect();
+            two.push_element(one.kinds[e], &vs);
+        }
+        for m in [one, two, crate::generate::mixed_block(3, 2)] {
+            let nb = super::super::topology::vertex_neighbours(&m);
+            let fixed = super::super::topology::fixed_vertices(&m);
+            let want = reverse_bfs_sorting_every_root(&m.points, &nb, &fixed);
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                assert_eq!(
+                    pool.install(|| reverse_bfs(&m.points, &nb, &fixed)),
+                    want,
+                    "{threads} threads"
+                );
+            }
+        }
+    }
+
+    /// The numbering as first written: a sweep over the vertices in order,
+    /// each taking its untouched elements in ascending id.
+    fn first_touch_by_sweep(order: &[u32], mesh: &Mesh) -> Vec<u32> {
+        let ve = super::super::topology::vertex_elements(mesh);
+        let mut touched = vec![false; mesh.num_elements()];
+        let mut elem_order = Vec::new();
+        for &v in order {
+            for &e in ve.of(v as usize) {
+                if !std::mem::replace(&mut touched[e as usize], true) {
+                    elem_order.push(e);
+                }
+            }
+        }
+        elem_order
+    }
+
     #[test]
     fn elements_follow_the_first_vertex_that_touches_them() {
-        // elements 0 = {0, 1}, 1 = {1, 2}, 2 = {2, 3}; sweep 3, 2, 1, 0
-        let ve = Csr::from_pairs(4, [(0, 0), (1, 0), (1, 1), (2, 1), (2, 2), (3, 2)].into_iter());
-        assert_eq!(elements_by_first_touch(&[3, 2, 1, 0], &ve, 3), vec![2, 1, 0]);
-        assert_eq!(elements_by_first_touch(&[1, 0, 2, 3], &ve, 3), vec![0, 1, 2]);
+        // triangles 0 = {0, 1, 2}, 1 = {1, 2, 3}, 2 = {2, 3, 4}
+        let mut m = Mesh::new((0..5).map(|i| [i as f64, (i % 2) as f64, 0.0]).collect());
+        for t in [[0, 1, 2], [1, 2, 3], [2, 3, 4]] {
+            m.push_element(super::super::ElementKind::Triangle, &t);
+        }
+        // sweep 4, 3, 2, 1, 0: vertex 4 touches 2, vertex 3 touches 1
+        assert_eq!(elements_by_first_touch(&invert(&[4, 3, 2, 1, 0]), &m), vec![2, 1, 0]);
+        // sweep 2, 0, ...: vertex 2 touches all three, ascending
+        assert_eq!(elements_by_first_touch(&invert(&[2, 0, 1, 3, 4]), &m), vec![0, 1, 2]);
+    }
+
+    #[test]
+    fn first_touch_is_the_sequential_sweep_for_every_ordering_and_thread_count() {
+        let meshes = [
+            crate::generate::tet_box(6, 5, 4, [6.0, 5.0, 4.0]),
+            crate::generate::mixed_block(3, 2),
+            crate::generate::tri_grid(7, 6, [1.0, 1.0]),
+        ];
+        for m in &meshes {
+            let nb = super::super::topology::vertex_neighbours(m);
+            let fixed = super::super::topology::fixed_vertices(m);
+            for o in [
+                Ordering::ReverseBfs,
+                Ordering::CuthillMcKee,
+                Ordering::RedBlack,
+                Ordering::INPUT,
+            ] {
+                let order = o.order(&m.points, &nb, &fixed);
+                let want = first_touch_by_sweep(&order, m);
+                for threads in [1, 2, 3] {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                    let got = pool.install(|| elements_by_first_touch(&invert(&order), m));
+                    assert_eq!(got, want, "{o} on {threads} threads");
+                }
+            }
+        }
     }
 }

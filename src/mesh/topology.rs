@@ -104,13 +104,23 @@ pub fn vertex_elements(mesh: &Mesh) -> Csr {
 /// entry `i`'s items to `out`. Chunks of entries are built independently and
 /// concatenated, so no global sort of (entry, item) pairs is needed.
 pub fn build_par(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Csr {
+    build_par_with(n, || (), |_, i, out| fill(i, out))
+}
+
+/// [`build_par`] with a scratch value per task (`init` makes one), which
+/// `fill` may use but must not let change what it appends.
+pub fn build_par_with<S>(
+    n: usize,
+    init: impl Fn() -> S + Sync + Send,
+    fill: impl Fn(&mut S, usize, &mut Vec<u32>) + Sync,
+) -> Csr {
     const CHUNK: usize = 1 << 14;
     let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
-        .map(|c| {
+        .map_init(init, |scratch, c| {
             let (mut ends, mut items) = (Vec::new(), Vec::new());
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                fill(i, &mut items);
+                fill(scratch, i, &mut items);
                 ends.push(items.len() as u32);
             }
             (ends, items)
@@ -139,42 +149,48 @@ pub fn vertex_neighbours(mesh: &Mesh) -> Csr {
 /// has them already (ids must be in range).
 pub fn vertex_neighbours_with(mesh: &Mesh, ve: &Csr) -> Csr {
     // each vertex gathers its own edges from its elements: linear, and no
-    // sort of all (vertex, neighbour) pairs (1 GB for 10M tetrahedra)
-    build_par(mesh.num_points(), |v, out| {
-        let from = out.len();
-        let v32 = v as u32;
-        for &e in ve.of(v) {
-            let e = e as usize;
-            let vs = mesh.element(e);
-            if mesh.kinds[e] == ElementKind::Polyhedron {
-                for [a, b] in mesh.element_edges(e) {
-                    if a == v32 {
-                        out.push(b);
+    // sort of all (vertex, neighbour) pairs (1 GB for 10M tetrahedra). A
+    // task's marks (`mark[w] == v + 1`: w is listed for v) drop the repeats
+    // as they come, so only the distinct neighbours (14 on a tet box, of 72
+    // edge ends) are sorted
+    let n = mesh.num_points();
+    build_par_with(
+        n,
+        || vec![0u32; n],
+        |mark, v, out| {
+            let from = out.len();
+            let v32 = v as u32;
+            let mut add = |w: u32| {
+                if mark[w as usize] != v32 + 1 {
+                    mark[w as usize] = v32 + 1;
+                    out.push(w);
+                }
+            };
+            for &e in ve.of(v) {
+                let e = e as usize;
+                let vs = mesh.element(e);
+                if mesh.kinds[e] == ElementKind::Polyhedron {
+                    for [a, b] in mesh.element_edges(e) {
+                        if a == v32 {
+                            add(b);
+                        }
+                        if b == v32 {
+                            add(a);
+                        }
                     }
-                    if b == v32 {
-                        out.push(a);
+                }
+                for [a, b] in mesh.kinds[e].edges() {
+                    if vs[*a] == v32 {
+                        add(vs[*b]);
+                    }
+                    if vs[*b] == v32 {
+                        add(vs[*a]);
                     }
                 }
             }
-            for [a, b] in mesh.kinds[e].edges() {
-                if vs[*a] == v32 {
-                    out.push(vs[*b]);
-                }
-                if vs[*b] == v32 {
-                    out.push(vs[*a]);
-                }
-            }
-        }
-        out[from..].sort_unstable();
-        let mut keep = from;
-        for i in from..out.len() {
-            if i == from || out[i] != out[keep - 1] {
-                out[keep] = out[i];
-                keep += 1;
-            }
-        }
-        out.truncate(keep);
-    })
+            out[from..].sort_unstable();
+        },
+    )
 }
 
 /// The pair-sorting construction, for meshes whose ids are out of range.
@@ -231,20 +247,14 @@ fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
     }
     // Copies of a facet share their lowest vertex: each vertex counts the
     // facets it is lowest on, among its own elements' facets. Linear,
-    // parallel, and no hash map of every facet of the mesh.
-    let key = |vs: &[u32], local: &[usize]| {
-        let mut k = [u32::MAX; 4];
-        for (slot, &l) in k.iter_mut().zip(local) {
-            *slot = vs[l];
-        }
-        k.sort_unstable();
-        k
-    };
+    // parallel, and no hash map of every facet of the mesh. In v's list a
+    // facet is keyed by its other (up to three) vertices, ascending, packed
+    // in a u128 (a missing fourth is u32::MAX): one compare, not four.
     let on_skin: Vec<u32> = (0..n)
         .into_par_iter()
         .with_min_len(1 << 12)
         .fold(
-            || (Vec::<[u32; 4]>::new(), Vec::<u32>::new()),
+            || (Vec::<u128>::new(), Vec::<u32>::new()),
             |(mut keys, mut skin), v| {
                 keys.clear();
                 let v32 = v as u32;
@@ -252,9 +262,9 @@ fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
                     let vs = mesh.element(e as usize);
                     for f in mesh.kinds[e as usize].facets() {
                         // only the facets v is lowest on: tested before the
-                        // key is sorted, which most facets never need
+                        // key is made, which most facets never need
                         if f.iter().all(|&l| vs[l] >= v32) && f.iter().any(|&l| vs[l] == v32) {
-                            keys.push(key(vs, f));
+                            keys.push(facet_key(vs, f, v32));
                         }
                     }
                 }
@@ -263,7 +273,13 @@ fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
                 while i < keys.len() {
                     let j = (i..keys.len()).find(|&j| keys[j] != keys[i]).unwrap_or(keys.len());
                     if j - i == 1 {
-                        skin.extend(keys[i].iter().filter(|&&w| w != u32::MAX));
+                        skin.push(v32);
+                        let k = keys[i];
+                        skin.extend(
+                            [(k >> 64) as u32, (k >> 32) as u32, k as u32]
+                                .into_iter()
+                                .filter(|&w| w != u32::MAX),
+                        );
                     }
                     i = j;
                 }
@@ -278,6 +294,25 @@ fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
         skin[v as usize] = true;
     }
     skin
+}
+
+/// A facet of `vs` (local ids `local`, two to four) on which `v` is the
+/// lowest vertex, by its other vertices ascending, u32::MAX-padded to three.
+#[inline]
+fn facet_key(vs: &[u32], local: &[usize], v: u32) -> u128 {
+    let (mut k, mut m, mut dropped) = ([u32::MAX; 3], 0, false);
+    for &l in local {
+        // one copy of v is dropped: a (degenerate) facet naming it twice
+        // keeps the other, as the sorted list of all its vertices would
+        if vs[l] == v && !dropped {
+            dropped = true;
+        } else {
+            k[m] = vs[l];
+            m += 1;
+        }
+    }
+    k.sort_unstable();
+    (u128::from(k[0]) << 64) | (u128::from(k[1]) << 32) | u128::from(k[2])
 }
 
 /// The hash-map construction: polyhedra (whose faces of more than four

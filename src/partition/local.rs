@@ -192,11 +192,7 @@ pub fn build(net: &dyn Network, mesh: &Mesh, ids: Option<&[i64]>, opts: &Problem
     }
     let global: Vec<u32> = p.order.iter().map(|&m| lgid[m as usize]).collect();
     let owned: Vec<bool> = p.order.iter().map(|&m| lowner[m as usize] == me32).collect();
-    let simplicial = local
-        .kinds
-        .iter()
-        .all(|k| matches!(k, ElementKind::Triangle | ElementKind::Tetrahedron));
-    let (colors, free_colour) = colour(net, &p, &global, &owned, &halo, simplicial);
+    let (colors, free_colour) = colour(net, &p, &global, &owned, &halo);
     p.colors = colors;
     let owned_free = (0..p.free_vertices.len() as u32)
         .filter(|&i| owned[p.free_vertices[i as usize] as usize])
@@ -431,19 +427,12 @@ fn ghost_layer(net: &dyn Network, mesh: &Mesh, gid: &[u32], owner: &[u32]) -> Re
 
 /// Step 4: colour classes of the owned free vertices and the colour of every
 /// free vertex (ghosts too), by Jones–Plassmann rounds over the ranks.
-fn colour(
-    net: &dyn Network,
-    p: &Problem,
-    global: &[u32],
-    owned: &[bool],
-    halo: &[Exchange],
-    simplicial: bool,
-) -> (Csr, Vec<u32>) {
+fn colour(net: &dyn Network, p: &Problem, global: &[u32], owned: &[bool], halo: &[Exchange]) -> (Csr, Vec<u32>) {
     const NONE: u32 = u32::MAX;
     let n = p.num_vertices();
     let shared;
     // in a simplex every two vertices share an edge
-    let around = if simplicial {
+    let around = if p.simplicial {
         &p.neighbours
     } else {
         shared = sharing_neighbours(&p.elements, n);

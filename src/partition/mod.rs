@@ -371,6 +371,8 @@ fn restrict(
         model: p.model,
         incidence,
         neighbours,
+        // a border edge's elements may be on another part
+        simplicial: false,
         free,
         free_vertices,
         colors,

@@ -43,12 +43,24 @@ pub fn element_vertices(mesh: &Mesh, e: usize, flip: bool) -> Vec<u32> {
 
 /// [`element_vertices`] into a buffer the caller reuses (no allocation per element).
 fn element_vertices_into(mesh: &Mesh, e: usize, flip: bool, out: &mut Vec<u32>) {
-    let vs = mesh.element(e);
     out.clear();
-    match (flip, mesh.kinds[e]) {
-        (true, ElementKind::Triangle) => out.extend_from_slice(&[vs[0], vs[2], vs[1]]),
-        (true, ElementKind::Quadrilateral) => out.extend_from_slice(&[vs[0], vs[3], vs[2], vs[1]]),
-        _ => out.extend_from_slice(vs),
+    push_element_vertices(mesh, e, flip, out);
+}
+
+/// [`element_vertices`] appended to `out`.
+pub(crate) fn push_element_vertices(mesh: &Mesh, e: usize, flip: bool, out: &mut Vec<u32>) {
+    let from = out.len();
+    out.extend_from_slice(mesh.element(e));
+    if flip {
+        reverse_winding(mesh.kinds[e], &mut out[from..]);
+    }
+}
+
+/// A planar element's vertices read the other way round from the first
+/// ([v0, v2, v1] for a triangle); other kinds as they are.
+pub(crate) fn reverse_winding(kind: ElementKind, vs: &mut [u32]) {
+    if matches!(kind, ElementKind::Triangle | ElementKind::Quadrilateral) {
+        vs[1..].reverse();
     }
 }
 

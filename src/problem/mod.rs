@@ -88,6 +88,12 @@ pub struct Problem {
     pub incidence: Csr,
     /// Per vertex: its edge neighbours (new numbering).
     pub neighbours: Csr,
+    /// Every element a simplex, and every element around each vertex here:
+    /// the vertices sharing a corner with a vertex are then exactly its
+    /// edge neighbours. A part restricted from a whole problem says `false`
+    /// (an edge's elements may lie on another part).
+    #[serde(default)]
+    pub simplicial: bool,
     /// Per vertex: may it move?
     pub free: Vec<bool>,
     /// Free vertices in sweep order (ascending new ids).
@@ -154,6 +160,7 @@ impl Problem {
             },
             incidence: adj.incidence,
             neighbours: adj.neighbours,
+            simplicial: adj.simplicial,
             free: adj.free,
             free_vertices: adj.free_vertices,
             colors,

@@ -56,12 +56,9 @@ impl Numbering {
 /// first touches them.
 pub fn order(mesh: &Mesh, graph: &MeshGraph, ordering: Ordering) -> Numbering {
     let order = ordering.order(&mesh.points, &graph.neighbours, &graph.fixed);
-    let elem_order = order::elements_by_first_touch(&order, &graph.vertex_elements, mesh.num_elements());
-    Numbering {
-        inv: order::invert(&order),
-        order,
-        elem_order,
-    }
+    let inv = order::invert(&order);
+    let elem_order = order::elements_by_first_touch(&inv, mesh);
+    Numbering { inv, order, elem_order }
 }
 
 #[cfg(test)]
