@@ -20,6 +20,7 @@
 //! - `cell_data` is written to VTK/VTU only (other formats check its length).
 
 mod atomic;
+mod batch;
 mod codec;
 mod gmsh;
 mod lex;

@@ -20,6 +20,7 @@ use quick_xml::reader::Reader;
 use rayon::prelude::*;
 use std::borrow::Cow;
 
+use super::batch::write_pieces;
 use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, zlib_blocks};
 use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
 use super::vtk::{vtk_shape, vtk_type_name};
@@ -1269,24 +1270,46 @@ impl Out<'_> {
 
     /// A binary array's line: its byte-count header and `n` values of `size`
     /// bytes (`push(i, out)` appends value `i`), as base64. The bytes are made
-    /// and encoded chunk by chunk in parallel, so the whole array never
-    /// exists as bytes: one pass over the values instead of three.
+    /// and encoded piece by piece, in parallel batches written as they come
+    /// (see `batch`): the array never exists whole as bytes or as base64.
     fn b64_values(&mut self, n: usize, size: usize, push: impl Fn(usize, &mut Vec<u8>) + Sync) -> WriteResult {
-        // values per chunk: a multiple of 3, so every chunk but the last is a
-        // whole number of base64 quanta and the chunks join with no padding
-        const CHUNK: usize = 3 << 14;
-        let total = n * size;
-        let mut out = vec![0u8; total.div_ceil(3) * 4];
-        out.par_chunks_mut(CHUNK * size / 3 * 4).enumerate().for_each(|(c, o)| {
-            let mut bytes = Vec::with_capacity(CHUNK * size);
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+        // values per piece: a multiple of 3, so every piece but the last is a
+        // whole number of base64 quanta and the pieces join with no padding
+        const PIECE: usize = 3 << 14;
+        self.w
+            .write_all(B64.encode(((n * size) as u64).to_le_bytes()).as_bytes())?;
+        write_pieces(self.w, n, PIECE, |range, out| {
+            let mut bytes = Vec::with_capacity(range.len() * size);
+            for i in range {
                 push(i, &mut bytes);
             }
-            B64.encode_slice(&bytes, o).expect("the output holds the encoding");
-        });
-        self.w.write_all(B64.encode((total as u64).to_le_bytes()).as_bytes())?;
-        self.w.write_all(&out)?;
+            let start = out.len();
+            out.resize(start + bytes.len().div_ceil(3) * 4, 0);
+            B64.encode_slice(&bytes, &mut out[start..])
+                .expect("the output holds the encoding");
+        })?;
         writeln!(self.w)?;
+        Ok(())
+    }
+
+    /// The tag and base64 line of a binary array of `n` values, for arrays
+    /// read straight from the mesh (no `DataArray` copy of them).
+    fn b64_array(
+        &mut self,
+        name: &str,
+        ty: ValueType,
+        components: usize,
+        n: usize,
+        push: impl Fn(usize, &mut Vec<u8>) + Sync,
+    ) -> WriteResult {
+        writeln!(
+            self.w,
+            "        <DataArray type=\"{}\" Name=\"{name}\" NumberOfComponents=\"{components}\" NumberOfTuples=\"{}\" format=\"binary\">",
+            xml_type_name(ty),
+            n / components
+        )?;
+        self.b64_values(n, ty.size(), push)?;
+        writeln!(self.w, "        </DataArray>")?;
         Ok(())
     }
 }
@@ -1331,43 +1354,50 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         }
         writeln!(o.w, "      </PointData>")?;
     }
-    writeln!(o.w, "      <Points>")?;
-    let pts = DataArray::new(
-        "Points",
-        ValueType::F64,
-        3,
-        Values::Float(mesh.points.par_iter().flatten_iter().copied().collect()),
-    );
-    o.array("        ", &pts)?;
-    writeln!(o.w, "      </Points>")?;
-    writeln!(o.w, "      <Cells>")?;
     let ids = &mesh.conn[mesh.offsets[0]..mesh.offsets[ne]];
     if enc == Encoding::Base64 {
-        // straight from the mesh's ids, with no i64 copy of them
-        writeln!(
-            o.w,
-            "        <DataArray type=\"Int64\" Name=\"connectivity\" NumberOfComponents=\"1\" NumberOfTuples=\"{}\" format=\"binary\">",
-            ids.len()
-        )?;
-        o.b64_values(ids.len(), 8, |i, out| {
-            out.extend_from_slice(&(ids[i] as i64).to_le_bytes())
+        // straight from the mesh, with no copy of points, ids, offsets or types
+        let le = |out: &mut Vec<u8>, b: &[u8]| out.extend_from_slice(b);
+        writeln!(o.w, "      <Points>")?;
+        o.b64_array("Points", ValueType::F64, 3, 3 * n, |i, out| {
+            le(out, &mesh.points[i / 3][i % 3].to_le_bytes())
         })?;
-        writeln!(o.w, "        </DataArray>")?;
+        writeln!(o.w, "      </Points>")?;
+        writeln!(o.w, "      <Cells>")?;
+        o.b64_array("connectivity", ValueType::I64, 1, ids.len(), |i, out| {
+            le(out, &(ids[i] as i64).to_le_bytes())
+        })?;
+        o.b64_array("offsets", ValueType::I64, 1, ne, |i, out| {
+            le(out, &(mesh.offsets[i + 1] as i64).to_le_bytes())
+        })?;
+        o.b64_array("types", ValueType::U8, 1, ne, |i, out| {
+            out.push(mesh.kinds[i].vtk_id() as u8)
+        })?;
     } else {
+        writeln!(o.w, "      <Points>")?;
+        let pts = DataArray::new(
+            "Points",
+            ValueType::F64,
+            3,
+            Values::Float(mesh.points.par_iter().flatten_iter().copied().collect()),
+        );
+        o.array("        ", &pts)?;
+        writeln!(o.w, "      </Points>")?;
+        writeln!(o.w, "      <Cells>")?;
         let conn = ids.par_iter().map(|&v| v as i64).collect();
         let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
         o.array_rows("        ", &conn, Some(&mesh.offsets))?;
+        let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
+        o.array(
+            "        ",
+            &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)),
+        )?;
+        let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
+        o.array(
+            "        ",
+            &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
+        )?;
     }
-    let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
-    o.array(
-        "        ",
-        &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)),
-    )?;
-    let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
-    o.array(
-        "        ",
-        &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
-    )?;
     if mesh.kinds.contains(&ElementKind::Polyhedron) {
         // VTK's first polyhedron layout, which every VTK since 5.8 reads
         // (9.4 writes `polyhedron_*` arrays but still reads these)
