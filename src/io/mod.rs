@@ -24,6 +24,7 @@ mod batch;
 mod codec;
 mod gmsh;
 mod lex;
+mod mapped;
 mod medit;
 mod pvtu;
 mod smoothed;
@@ -209,7 +210,7 @@ fn read_piece(path: &Path) -> Result<Mesh> {
 }
 
 fn read_file(path: &Path, index_allowed: bool) -> Result<Mesh> {
-    let data = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let data = mapped::FileBytes::of(path)?;
     if data.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(Error::parse(path, None, "file is empty"));
     }
