@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use std::borrow::Cow;
 
 use super::batch::write_pieces;
-use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, zlib_blocks};
+use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, b64_values, zlib_blocks};
 use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
 use super::vtk::{vtk_shape, vtk_type_name};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
@@ -154,6 +154,17 @@ impl Ctx<'_> {
         if s.storage == Storage::Ascii {
             return self.decode_ascii(s);
         }
+        if let (Storage::Binary, Ty::Num(t)) = (s.storage, s.ty) {
+            let (text, e, max) = (s.text.as_bytes(), self.layout.endian, self.max_values(s, file_len));
+            let fused = if t.is_float() {
+                b64_values(&self.layout, text, max, t.size(), |c| t.get(e, c)).map(Values::Float)
+            } else {
+                b64_values(&self.layout, text, max, t.size(), |c| t.get_i64(e, c)).map(Values::Int)
+            };
+            if let Some(v) = fused {
+                return Ok(Decoded::Num(t, v));
+            }
+        }
         let bytes = self.payload(s, file_len)?;
         match s.ty {
             Ty::Num(t) => Ok(Decoded::Num(t, t.decode_all(self.layout.endian, &bytes))),
@@ -166,6 +177,18 @@ impl Ctx<'_> {
     fn raw_ints(&self, s: &Spec<'_>, file_len: usize) -> Result<Option<Ints>> {
         match s.ty {
             Ty::Num(t) if s.storage != Storage::Ascii && !t.is_float() => {
+                if s.storage == Storage::Binary {
+                    // ids that fit u32 (all but a broken file's) decoded
+                    // straight to u32; u32::MAX marks one that does not
+                    let e = self.layout.endian;
+                    let max = self.max_values(s, file_len);
+                    let narrow = |c: &[u8]| u32::try_from(t.get_i64(e, c)).unwrap_or(u32::MAX);
+                    if let Some(ids) = b64_values(&self.layout, s.text.as_bytes(), max, t.size(), narrow)
+                        && ids.par_iter().all(|&v| v != u32::MAX)
+                    {
+                        return Ok(Some(Ints::U32(ids)));
+                    }
+                }
                 Ok(Some(Ints::Raw(t, self.layout.endian, self.payload(s, file_len)?)))
             }
             _ => Ok(None),
@@ -726,7 +749,7 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
         }
     }
     let (pts, pat) = pts.ok_or_else(|| missing("<Points> DataArray"))?;
-    let (conn, cat) = conn.ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
+    let (mut conn, cat) = conn.ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
     let (offs, oat) = offs.ok_or_else(|| missing("Cells DataArray 'offsets'"))?;
     let (types, tat) = types.ok_or_else(|| missing("Cells DataArray 'types'"))?;
     let count_err = |at: usize, what: &str, want: usize, got: usize| {
@@ -770,8 +793,8 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
             }
         }
     }
-    let fast = match (&conn, &offs, &types) {
-        (c @ (Ints::I(_) | Ints::Raw(..)), Ints::I(o), Ints::I(t)) => fast_cells(c, o, t, np),
+    let fast = match (&mut conn, &offs, &types) {
+        (c @ (Ints::I(_) | Ints::Raw(..) | Ints::U32(_)), Ints::I(o), Ints::I(t)) => fast_cells(c, o, t, np),
         _ => None,
     };
     if let Some((shapes, offsets, ids)) = fast {
@@ -809,6 +832,8 @@ enum Ints {
     /// Binary integers as stored (a whole number of values): the
     /// connectivity, converted once, straight to u32, by [`fast_cells`].
     Raw(Scalar, Endian, Vec<u8>),
+    /// Binary integers decoded straight to u32 (every one fitted).
+    U32(Vec<u32>),
 }
 
 impl Ints {
@@ -817,6 +842,7 @@ impl Ints {
             Ints::I(v) => v.len(),
             Ints::F(v) => v.len(),
             Ints::Raw(t, _, b) => b.len() / t.size(),
+            Ints::U32(v) => v.len(),
         }
     }
 
@@ -824,6 +850,7 @@ impl Ints {
         match self {
             Ints::I(v) => v.into_par_iter().map(|x| x as f64).collect(),
             Ints::F(v) => v,
+            Ints::U32(v) => v.into_par_iter().map(|x| x as f64).collect(),
             Ints::Raw(t, e, b) => {
                 let s = t.size();
                 b.par_chunks_exact(s).map(|c| t.get_i64(e, c) as f64).collect()
@@ -836,8 +863,8 @@ impl Ints {
 /// converted in parallel: shapes, offsets (with the leading 0) and vertex
 /// ids. `None` for anything else; [`slow_cells`] then builds the cells, or
 /// names the first bad one, exactly as it always has.
-fn fast_cells(conn: &Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Vec<Shape>, Vec<usize>, Vec<u32>)> {
-    let mut table: [Option<(Shape, usize)>; 256] = [None; 256];
+fn fast_cells(conn: &mut Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Vec<Shape>, Vec<usize>, Vec<u32>)> {
+    let mut table: ShapeTable = [None; 256];
     for (t, slot) in table.iter_mut().enumerate() {
         *slot = vtk_shape(0, t as i64)
             .ok()
@@ -859,10 +886,20 @@ fn fast_cells(conn: &Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Ve
     }
     let used = offs.last().map_or(0, |&o| o as usize);
     // checked and narrowed in one pass; any id out of range: the slow path
+    if let Ints::U32(c) = conn {
+        // already narrowed: checked, then moved
+        if !c[..used].par_iter().all(|&v| (v as usize) < np) {
+            return None;
+        }
+        let mut ids = std::mem::take(c);
+        ids.truncate(used);
+        return Some((shapes(types, &table), offsets(offs), ids));
+    }
     let mut ids = vec![0u32; used];
     let ok = match conn {
         Ints::I(c) => narrow_ids(&c[..used], 1, &mut ids, np, |v| v[0]),
         Ints::Raw(t, e, b) => {
+            let (t, e) = (*t, *e);
             let b = &b[..used * t.size()];
             // the common layouts converted without a match per value
             match (t, e) {
@@ -872,20 +909,30 @@ fn fast_cells(conn: &Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Ve
                 (Scalar::I32, Endian::Little) => narrow_ids(b, 4, &mut ids, np, |c| {
                     i32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as i64
                 }),
-                _ => narrow_ids(b, t.size(), &mut ids, np, |c| t.get_i64(*e, c)),
+                _ => narrow_ids(b, t.size(), &mut ids, np, |c| t.get_i64(e, c)),
             }
         }
-        Ints::F(_) => false,
+        Ints::F(_) | Ints::U32(_) => false,
     };
     if !ok {
         return None;
     }
-    let shapes = types
+    Some((shapes(types, &table), offsets(offs), ids))
+}
+
+type ShapeTable = [Option<(Shape, usize)>; 256];
+
+/// The shapes of checked cell types.
+fn shapes(types: &[i64], table: &ShapeTable) -> Vec<Shape> {
+    types
         .par_iter()
         .map(|&t| table[t as usize].map(|(s, _)| s).unwrap_or(Shape::Vertex))
-        .collect();
-    let offsets = std::iter::once(0).chain(offs.iter().map(|&o| o as usize)).collect();
-    Some((shapes, offsets, ids))
+        .collect()
+}
+
+/// Checked end offsets, with the leading 0.
+fn offsets(offs: &[i64]) -> Vec<usize> {
+    std::iter::once(0).chain(offs.iter().map(|&o| o as usize)).collect()
 }
 
 /// `out[i]` = the vertex id that `get` reads from the `i`-th group of

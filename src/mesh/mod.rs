@@ -239,7 +239,24 @@ impl Mesh {
                 "polyhedron face offsets do not match the elements".into(),
             ));
         }
-        for e in 0..self.num_elements() {
+        // every element checked in parallel first; the loop below then runs
+        // only to name the first bad one, or for polyhedra (small meshes)
+        let plain = |e: usize| {
+            let vs = self.element(e);
+            self.kinds[e].num_vertices() == Some(vs.len())
+                && vs
+                    .iter()
+                    .enumerate()
+                    .all(|(i, &v)| (v as usize) < n && !vs[..i].contains(&v))
+        };
+        let all_plain = !polyhedra && {
+            use rayon::prelude::*;
+            (0..self.num_elements())
+                .into_par_iter()
+                .with_min_len(1 << 12)
+                .all(plain)
+        };
+        for e in (0..self.num_elements()).filter(|_| !all_plain) {
             let vs = self.element(e);
             if let Some(nv) = self.kinds[e].num_vertices().filter(|&nv| nv != vs.len()) {
                 return Err(Error::InvalidMesh(format!(
