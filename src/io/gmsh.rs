@@ -491,7 +491,7 @@ impl Reader<'_> {
             self.c = save;
             return false;
         }
-        self.raw.push_block(shape, nv, &ids);
+        self.raw.push_block(shape, nv, ids);
         self.physical.resize(self.physical.len() + k, physical);
         self.elementary.resize(self.elementary.len() + k, elementary);
         true
