@@ -390,7 +390,7 @@ pub(crate) fn b64_values<T: Copy + Default + Send>(
     use rayon::prelude::*;
     // a multiple of 3 and of every value size, so that each piece but the
     // last is whole quanta and whole values
-    const PIECE: usize = 3 * 8 << 13;
+    const PIECE: usize = (3 * 8) << 13;
     if layout.codec.is_some() || !matches!(size, 1 | 2 | 4 | 8) {
         return None;
     }

@@ -1433,9 +1433,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         o.b64_array("offsets", ValueType::I64, 1, ne, |i, out| {
             le(out, &(mesh.offsets[i + 1] as i64).to_le_bytes())
         })?;
-        o.b64_array("types", ValueType::U8, 1, ne, |i, out| {
-            out.push(mesh.kinds[i].vtk_id() as u8)
-        })?;
+        o.b64_array("types", ValueType::U8, 1, ne, |i, out| out.push(mesh.kinds[i].vtk_id()))?;
     } else {
         writeln!(o.w, "      <Points>")?;
         let pts = DataArray::new(
