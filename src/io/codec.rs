@@ -402,7 +402,7 @@ pub(crate) fn b64_values<T: Copy + Default + Send>(
         return None;
     }
     let bytes = usize::try_from(layout.header.get_i64(layout.endian, &header)).ok()?;
-    if bytes < 1 << 16 || bytes % size != 0 || bytes / size > max {
+    if bytes < 1 << 12 || bytes % size != 0 || bytes / size > max {
         return None;
     }
     let body = text.get(start + hchars..start + hchars + bytes.div_ceil(3) * 4)?;
