@@ -291,6 +291,45 @@ fn parallel_binary_writers_round_trip_meshes_of_several_chunks() {
     }
 }
 
+/// The batched binary writers put each large array in the file exactly as
+/// one encoding of the whole array would: VTU's points and connectivity as
+/// one base64 run after their byte count, MSH 4.1's nodes and element
+/// records as one block each (several batches of pieces here).
+#[test]
+fn batched_binary_writers_write_whole_array_encodings() {
+    use base64::Engine;
+    use base64::engine::general_purpose::STANDARD as B64;
+    let m = meshsmooth::generate::tet_box(40, 40, 40, [1.0, 1.3, 0.7]);
+    let dir = tempfile::tempdir().unwrap();
+    let holds = |file: &[u8], want: &[u8], what: &str| {
+        assert!(
+            memchr::memmem::find(file, want).is_some(),
+            "{what} is not in the file whole"
+        );
+    };
+    let points: Vec<u8> = m.points.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let conn: Vec<u8> = m.conn.iter().flat_map(|&v| (v as i64).to_le_bytes()).collect();
+    let path = dir.path().join("box.vtu");
+    io::write(&path, &m, Format::VtuBinary, &[]).unwrap();
+    let file = std::fs::read(&path).unwrap();
+    for (what, bytes) in [("points", &points), ("connectivity", &conn)] {
+        let line = B64.encode((bytes.len() as u64).to_le_bytes()) + &B64.encode(bytes) + "\n";
+        holds(&file, line.as_bytes(), what);
+    }
+    let records: Vec<u8> = (0..m.num_elements())
+        .flat_map(|e| {
+            let vs = m.element(e).iter().map(|&v| v as u64 + 1);
+            std::iter::once(e as u64 + 1).chain(vs).flat_map(u64::to_le_bytes)
+        })
+        .collect();
+    let tags: Vec<u8> = (1..=m.num_points() as u64).flat_map(u64::to_le_bytes).collect();
+    let path = dir.path().join("box.msh");
+    io::write(&path, &m, Format::Msh41Binary, &[]).unwrap();
+    let file = std::fs::read(&path).unwrap();
+    holds(&file, &[tags, points].concat(), "node tags and coordinates");
+    holds(&file, &records, "element records");
+}
+
 #[test]
 fn medit_writes_2d_only_for_planar_z0_meshes() {
     let dir = tempfile::tempdir().unwrap();

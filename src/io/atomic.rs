@@ -97,9 +97,9 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResul
         // created with 0666 & ~umask, as any tool would (the kernel applies the umask)
         builder.permissions(fs::Permissions::from_mode(0o666));
     }
-    let mut tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
+    let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
     let filled = {
-        let mut w = BufWriter::new(tmp.as_file_mut());
+        let mut w = BufWriter::with_capacity(1 << 20, Streamed::new(tmp.as_file()));
         fill(&mut w).and_then(|()| w.flush().map_err(WriteError::Io))
     };
     finish(path, filled)?;
@@ -113,6 +113,66 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResul
     tmp.persist(&target).map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }
+
+/// The temporary file, its pages sent to the disk as it grows. Left to
+/// itself the kernel starts writing a file back only once a tenth of the
+/// memory is dirty, so a file of a few hundred MB would wait whole for the
+/// closing `fsync`, the disk idle while it was encoded. Starting the
+/// writeback every few MB overlaps the two; the `fsync` still decides.
+struct Streamed<'a> {
+    file: &'a fs::File,
+    written: u64,
+    started: u64,
+}
+
+impl<'a> Streamed<'a> {
+    /// How much is written before its writeback is started.
+    const STEP: u64 = 16 << 20;
+
+    fn new(file: &'a fs::File) -> Self {
+        Streamed {
+            file,
+            written: 0,
+            started: 0,
+        }
+    }
+}
+
+impl Write for Streamed<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let k = (&mut &*self.file).write(buf)?;
+        self.written += k as u64;
+        if self.written - self.started >= Self::STEP {
+            start_writeback(self.file, self.started, self.written - self.started);
+            self.started = self.written;
+        }
+        Ok(k)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        (&mut &*self.file).flush()
+    }
+}
+
+/// Asks the kernel to start writing `len` bytes at `from` to the disk,
+/// without waiting for them: a hint, so its failure is ignored (the closing
+/// `fsync` reports what matters).
+#[cfg(target_os = "linux")]
+fn start_writeback(file: &fs::File, from: u64, len: u64) {
+    use std::os::fd::AsRawFd;
+    // SAFETY: only integers and an open descriptor cross; no memory is shared
+    unsafe {
+        libc::sync_file_range(
+            file.as_raw_fd(),
+            from as libc::off64_t,
+            len as libc::off64_t,
+            libc::SYNC_FILE_RANGE_WRITE,
+        );
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn start_writeback(_: &fs::File, _: u64, _: u64) {}
 
 /// Whether two paths name the same existing file (after resolving links and
 /// `..`); false when either does not exist.

@@ -15,6 +15,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
+use super::batch::write_records;
 use super::lex::{Cursor, clip};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
 use crate::error::{Error, Result};
@@ -490,7 +491,7 @@ impl Reader<'_> {
             self.c = save;
             return false;
         }
-        self.raw.push_block(shape, nv, &ids);
+        self.raw.push_block(shape, nv, ids);
         self.physical.resize(self.physical.len() + k, physical);
         self.elementary.resize(self.elementary.len() + k, elementary);
         true
@@ -891,19 +892,6 @@ pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     Ok(())
 }
 
-/// `n` records of `size` bytes, record `i` filled by `fill(i, bytes)`, in
-/// parallel chunks.
-fn par_le_bytes(n: usize, size: usize, fill: impl Fn(usize, &mut [u8]) + Sync) -> Vec<u8> {
-    const CHUNK: usize = 1 << 14;
-    let mut out = vec![0u8; n * size];
-    out.par_chunks_mut(CHUNK * size).enumerate().for_each(|(c, part)| {
-        for (j, rec) in part.chunks_exact_mut(size).enumerate() {
-            fill(c * CHUNK + j, rec);
-        }
-    });
-    out
-}
-
 pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
     let n = mesh.num_points();
     let mut buf: Vec<u8> = Vec::new();
@@ -990,17 +978,15 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     if n > 0 {
         nums(w, &mut buf, &[ndim as i32, ntag, 0], &[n as u64])?;
         if binary {
-            // tags and coordinates encoded in parallel, written as two blocks
+            // tags and coordinates encoded in parallel batches
             w.write_all(&buf)?;
             buf.clear();
-            w.write_all(&par_le_bytes(n, 8, |i, out| {
-                out.copy_from_slice(&(i as u64 + 1).to_le_bytes())
-            }))?;
-            w.write_all(&par_le_bytes(n, 24, |i, out| {
+            write_records(w, n, 8, |i, out| out.copy_from_slice(&(i as u64 + 1).to_le_bytes()))?;
+            write_records(w, n, 24, |i, out| {
                 for (k, c) in mesh.points[i].iter().enumerate() {
                     out[8 * k..8 * k + 8].copy_from_slice(&c.to_le_bytes());
                 }
-            }))?;
+            })?;
         } else {
             for i in 1..=n as u64 {
                 nums(w, &mut buf, &[], &[i])?;
@@ -1031,12 +1017,12 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
             // parallel, each row at its own offset
             w.write_all(&buf)?;
             buf.clear();
-            w.write_all(&par_le_bytes(cs.len(), 8 * (nv + 1), |i, out| {
+            write_records(w, cs.len(), 8 * (nv + 1), |i, out| {
                 out[..8].copy_from_slice(&(tag + 1 + i as u64).to_le_bytes());
                 for (k, &v) in cs[i].vs.iter().enumerate() {
                     out[8 * k + 8..8 * k + 16].copy_from_slice(&(v as u64 + 1).to_le_bytes());
                 }
-            }))?;
+            })?;
             tag += cs.len() as u64;
             continue;
         }

@@ -20,8 +20,9 @@ use quick_xml::reader::Reader;
 use rayon::prelude::*;
 use std::borrow::Cow;
 
-use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, zlib_blocks};
-use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
+use super::batch::write_pieces;
+use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, b64_values, zlib_blocks};
+use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, par_parse, push_val};
 use super::vtk::{vtk_shape, vtk_type_name};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
 use crate::error::{Error, Location, Result};
@@ -153,6 +154,17 @@ impl Ctx<'_> {
         if s.storage == Storage::Ascii {
             return self.decode_ascii(s);
         }
+        if let (Storage::Binary, Ty::Num(t)) = (s.storage, s.ty) {
+            let (text, e, max) = (s.text.as_bytes(), self.layout.endian, self.max_values(s, file_len));
+            let fused = if t.is_float() {
+                b64_values(&self.layout, text, max, t.size(), |c| t.get(e, c)).map(Values::Float)
+            } else {
+                b64_values(&self.layout, text, max, t.size(), |c| t.get_i64(e, c)).map(Values::Int)
+            };
+            if let Some(v) = fused {
+                return Ok(Decoded::Num(t, v));
+            }
+        }
         let bytes = self.payload(s, file_len)?;
         match s.ty {
             Ty::Num(t) => Ok(Decoded::Num(t, t.decode_all(self.layout.endian, &bytes))),
@@ -165,6 +177,18 @@ impl Ctx<'_> {
     fn raw_ints(&self, s: &Spec<'_>, file_len: usize) -> Result<Option<Ints>> {
         match s.ty {
             Ty::Num(t) if s.storage != Storage::Ascii && !t.is_float() => {
+                if s.storage == Storage::Binary {
+                    // ids that fit u32 (all but a broken file's) decoded
+                    // straight to u32; u32::MAX marks one that does not
+                    let e = self.layout.endian;
+                    let max = self.max_values(s, file_len);
+                    let narrow = |c: &[u8]| u32::try_from(t.get_i64(e, c)).unwrap_or(u32::MAX);
+                    if let Some(ids) = b64_values(&self.layout, s.text.as_bytes(), max, t.size(), narrow)
+                        && ids.par_iter().all(|&v| v != u32::MAX)
+                    {
+                        return Ok(Some(Ints::U32(ids)));
+                    }
+                }
                 Ok(Some(Ints::Raw(t, self.layout.endian, self.payload(s, file_len)?)))
             }
             _ => Ok(None),
@@ -252,6 +276,9 @@ impl Ctx<'_> {
         });
         match s.ty {
             Ty::Num(t) => {
+                if let Some(v) = par_parse(t, &s.text) {
+                    return Ok(Decoded::Num(t, v));
+                }
                 let mut out = empty_values(t, 0);
                 for (pos, tok) in tokens.by_ref() {
                     let v = t.parse_text(tok).ok_or_else(|| {
@@ -339,22 +366,12 @@ pub(crate) fn attr(e: &BytesStart, key: &str) -> Option<String> {
 }
 
 fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    // scanning for the first byte alone vectorises; comparing a window at
-    // every offset of a gigabyte file took longer than decoding it
-    let (&first, _) = needle.split_first()?;
-    let mut from = 0;
-    while let Some(i) = hay[from..].iter().position(|&b| b == first) {
-        let at = from + i;
-        if hay[at..].starts_with(needle) {
-            return Some(at);
-        }
-        from = at + 1;
-    }
-    None
+    // vectorised: a plain scan of a gigabyte file took longer than decoding it
+    memchr::memmem::find(hay, needle)
 }
 
 fn rfind(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    hay.windows(needle.len()).rposition(|w| w == needle)
+    memchr::memmem::rfind(hay, needle)
 }
 
 /// Split off `<AppendedData>`: its payload is binary (raw) and no XML parser
@@ -735,7 +752,7 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
         }
     }
     let (pts, pat) = pts.ok_or_else(|| missing("<Points> DataArray"))?;
-    let (conn, cat) = conn.ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
+    let (mut conn, cat) = conn.ok_or_else(|| missing("Cells DataArray 'connectivity'"))?;
     let (offs, oat) = offs.ok_or_else(|| missing("Cells DataArray 'offsets'"))?;
     let (types, tat) = types.ok_or_else(|| missing("Cells DataArray 'types'"))?;
     let count_err = |at: usize, what: &str, want: usize, got: usize| {
@@ -779,8 +796,8 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
             }
         }
     }
-    let fast = match (&conn, &offs, &types) {
-        (c @ (Ints::I(_) | Ints::Raw(..)), Ints::I(o), Ints::I(t)) => fast_cells(c, o, t, np),
+    let fast = match (&mut conn, &offs, &types) {
+        (c @ (Ints::I(_) | Ints::Raw(..) | Ints::U32(_)), Ints::I(o), Ints::I(t)) => fast_cells(c, o, t, np),
         _ => None,
     };
     if let Some((shapes, offsets, ids)) = fast {
@@ -818,6 +835,8 @@ enum Ints {
     /// Binary integers as stored (a whole number of values): the
     /// connectivity, converted once, straight to u32, by [`fast_cells`].
     Raw(Scalar, Endian, Vec<u8>),
+    /// Binary integers decoded straight to u32 (every one fitted).
+    U32(Vec<u32>),
 }
 
 impl Ints {
@@ -826,6 +845,7 @@ impl Ints {
             Ints::I(v) => v.len(),
             Ints::F(v) => v.len(),
             Ints::Raw(t, _, b) => b.len() / t.size(),
+            Ints::U32(v) => v.len(),
         }
     }
 
@@ -833,6 +853,7 @@ impl Ints {
         match self {
             Ints::I(v) => v.into_par_iter().map(|x| x as f64).collect(),
             Ints::F(v) => v,
+            Ints::U32(v) => v.into_par_iter().map(|x| x as f64).collect(),
             Ints::Raw(t, e, b) => {
                 let s = t.size();
                 b.par_chunks_exact(s).map(|c| t.get_i64(e, c) as f64).collect()
@@ -845,8 +866,8 @@ impl Ints {
 /// converted in parallel: shapes, offsets (with the leading 0) and vertex
 /// ids. `None` for anything else; [`slow_cells`] then builds the cells, or
 /// names the first bad one, exactly as it always has.
-fn fast_cells(conn: &Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Vec<Shape>, Vec<usize>, Vec<u32>)> {
-    let mut table: [Option<(Shape, usize)>; 256] = [None; 256];
+fn fast_cells(conn: &mut Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Vec<Shape>, Vec<usize>, Vec<u32>)> {
+    let mut table: ShapeTable = [None; 256];
     for (t, slot) in table.iter_mut().enumerate() {
         *slot = vtk_shape(0, t as i64)
             .ok()
@@ -867,26 +888,69 @@ fn fast_cells(conn: &Ints, offs: &[i64], types: &[i64], np: usize) -> Option<(Ve
         return None;
     }
     let used = offs.last().map_or(0, |&o| o as usize);
-    let id = |v: i64| (v >= 0 && (v as u64) < np as u64).then_some(v as u32);
     // checked and narrowed in one pass; any id out of range: the slow path
-    let ids: Vec<u32> = match conn {
-        Ints::I(c) => c[..used].par_iter().map(|&v| id(v)).collect::<Option<_>>()?,
-        Ints::Raw(t, e, b) => {
-            let s = t.size();
-            b[..used * s]
-                .par_chunks_exact(s)
-                .with_min_len((1 << 16) / s)
-                .map(|c| id(t.get_i64(*e, c)))
-                .collect::<Option<_>>()?
+    if let Ints::U32(c) = conn {
+        // already narrowed: checked, then moved
+        if !c[..used].par_iter().all(|&v| (v as usize) < np) {
+            return None;
         }
-        Ints::F(_) => return None,
+        let mut ids = std::mem::take(c);
+        ids.truncate(used);
+        return Some((shapes(types, &table), offsets(offs), ids));
+    }
+    let mut ids = vec![0u32; used];
+    let ok = match conn {
+        Ints::I(c) => narrow_ids(&c[..used], 1, &mut ids, np, |v| v[0]),
+        Ints::Raw(t, e, b) => {
+            let (t, e) = (*t, *e);
+            let b = &b[..used * t.size()];
+            // the common layouts converted without a match per value
+            match (t, e) {
+                (Scalar::I64 | Scalar::U64, Endian::Little) => narrow_ids(b, 8, &mut ids, np, |c| {
+                    i64::from_le_bytes(c.try_into().unwrap_or([0; 8]))
+                }),
+                (Scalar::I32, Endian::Little) => narrow_ids(b, 4, &mut ids, np, |c| {
+                    i32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as i64
+                }),
+                _ => narrow_ids(b, t.size(), &mut ids, np, |c| t.get_i64(e, c)),
+            }
+        }
+        Ints::F(_) | Ints::U32(_) => false,
     };
-    let shapes = types
+    if !ok {
+        return None;
+    }
+    Some((shapes(types, &table), offsets(offs), ids))
+}
+
+type ShapeTable = [Option<(Shape, usize)>; 256];
+
+/// The shapes of checked cell types.
+fn shapes(types: &[i64], table: &ShapeTable) -> Vec<Shape> {
+    types
         .par_iter()
         .map(|&t| table[t as usize].map(|(s, _)| s).unwrap_or(Shape::Vertex))
-        .collect();
-    let offsets = std::iter::once(0).chain(offs.iter().map(|&o| o as usize)).collect();
-    Some((shapes, offsets, ids))
+        .collect()
+}
+
+/// Checked end offsets, with the leading 0.
+fn offsets(offs: &[i64]) -> Vec<usize> {
+    std::iter::once(0).chain(offs.iter().map(|&o| o as usize)).collect()
+}
+
+/// `out[i]` = the vertex id that `get` reads from the `i`-th group of
+/// `step` items of `from`, in parallel; false if any is not below `np`.
+fn narrow_ids<T: Sync>(from: &[T], step: usize, out: &mut [u32], np: usize, get: impl Fn(&[T]) -> i64 + Sync) -> bool {
+    const CHUNK: usize = 1 << 16;
+    out.par_chunks_mut(CHUNK)
+        .zip(from.par_chunks(CHUNK * step))
+        .all(|(o, f)| {
+            o.iter_mut().zip(f.chunks_exact(step)).all(|(o, c)| {
+                let v = get(c);
+                *o = v as u32;
+                v >= 0 && (v as u64) < np as u64
+            })
+        })
 }
 
 /// Cells one by one, polyhedra included, stopping at the first bad one.
@@ -1269,24 +1333,46 @@ impl Out<'_> {
 
     /// A binary array's line: its byte-count header and `n` values of `size`
     /// bytes (`push(i, out)` appends value `i`), as base64. The bytes are made
-    /// and encoded chunk by chunk in parallel, so the whole array never
-    /// exists as bytes: one pass over the values instead of three.
+    /// and encoded piece by piece, in parallel batches written as they come
+    /// (see `batch`): the array never exists whole as bytes or as base64.
     fn b64_values(&mut self, n: usize, size: usize, push: impl Fn(usize, &mut Vec<u8>) + Sync) -> WriteResult {
-        // values per chunk: a multiple of 3, so every chunk but the last is a
-        // whole number of base64 quanta and the chunks join with no padding
-        const CHUNK: usize = 3 << 14;
-        let total = n * size;
-        let mut out = vec![0u8; total.div_ceil(3) * 4];
-        out.par_chunks_mut(CHUNK * size / 3 * 4).enumerate().for_each(|(c, o)| {
-            let mut bytes = Vec::with_capacity(CHUNK * size);
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+        // values per piece: a multiple of 3, so every piece but the last is a
+        // whole number of base64 quanta and the pieces join with no padding
+        const PIECE: usize = 3 << 14;
+        self.w
+            .write_all(B64.encode(((n * size) as u64).to_le_bytes()).as_bytes())?;
+        write_pieces(self.w, n, PIECE, |range, out| {
+            let mut bytes = Vec::with_capacity(range.len() * size);
+            for i in range {
                 push(i, &mut bytes);
             }
-            B64.encode_slice(&bytes, o).expect("the output holds the encoding");
-        });
-        self.w.write_all(B64.encode((total as u64).to_le_bytes()).as_bytes())?;
-        self.w.write_all(&out)?;
+            let start = out.len();
+            out.resize(start + bytes.len().div_ceil(3) * 4, 0);
+            B64.encode_slice(&bytes, &mut out[start..])
+                .expect("the output holds the encoding");
+        })?;
         writeln!(self.w)?;
+        Ok(())
+    }
+
+    /// The tag and base64 line of a binary array of `n` values, for arrays
+    /// read straight from the mesh (no `DataArray` copy of them).
+    fn b64_array(
+        &mut self,
+        name: &str,
+        ty: ValueType,
+        components: usize,
+        n: usize,
+        push: impl Fn(usize, &mut Vec<u8>) + Sync,
+    ) -> WriteResult {
+        writeln!(
+            self.w,
+            "        <DataArray type=\"{}\" Name=\"{name}\" NumberOfComponents=\"{components}\" NumberOfTuples=\"{}\" format=\"binary\">",
+            xml_type_name(ty),
+            n / components
+        )?;
+        self.b64_values(n, ty.size(), push)?;
+        writeln!(self.w, "        </DataArray>")?;
         Ok(())
     }
 }
@@ -1331,43 +1417,48 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         }
         writeln!(o.w, "      </PointData>")?;
     }
-    writeln!(o.w, "      <Points>")?;
-    let pts = DataArray::new(
-        "Points",
-        ValueType::F64,
-        3,
-        Values::Float(mesh.points.par_iter().flatten_iter().copied().collect()),
-    );
-    o.array("        ", &pts)?;
-    writeln!(o.w, "      </Points>")?;
-    writeln!(o.w, "      <Cells>")?;
     let ids = &mesh.conn[mesh.offsets[0]..mesh.offsets[ne]];
     if enc == Encoding::Base64 {
-        // straight from the mesh's ids, with no i64 copy of them
-        writeln!(
-            o.w,
-            "        <DataArray type=\"Int64\" Name=\"connectivity\" NumberOfComponents=\"1\" NumberOfTuples=\"{}\" format=\"binary\">",
-            ids.len()
-        )?;
-        o.b64_values(ids.len(), 8, |i, out| {
-            out.extend_from_slice(&(ids[i] as i64).to_le_bytes())
+        // straight from the mesh, with no copy of points, ids, offsets or types
+        let le = |out: &mut Vec<u8>, b: &[u8]| out.extend_from_slice(b);
+        writeln!(o.w, "      <Points>")?;
+        o.b64_array("Points", ValueType::F64, 3, 3 * n, |i, out| {
+            le(out, &mesh.points[i / 3][i % 3].to_le_bytes())
         })?;
-        writeln!(o.w, "        </DataArray>")?;
+        writeln!(o.w, "      </Points>")?;
+        writeln!(o.w, "      <Cells>")?;
+        o.b64_array("connectivity", ValueType::I64, 1, ids.len(), |i, out| {
+            le(out, &(ids[i] as i64).to_le_bytes())
+        })?;
+        o.b64_array("offsets", ValueType::I64, 1, ne, |i, out| {
+            le(out, &(mesh.offsets[i + 1] as i64).to_le_bytes())
+        })?;
+        o.b64_array("types", ValueType::U8, 1, ne, |i, out| out.push(mesh.kinds[i].vtk_id()))?;
     } else {
+        writeln!(o.w, "      <Points>")?;
+        let pts = DataArray::new(
+            "Points",
+            ValueType::F64,
+            3,
+            Values::Float(mesh.points.par_iter().flatten_iter().copied().collect()),
+        );
+        o.array("        ", &pts)?;
+        writeln!(o.w, "      </Points>")?;
+        writeln!(o.w, "      <Cells>")?;
         let conn = ids.par_iter().map(|&v| v as i64).collect();
         let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
         o.array_rows("        ", &conn, Some(&mesh.offsets))?;
+        let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
+        o.array(
+            "        ",
+            &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)),
+        )?;
+        let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
+        o.array(
+            "        ",
+            &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
+        )?;
     }
-    let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
-    o.array(
-        "        ",
-        &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)),
-    )?;
-    let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
-    o.array(
-        "        ",
-        &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
-    )?;
     if mesh.kinds.contains(&ElementKind::Polyhedron) {
         // VTK's first polyhedron layout, which every VTK since 5.8 reads
         // (9.4 writes `polyhedron_*` arrays but still reads these)

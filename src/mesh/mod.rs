@@ -239,7 +239,24 @@ impl Mesh {
                 "polyhedron face offsets do not match the elements".into(),
             ));
         }
-        for e in 0..self.num_elements() {
+        // every element checked in parallel first; the loop below then runs
+        // only to name the first bad one, or for polyhedra (small meshes)
+        let plain = |e: usize| {
+            let vs = self.element(e);
+            self.kinds[e].num_vertices() == Some(vs.len())
+                && vs
+                    .iter()
+                    .enumerate()
+                    .all(|(i, &v)| (v as usize) < n && !vs[..i].contains(&v))
+        };
+        let all_plain = !polyhedra && {
+            use rayon::prelude::*;
+            (0..self.num_elements())
+                .into_par_iter()
+                .with_min_len(1 << 12)
+                .all(plain)
+        };
+        for e in (0..self.num_elements()).filter(|_| !all_plain) {
             let vs = self.element(e);
             if let Some(nv) = self.kinds[e].num_vertices().filter(|&nv| nv != vs.len()) {
                 return Err(Error::InvalidMesh(format!(
@@ -379,10 +396,31 @@ impl Mesh {
             .into_par_iter()
             .with_min_len(4096)
             .map_init(
-                || (Vec::<u32>::new(), Vec::<usize>::new(), Vec::<usize>::new()),
-                |(keys, starts, idx), v| {
+                || {
+                    (
+                        Vec::<u32>::new(),
+                        Vec::<usize>::new(),
+                        Vec::<usize>::new(),
+                        Vec::<u64>::new(),
+                    )
+                },
+                |(keys, starts, idx, prints), v| {
                     let group = buckets.of(v);
                     if group.len() < 2 {
+                        return None;
+                    }
+                    // equal vertex sets have equal fingerprints (a sum over
+                    // the set), so a group whose fingerprints all differ,
+                    // nearly every group, needs no sort of its vertex lists
+                    prints.clear();
+                    prints.extend(group.iter().map(|&e| {
+                        let vs = self.element(e as usize);
+                        vs.iter().fold(vs.len() as u64, |h, &v| {
+                            h.wrapping_add((v as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15).rotate_left(29))
+                        })
+                    }));
+                    prints.sort_unstable();
+                    if prints.windows(2).all(|w| w[0] != w[1]) {
                         return None;
                     }
                     keys.clear();
@@ -409,5 +447,57 @@ impl Mesh {
             )
             .flatten()
             .min_by_key(|&(_, b)| b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first pair a scan in file order finds: the smallest second
+    /// occurrence of a vertex set, with that set's first element.
+    fn first_duplicate(mesh: &Mesh) -> Option<(usize, usize)> {
+        let mut seen = std::collections::HashMap::new();
+        for e in 0..mesh.num_elements() {
+            let mut vs = mesh.element(e).to_vec();
+            vs.sort_unstable();
+            if let Some(&a) = seen.get(&vs) {
+                return Some((a, e));
+            }
+            seen.insert(vs, e);
+        }
+        None
+    }
+
+    #[test]
+    fn duplicate_elements_are_the_first_a_scan_in_file_order_finds() {
+        let mut x = 12345u64;
+        let mut next = |m: u64| {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 33) % m
+        };
+        for round in 0..40 {
+            // few points, so groups sharing a lowest vertex are large
+            let np = 8 + next(40) as usize;
+            let mut mesh = Mesh::new((0..np).map(|i| [i as f64, 0.0, 0.0]).collect());
+            for _ in 0..(20 + next(200)) {
+                let mut vs = Vec::new();
+                while vs.len() < 4 {
+                    let v = next(np as u64) as u32;
+                    if !vs.contains(&v) {
+                        vs.push(v);
+                    }
+                }
+                mesh.push_element(ElementKind::Tetrahedron, &vs);
+            }
+            if round % 2 == 0 {
+                // a copy of an earlier element, its vertices in another order
+                let e = next(mesh.num_elements() as u64) as usize;
+                let mut vs = mesh.element(e).to_vec();
+                vs.rotate_left(1 + next(3) as usize);
+                mesh.push_element(ElementKind::Tetrahedron, &vs);
+            }
+            assert_eq!(mesh.duplicate_elements(), first_duplicate(&mesh), "round {round}");
+        }
     }
 }
