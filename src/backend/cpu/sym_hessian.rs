@@ -269,6 +269,16 @@ impl SymBlockCsr {
     /// symmetric positive definite): M = (D + L) D^-1 (D + U), with D^-1
     /// applied through the block-Jacobi factors.
     pub fn sgs(&self, jacobi: &BlockJacobi, x: &[Vec3], y: &mut [Vec3]) {
+        if self.planar {
+            self.sgs_dim::<2>(jacobi, x, y)
+        } else {
+            self.sgs_dim::<3>(jacobi, x, y)
+        }
+    }
+
+    /// `sgs` reading the leading D x D part of the off-diagonal blocks (as
+    /// `mul_dim`): in a planar problem the rest is exactly zero.
+    fn sgs_dim<const D: usize>(&self, jacobi: &BlockJacobi, x: &[Vec3], y: &mut [Vec3]) {
         let f = jacobi.factors();
         let parts = split_rows(&self.bounds, y);
         parts.into_par_iter().for_each(|(start, ys)| {
@@ -284,8 +294,12 @@ impl SymBlockCsr {
                         break;
                     }
                     let (b, yj) = (&self.blocks[s], &mut ys[j - start]);
-                    for c in 0..3 {
-                        yj[c] -= b[0][c] * w[0] + b[1][c] * w[1] + b[2][c] * w[2];
+                    for c in 0..D {
+                        let mut t = 0.0;
+                        for r in 0..D {
+                            t += b[r][c] * w[r];
+                        }
+                        yj[c] -= t;
                     }
                 }
             }
@@ -298,8 +312,12 @@ impl SymBlockCsr {
                         break;
                     }
                     let (b, yj) = (&self.blocks[s], &ys[j - start]);
-                    for r in 0..3 {
-                        acc[r] += b[r][0] * yj[0] + b[r][1] * yj[1] + b[r][2] * yj[2];
+                    for r in 0..D {
+                        let mut t = 0.0;
+                        for c in 0..D {
+                            t += b[r][c] * yj[c];
+                        }
+                        acc[r] += t;
                     }
                 }
                 let t = ldlt_solve(&f[i], &acc);
