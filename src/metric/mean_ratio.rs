@@ -244,7 +244,7 @@ impl TetShape {
 
     /// What every block (k, l) is made of, for an assembly that builds
     /// only the blocks it stores ([`BlockFactors::block`]).
-    #[inline]
+    #[inline(always)]
     pub fn block_factors(&self, x: &[Vec3; 4]) -> Option<BlockFactors> {
         let p = self.parts(x)?;
         let grad = self.b.map(|bk| mul_vec(&p.grad_s, &bk));
