@@ -457,108 +457,11 @@ pub(crate) fn push_val(out: &mut crate::mesh::Values, v: NumVal) {
     }
 }
 
-/// The whitespace-separated values of a long `text`, parsed in parallel
-/// pieces split at whitespace; `None` for a short text or a token that is not
-/// a value of `s` (the caller's token-by-token loop then names it). The
-/// same values that loop gives, on any thread count.
-pub(crate) fn par_parse(s: Scalar, text: &str) -> Option<crate::mesh::Values> {
-    use crate::mesh::Values;
-    use rayon::prelude::*;
-    const PIECE: usize = 1 << 18;
-    let b = text.as_bytes();
-    if b.len() < 4 * PIECE {
-        return None;
-    }
-    // piece starts moved forward to a whitespace byte (ASCII, so a char
-    // boundary): no token is cut
-    let mut cuts = vec![0];
-    let mut at = PIECE;
-    while at < b.len() {
-        at += b[at..]
-            .iter()
-            .position(|c| c.is_ascii_whitespace())
-            .unwrap_or(b.len() - at);
-        cuts.push(at);
-        at += PIECE;
-    }
-    cuts.push(b.len());
-    cuts.dedup();
-    let parts: Vec<Values> = cuts
-        .par_windows(2)
-        .map(|w| {
-            let mut out = empty_values(s, 0);
-            for tok in text[w[0]..w[1]].split_ascii_whitespace() {
-                push_val(&mut out, s.parse_text(tok)?);
-            }
-            Some(out)
-        })
-        .collect::<Option<_>>()?;
-    let mut all = empty_values(s, 0);
-    match &mut all {
-        Values::Int(v) => v.extend(parts.into_iter().flat_map(|p| match p {
-            Values::Int(p) => p,
-            _ => Vec::new(),
-        })),
-        Values::Float(v) => v.extend(parts.into_iter().flat_map(|p| match p {
-            Values::Float(p) => p,
-            _ => Vec::new(),
-        })),
-        Values::Str(_) => {}
-    }
-    Some(all)
-}
-
 /// Empty storage for values of `s`.
 pub(crate) fn empty_values(s: Scalar, cap: usize) -> crate::mesh::Values {
     if s.is_float() {
         crate::mesh::Values::Float(Vec::with_capacity(cap))
     } else {
         crate::mesh::Values::Int(Vec::with_capacity(cap))
-    }
-}
-
-#[cfg(test)]
-mod par_parse_tests {
-    use super::*;
-    use crate::mesh::Values;
-
-    fn one_by_one(s: Scalar, text: &str) -> Vec<f64> {
-        let mut out = empty_values(s, 0);
-        for tok in text.split_ascii_whitespace() {
-            push_val(&mut out, s.parse_text(tok).unwrap());
-        }
-        floats(out)
-    }
-
-    fn floats(v: Values) -> Vec<f64> {
-        match v {
-            Values::Int(v) => v.into_iter().map(|x| x as f64).collect(),
-            Values::Float(v) => v,
-            Values::Str(_) => unreachable!(),
-        }
-    }
-
-    #[test]
-    fn parallel_pieces_parse_as_the_token_loop() {
-        // long tokens and runs of mixed whitespace around the piece cuts
-        let ws = [" ", "\n", "\t ", "   \r\n  "];
-        let text: String = (0..400_000u64)
-            .map(|i| format!("{}{}", (i * 2654435761 % 1_000_003) as f64 / 7.0, ws[(i % 4) as usize]))
-            .collect();
-        let ints: String = (0..600_000i64).map(|i| format!("{} ", i * 37 - 5000)).collect();
-        for threads in [1, 2, 3] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| {
-                let f = par_parse(Scalar::F64, &text).unwrap();
-                assert_eq!(floats(f), one_by_one(Scalar::F64, &text));
-                let i = par_parse(Scalar::I64, &ints).unwrap();
-                assert_eq!(floats(i), one_by_one(Scalar::I64, &ints));
-            });
-        }
-        // a bad token anywhere, or a short text: left to the loop
-        let mut bad = ints.clone();
-        bad.replace_range(3_000_000..3_000_001, "x");
-        assert!(par_parse(Scalar::I64, &bad).is_none());
-        assert!(par_parse(Scalar::I64, "1 2 3").is_none());
     }
 }

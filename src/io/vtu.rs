@@ -22,7 +22,7 @@ use std::borrow::Cow;
 
 use super::batch::write_pieces;
 use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, b64_values, zlib_blocks};
-use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, par_parse, push_val};
+use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
 use super::vtk::{vtk_shape, vtk_type_name};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
 use crate::error::{Error, Location, Result};
@@ -276,9 +276,6 @@ impl Ctx<'_> {
         });
         match s.ty {
             Ty::Num(t) => {
-                if let Some(v) = par_parse(t, &s.text) {
-                    return Ok(Decoded::Num(t, v));
-                }
                 let mut out = empty_values(t, 0);
                 for (pos, tok) in tokens.by_ref() {
                     let v = t.parse_text(tok).ok_or_else(|| {
