@@ -55,11 +55,31 @@ pub(crate) fn assembly_ranges(rows: usize) -> usize {
     rows.div_ceil(ROWS_PER_RANGE).min(cap).max(1)
 }
 
+/// The free index of each vertex (`u32::MAX` if fixed).
+pub(crate) fn free_index(p: &Problem) -> Vec<u32> {
+    let mut free_index = vec![u32::MAX; p.num_vertices()];
+    for (i, &v) in p.free_vertices.iter().enumerate() {
+        free_index[v as usize] = i as u32;
+    }
+    free_index
+}
+
+/// The Hessian's row pattern over the free vertices: each row's columns
+/// ascending, the whole row (diagonal included) or, with `upper`, only the
+/// columns after the diagonal (the symmetric store's, `SymHessian`).
+pub(crate) fn pattern_rows(p: &Problem, free_index: &[u32], upper: bool) -> Csr {
+    if p.simplicial {
+        simplex_rows(p, &p.free_vertices, free_index, upper)
+    } else {
+        corner_rows(p, &p.free_vertices, free_index, upper)
+    }
+}
+
 /// Row pattern: per free vertex, the free vertices sharing a corner with it
-/// (for hexahedra that includes face diagonals) and itself, ascending, each
-/// once. Rows in parallel, each from the corners around its vertex: short
-/// sorts, not one big one.
-pub(crate) fn corner_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32]) -> Csr {
+/// (for hexahedra that includes face diagonals) and itself (with `upper`,
+/// those after it only), ascending, each once. Rows in parallel, each from
+/// the corners around its vertex: short sorts, not one big one.
+pub(crate) fn corner_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32], upper: bool) -> Csr {
     let nslots = p.dim + 1;
     build_par(free_vertex.len(), |i, row| {
         let from = row.len();
@@ -70,10 +90,12 @@ pub(crate) fn corner_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32]) 
                 t[..nslots]
                     .iter()
                     .map(|&w| free_index[w as usize])
-                    .filter(|&j| j != u32::MAX),
+                    .filter(|&j| j != u32::MAX && (!upper || j > i as u32)),
             );
         }
-        row.push(i as u32);
+        if !upper {
+            row.push(i as u32);
+        }
         row[from..].sort_unstable();
         let mut keep = from;
         for k in from..row.len() {
@@ -89,15 +111,16 @@ pub(crate) fn corner_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32]) 
 /// [`corner_rows`] of a simplicial problem, whose corner-sharing vertices
 /// are the edge neighbours setup has already sorted: free indices ascend
 /// with vertex ids, so each row is its neighbours' free indices with the
-/// diagonal merged in, and there is nothing to sort (about 96 entries a row
-/// on a tet box).
-pub(crate) fn simplex_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32]) -> Csr {
+/// diagonal merged in (with `upper`, those after the diagonal), and there is
+/// nothing to sort (about 96 entries a row on a tet box).
+pub(crate) fn simplex_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32], upper: bool) -> Csr {
     build_par(free_vertex.len(), |i, row| {
         let i = i as u32;
-        let mut diagonal = true;
+        // the upper rows have no diagonal to merge in
+        let mut diagonal = !upper;
         for &w in p.neighbours.of(free_vertex[i as usize] as usize) {
             let j = free_index[w as usize];
-            if j == u32::MAX {
+            if j == u32::MAX || (upper && j <= i) {
                 continue;
             }
             if diagonal && j >= i {
@@ -114,20 +137,51 @@ pub(crate) fn simplex_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32])
     })
 }
 
+/// The `rows` rows cut into `assembly_ranges(rows)` ranges: each range's
+/// first and end row and the corners with a free vertex among its rows,
+/// ascending. Each corner's ranges are found in parallel (fixed chunks),
+/// then handed to the ranges in corner order: a linear pass.
+pub(crate) fn range_corners(p: &Problem, free_index: &[u32], rows: usize) -> Vec<(u32, u32, Vec<u32>)> {
+    const CHUNK: usize = 1 << 16;
+    let n = assembly_ranges(rows);
+    let ends: Vec<u32> = (1..=n).map(|r| (r * rows / n) as u32).collect();
+    let nslots = p.dim + 1;
+    let range_of = |i: u32| ends.partition_point(|&end| end <= i);
+    let touched: Vec<Vec<(u32, u32)>> = p
+        .corners
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(ci, cs)| {
+            let mut touched = Vec::with_capacity(cs.len() + cs.len() / 8);
+            for (j, t) in cs.iter().enumerate() {
+                let mut seen = [usize::MAX; 4];
+                for (k, &v) in t.iter().enumerate().take(nslots) {
+                    let i = free_index[v as usize];
+                    if i != u32::MAX {
+                        let r = range_of(i);
+                        if !seen.contains(&r) {
+                            seen[k] = r;
+                            touched.push((r as u32, (ci * CHUNK + j) as u32));
+                        }
+                    }
+                }
+            }
+            touched
+        })
+        .collect();
+    let mut ranges: Vec<(u32, u32, Vec<u32>)> = (0..n).map(|r| ((r * rows / n) as u32, ends[r], Vec::new())).collect();
+    for (r, e) in touched.into_iter().flatten() {
+        ranges[r as usize].2.push(e);
+    }
+    ranges
+}
+
 impl HessianPattern {
     pub fn new(p: &Problem) -> HessianPattern {
-        let n = p.num_vertices();
-        let mut free_index = vec![u32::MAX; n];
+        let free_index = free_index(p);
         let free_vertex: Vec<u32> = p.free_vertices.clone();
-        for (i, &v) in free_vertex.iter().enumerate() {
-            free_index[v as usize] = i as u32;
-        }
         let rows = free_vertex.len();
-        let pattern = if p.simplicial {
-            simplex_rows(p, &free_vertex, &free_index)
-        } else {
-            corner_rows(p, &free_vertex, &free_index)
-        };
+        let pattern = pattern_rows(p, &free_index, false);
         let (row_offsets, cols) = (pattern.offsets, pattern.items);
         let nslots = p.dim + 1;
         let diag: Vec<u32> = (0..rows)
@@ -156,43 +210,10 @@ impl HessianPattern {
                 s
             })
             .collect();
-        let nranges = assembly_ranges(rows);
-        let mut ranges: Vec<RowRange> = (0..nranges)
-            .map(|r| RowRange {
-                start: (r * rows / nranges) as u32,
-                end: ((r + 1) * rows / nranges) as u32,
-                elements: Vec::new(),
-            })
+        let ranges: Vec<RowRange> = range_corners(p, &free_index, rows)
+            .into_iter()
+            .map(|(start, end, elements)| RowRange { start, end, elements })
             .collect();
-        // each corner's ranges found in parallel (fixed chunks), then handed
-        // to the ranges in corner order: a linear pass, lists ascending
-        const CHUNK: usize = 1 << 16;
-        let range_of = |i: u32| ranges.partition_point(|r| r.end <= i);
-        let touched: Vec<Vec<(u32, u32)>> = p
-            .corners
-            .par_chunks(CHUNK)
-            .enumerate()
-            .map(|(ci, cs)| {
-                let mut touched = Vec::with_capacity(cs.len() + cs.len() / 8);
-                for (j, t) in cs.iter().enumerate() {
-                    let mut seen = [usize::MAX; 4];
-                    for (k, &v) in t.iter().enumerate().take(nslots) {
-                        let i = free_index[v as usize];
-                        if i != u32::MAX {
-                            let r = range_of(i);
-                            if !seen.contains(&r) {
-                                seen[k] = r;
-                                touched.push((r as u32, (ci * CHUNK + j) as u32));
-                            }
-                        }
-                    }
-                }
-                touched
-            })
-            .collect();
-        for (r, e) in touched.into_iter().flatten() {
-            ranges[r as usize].elements.push(e);
-        }
         let nblocks = cols.len();
         HessianPattern {
             free_index,
@@ -270,11 +291,14 @@ mod tests {
     use crate::problem::{Boundary, BoundaryMode, ProblemOptions};
 
     fn free_maps(p: &Problem) -> (Vec<u32>, Vec<u32>) {
-        let mut free_index = vec![u32::MAX; p.num_vertices()];
-        for (i, &v) in p.free_vertices.iter().enumerate() {
-            free_index[v as usize] = i as u32;
-        }
-        (p.free_vertices.clone(), free_index)
+        (p.free_vertices.clone(), free_index(p))
+    }
+
+    /// `rows` with each row's columns up to its own index dropped.
+    fn upper_of(rows: &Csr) -> Csr {
+        build_par(rows.offsets.len() - 1, |i, row| {
+            row.extend(rows.of(i).iter().filter(|&&j| j > i as u32))
+        })
     }
 
     fn problems(m: &Mesh) -> Vec<Problem> {
@@ -297,7 +321,7 @@ mod tests {
 
     /// The simplex rows (edge neighbours, no sort) are the corner rows (every
     /// corner's vertices, sorted and deduplicated), bit for bit, on 1, 2 and
-    /// 3 threads; only simplicial problems take them.
+    /// 3 threads, whole or upper; only simplicial problems take them.
     #[test]
     fn simplex_rows_are_the_corner_rows_and_other_meshes_take_the_corner_rows() {
         let tets = generate::tet_box(7, 6, 5, [7.0, 6.0, 5.0]);
@@ -306,17 +330,22 @@ mod tests {
             for (k, p) in problems(&m).iter().enumerate() {
                 assert!(p.simplicial, "{name} {k}");
                 let (fv, fi) = free_maps(p);
-                let want = corner_rows(p, &fv, &fi);
+                let want = corner_rows(p, &fv, &fi, false);
                 assert!(
                     want.items.len() > fv.len(),
                     "{name} {k}: rows hold more than the diagonal"
                 );
                 for threads in [1, 2, 3] {
                     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-                    let got = pool.install(|| simplex_rows(p, &fv, &fi));
+                    let got = pool.install(|| simplex_rows(p, &fv, &fi, false));
                     assert_eq!(got, want, "{name} {k} on {threads} threads");
                     let h = pool.install(|| HessianPattern::new(p));
                     assert_eq!((&h.matrix.row_offsets, &h.matrix.cols), (&want.offsets, &want.items));
+                    // the symmetric store's rows: both paths, the columns after the diagonal
+                    let upper = upper_of(&want);
+                    assert!(upper.items.len() < want.items.len(), "{name} {k}");
+                    assert_eq!(pool.install(|| simplex_rows(p, &fv, &fi, true)), upper, "{name} {k}");
+                    assert_eq!(pool.install(|| corner_rows(p, &fv, &fi, true)), upper, "{name} {k}");
                 }
             }
         }
@@ -327,13 +356,18 @@ mod tests {
             assert!(!p.simplicial, "{name}");
             let (fv, fi) = free_maps(&p);
             let h = HessianPattern::new(&p);
-            let want = corner_rows(&p, &fv, &fi);
+            let want = corner_rows(&p, &fv, &fi, false);
             assert_eq!(
                 (&h.matrix.row_offsets, &h.matrix.cols),
                 (&want.offsets, &want.items),
                 "{name}"
             );
-            assert_ne!(simplex_rows(&p, &fv, &fi), want, "{name}: edges alone would miss pairs");
+            assert_ne!(
+                simplex_rows(&p, &fv, &fi, false),
+                want,
+                "{name}: edges alone would miss pairs"
+            );
+            assert_eq!(pattern_rows(&p, &fi, true), upper_of(&want), "{name}");
         }
     }
 }

@@ -386,57 +386,12 @@ pub struct SymHessian {
 
 impl SymHessian {
     pub fn new(p: &Problem) -> SymHessian {
-        let n = p.num_vertices();
-        let mut free_index = vec![u32::MAX; n];
-        for (i, &v) in p.free_vertices.iter().enumerate() {
-            free_index[v as usize] = i as u32;
-        }
-        let rows = p.free_vertices.len();
-        let nslots = p.dim + 1;
-        let mut row_offsets = Vec::with_capacity(rows + 1);
-        let mut cols: Vec<u32> = Vec::new();
-        row_offsets.push(0u32);
-        let mut row = Vec::new();
-        for (i, &v) in p.free_vertices.iter().enumerate() {
-            row.clear();
-            for &packed in p.incidence.of(v as usize) {
-                let t = &p.corners[(packed >> 2) as usize];
-                row.extend(
-                    t[..nslots]
-                        .iter()
-                        .map(|&w| free_index[w as usize])
-                        .filter(|&j| j != u32::MAX && j > i as u32),
-                );
-            }
-            row.sort_unstable();
-            row.dedup();
-            cols.extend_from_slice(&row);
-            row_offsets.push(cols.len() as u32);
-        }
-        let nranges = super::hessian_assemble::assembly_ranges(rows);
-        let mut ranges: Vec<(u32, u32, Vec<u32>)> = (0..nranges)
-            .map(|r| {
-                (
-                    (r * rows / nranges) as u32,
-                    ((r + 1) * rows / nranges) as u32,
-                    Vec::new(),
-                )
-            })
-            .collect();
-        let bounds: Vec<u32> = ranges.iter().map(|r| r.1).collect();
-        for (e, t) in p.corners.iter().enumerate() {
-            let mut seen = [usize::MAX; 4];
-            for (k, &v) in t.iter().enumerate().take(nslots) {
-                let i = free_index[v as usize];
-                if i != u32::MAX {
-                    let r = bounds.partition_point(|&end| end <= i);
-                    if !seen.contains(&r) {
-                        seen[k] = r;
-                        ranges[r].2.push(e as u32);
-                    }
-                }
-            }
-        }
+        use super::hessian_assemble::{free_index, pattern_rows, range_corners};
+        let free_index = free_index(p);
+        // the rows' columns after the diagonal, as the full pattern has them
+        let pattern = pattern_rows(p, &free_index, true);
+        let (row_offsets, cols) = (pattern.offsets, pattern.items);
+        let ranges = range_corners(p, &free_index, p.free_vertices.len());
         SymHessian {
             free_index,
             ranges,
