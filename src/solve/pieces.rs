@@ -7,6 +7,7 @@
 
 use super::distributed::{Cluster, Report, encode_job, piece_reader, run_part};
 use super::{Info, Method, Params, Record};
+use crate::backend::cpu::{halo_gather, halo_scatter};
 use crate::backend::distributed::comm::Comm;
 use crate::error::{Error, Result};
 use crate::io::{self, CellData, Format};
@@ -127,14 +128,17 @@ impl Network for World<'_> {
     }
 
     fn exchange(&self, halo: &[Exchange], data: &mut [Vec3]) {
-        let send: Vec<f64> = halo
-            .iter()
-            .flat_map(|h| &h.send)
-            .flat_map(|&i| data[i as usize])
-            .collect();
+        // the CPU backend's halo twins, one neighbour's list after another
+        let mut send = Vec::new();
+        for h in halo {
+            halo_gather::gather(data, &h.send, |i| i as usize, &mut send);
+        }
         let recv = Comm::new(self.0).exchange(halo, &send);
-        for (&i, v) in halo.iter().flat_map(|h| &h.recv).zip(recv.chunks_exact(3)) {
-            data[i as usize] = [v[0], v[1], v[2]];
+        let mut rest = &recv[..];
+        for h in halo {
+            let (theirs, tail) = rest.split_at(3 * h.recv.len());
+            halo_scatter::scatter(data, &h.recv, |i| i as usize, theirs);
+            rest = tail;
         }
     }
 }
