@@ -173,6 +173,16 @@ fn newton_first_iterates_quad_target_match_cpu_f64() {
 }
 
 #[test]
+fn newton_first_iterates_hex_shape_size_match_cpu_f64() {
+    newton_first_iterates(ElementKind::Hexahedron, MetricKind::ShapeSize, Template::Harmonic);
+}
+
+#[test]
+fn newton_first_iterates_tri_shape_size_match_cpu_f64() {
+    newton_first_iterates(ElementKind::Triangle, MetricKind::ShapeSize, Template::Harmonic);
+}
+
+#[test]
 fn newton_first_iterates_tri_condition_number_average_match_cpu_f64() {
     newton_first_iterates(ElementKind::Triangle, MetricKind::ConditionNumber, Template::Average);
 }

@@ -51,6 +51,8 @@ fn cases() -> Vec<Case> {
             (MetricKind::ConditionNumber, Template::Average),
             (MetricKind::InverseMeanRatio, Template::Average),
             (MetricKind::TargetShapeSize, Template::Harmonic),
+            (MetricKind::ShapeSize, Template::Harmonic),
+            (MetricKind::ShapeSize, Template::Average),
         ] {
             let p = problem(&mesh, &reference, metric, template);
             let x: Vec<Vec3> = p.gather(&mesh.points).iter().map(|c| c.map(quantise)).collect();

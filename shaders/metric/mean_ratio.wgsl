@@ -206,3 +206,21 @@ fn imr(n: u32, s: mat3x3<real>, x: Chi, hess: bool) -> MetricEval {
     }
     return out;
 }
+
+// `smetric::shape_size`: eta(S) + tau + 1/tau - 2 with tau = chi(det S); the
+// size term adds sigma' chi' C to the gradient, (sigma'' chi'^2 + sigma' chi'')
+// to the rank-one slot 0 (C C^T) and sigma' chi' D2 to P.
+fn shape_size(n: u32, s: mat3x3<real>, x: Chi, hess: bool) -> MetricEval {
+    var out = imr(n, s, x, hess);
+    let tau = x.c;
+    let s1 = real(1.0) - real(1.0) / (tau * tau);
+    let s2 = real(2.0) / (tau * tau * tau);
+    let c = cof_n(s, n);
+    out.g = out.g + scaled3(c, s1 * x.c1);
+    if hess {
+        out.h.sq_c[0] += s2 * x.c1 * x.c1 + s1 * x.c2;
+        out.h.p = out.h.p + d2det_term(s, n, s1 * x.c1);
+    }
+    out.v = out.v + tau + real(1.0) / tau - real(2.0);
+    return out;
+}

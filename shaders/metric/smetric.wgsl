@@ -124,6 +124,9 @@ fn eval_metric(n: u32, s_in: mat3x3<real>, rjm: mat3x3<real>, hess: bool, eps: r
 #if IMR
     out = imr(n, s, x, hess);
 #endif
+#if SS
+    out = shape_size(n, s, x, hess);
+#endif
 #if FAST
     // the closed forms are the inverse mean ratio's; this is their general twin
     out = imr(n, s, x, hess);

@@ -12,7 +12,7 @@ use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report;
 use meshsmooth::partition::{self, Partitioner};
 use meshsmooth::problem::boundary::{VertexClass, classify};
-use meshsmooth::problem::{BoundaryMode, ProblemOptions};
+use meshsmooth::problem::{BoundaryMode, InputTargets, ProblemOptions, Target};
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::{self, Info, Method, Params};
 use meshsmooth::{Error, Mesh, Result, metric};
@@ -97,13 +97,58 @@ impl ObjectiveArgs {
 
     /// The reference mesh, read when given.
     pub(super) fn reference(&self) -> Result<Option<Mesh>> {
-        self.reference.as_deref().map(io::read).transpose()
+        let from_target = self.target.as_deref().and_then(|t| t.strip_prefix("reference:"));
+        if let (Some(_), Some(_)) = (from_target, &self.reference) {
+            return Err(Error::InvalidArgument(
+                "give the reference mesh once: --reference MESH or --target reference:MESH".into(),
+            ));
+        }
+        match from_target {
+            Some(path) => io::read(Path::new(path)).map(Some),
+            None => self.reference.as_deref().map(io::read).transpose(),
+        }
     }
 
-    pub(super) fn options<'a>(&self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
+    /// The `--target` spec as the library's [`Target`].
+    fn target(&self) -> Result<Target<'_>> {
+        let Some(spec) = self.target.as_deref() else {
+            return Ok(Target::Ideal);
+        };
+        let field = |name: &'static str, rest: &str| -> Result<()> {
+            if rest.is_empty() {
+                return Err(Error::InvalidArgument(format!(
+                    "--target {name}: needs the point-data field's name ({name}:NAME)"
+                )));
+            }
+            Ok(())
+        };
+        Ok(match spec {
+            "ideal" => Target::Ideal,
+            "input" => Target::Input(InputTargets::default()),
+            s if s.starts_with("reference:") => Target::Ideal,
+            s => match s.split_once(':') {
+                Some(("size", f)) => {
+                    field("size", f)?;
+                    Target::Size(f)
+                }
+                Some(("metric", f)) => {
+                    field("metric", f)?;
+                    Target::Metric(f)
+                }
+                _ => {
+                    return Err(Error::InvalidArgument(format!(
+                        "--target '{spec}': expected ideal, input, size:FIELD, metric:FIELD or reference:MESH"
+                    )));
+                }
+            },
+        })
+    }
+
+    pub(super) fn options<'a>(&'a self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
         Ok(ProblemOptions {
             metric: self.metric,
             template: self.template,
+            target: self.target()?,
             reference,
             ordering: self.order,
             order_seed: self.order_seed,
@@ -336,7 +381,8 @@ fn run_with_rules(
     untangle_phase(mesh, options, &phase_opts, save_partial, quiet)?;
     let start = mesh.points.clone();
     // other metrics get the paper-style table of their own values as well
-    let metric_before = (options.metric != MetricKind::InverseMeanRatio)
+    // (the paper-style table reads reference meshes, not constructed targets)
+    let metric_before = (options.metric != MetricKind::InverseMeanRatio && !options.target.is_constructed())
         .then(|| metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference))
         .transpose()?;
     let mut progress = Progress::new(params.max_iter, !quiet);
@@ -755,8 +801,14 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report).expect("report serialises"));
     } else {
         println!("{}\n{report}", a.input.display());
+        let intent = meshsmooth_intent(&mesh)?;
+        println!("anisotropy: {}", intent.describe());
     }
     Ok(())
+}
+
+fn meshsmooth_intent(mesh: &Mesh) -> Result<meshsmooth::problem::targets::Intent> {
+    meshsmooth::problem::targets::intent(mesh, &mesh.points)
 }
 
 pub fn demo(a: &DemoArgs) -> Result<()> {

@@ -324,6 +324,13 @@ pub struct ObjectiveArgs {
     /// Reference mesh with the same connectivity: its corners are the targets W.
     #[arg(long, value_name = "MESH")]
     pub reference: Option<PathBuf>,
+    /// Targets W per corner: ideal (each kind's ideal corner, the default), input (the
+    /// input's own corners, regularised: keeps boundary layers, grading and anisotropy),
+    /// size:FIELD (a point-data edge length), metric:FIELD (a point-data metric tensor, unit
+    /// edges in it) or reference:MESH (as --reference). Use --metric shape-size to keep the
+    /// targets' sizes as well as their shapes.
+    #[arg(long, value_name = "SPEC")]
+    pub target: Option<String>,
     /// Vertex order. rbfs (default; reverse breadth-first from the boundary), cuthill-mckee
     /// and red-black (checkerboard) number the problem for every method. The reordering
     /// paper's schemes order the sequential sweep (--method bcd on the CPU) and leave the

@@ -92,6 +92,7 @@ impl Model {
     pub fn planar(&self, n: usize) -> bool {
         n == 2
             && self.metric != MetricKind::TargetShapeSize
+            && self.metric != MetricKind::ShapeSize
             && self.metric != MetricKind::ReferenceJacobian
             && self.template == Template::Harmonic
             && self.eps == 0.0

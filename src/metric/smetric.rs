@@ -21,6 +21,11 @@ pub enum MetricKind {
     /// Target-matrix shape+size |S - I|^2 >= 0, 0 only when the corner equals its target.
     #[value(name = "tmp")]
     TargetShapeSize,
+    /// Shape and size against the targets: eta(S) + (tau - 1)^2 / tau with
+    /// tau = det S, >= 1, 1 only when S is a rotation (the corner has its
+    /// target's shape and size); a barrier at tau -> 0.
+    #[value(name = "shape-size")]
+    ShapeSize,
     /// The rezoning paper's shape measure: the Frobenius condition number
     /// |J| |J^-1| / 3 of the raw edge matrix J at every corner of every
     /// element (target: the octant corner, W = I), each corner weighted
@@ -41,6 +46,7 @@ impl MetricKind {
             MetricKind::InverseMeanRatio => "imr",
             MetricKind::ConditionNumber => "cn",
             MetricKind::TargetShapeSize => "tmp",
+            MetricKind::ShapeSize => "shape-size",
             MetricKind::ConditionNumberPaper => "cn-paper",
             MetricKind::ReferenceJacobian => "rj",
         }
@@ -183,6 +189,7 @@ pub fn eval_full(
         MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper if n == 2 => imr(n, s, x, hess),
         MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper => cn3(s, x, hess),
         MetricKind::TargetShapeSize => tmp(n, s, hess),
+        MetricKind::ShapeSize => shape_size(n, s, x, hess),
         MetricKind::ReferenceJacobian => {
             if !(d > 0.0) {
                 return None;
@@ -235,6 +242,33 @@ fn imr(n: usize, s: &Mat3, (d, d1, d2c): (f64, f64, f64), hess: Option<&mut SHes
         hm.p = d2det_term(s, n, dd * d1);
     }
     (eta, g)
+}
+
+/// eta(S) + sigma(tau), sigma(tau) = tau + 1/tau - 2 = (tau - 1)^2 / tau with
+/// tau = chi(det S): with grad tau = chi' C and Hess tau = chi' D2 + chi'' C C^T,
+/// the size term adds sigma' chi' C to the gradient, (sigma'' chi'^2 +
+/// sigma' chi'') C C^T to the rank-one slot 0 and sigma' chi' D2 to P.
+#[inline]
+fn shape_size(n: usize, s: &Mat3, x: (f64, f64, f64), mut hess: Option<&mut SHess>) -> (f64, Mat3) {
+    let (tau, d1, d2c) = x;
+    let c = cof_n(s, n);
+    let (s1, s2) = (1.0 - 1.0 / (tau * tau), 2.0 / (tau * tau * tau));
+    let (eta, mut g) = imr(n, s, x, hess.as_deref_mut());
+    for i in 0..n {
+        for j in 0..n {
+            g[i][j] += s1 * d1 * c[i][j];
+        }
+    }
+    if let Some(hm) = hess {
+        hm.sq_c[0] += s2 * d1 * d1 + s1 * d2c;
+        let extra = d2det_term(s, n, s1 * d1);
+        for i in 0..3 {
+            for j in 0..3 {
+                hm.p[i][j] += extra[i][j];
+            }
+        }
+    }
+    (eta + tau + 1.0 / tau - 2.0, g)
 }
 
 /// |S - I|^2: gradient 2 (S - I), Hessian 2 I.
@@ -364,6 +398,7 @@ mod tests {
             MetricKind::InverseMeanRatio,
             MetricKind::ConditionNumber,
             MetricKind::TargetShapeSize,
+            MetricKind::ShapeSize,
         ] {
             fd_check(m, 3, s3);
             fd_check(m, 2, s2);
@@ -378,6 +413,14 @@ mod tests {
             assert!((eval(MetricKind::InverseMeanRatio, n, &rot, false).unwrap().0 - 1.0).abs() < 1e-14);
             assert!((eval(MetricKind::ConditionNumber, n, &rot, false).unwrap().0 - 1.0).abs() < 1e-14);
             assert_eq!(eval(MetricKind::TargetShapeSize, n, &id, false).unwrap().0, 0.0);
+            // shape+size: 1 at any rotation, above 1 at a scaled rotation
+            let mut r1 = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+            assert!((eval(MetricKind::ShapeSize, n, &r1, false).unwrap().0 - 1.0).abs() < 1e-14);
+            r1[0][1] = -1.1;
+            r1[1][0] = 1.1;
+            r1[2][2] = 1.1;
+            assert!(eval(MetricKind::ShapeSize, n, &r1, false).unwrap().0 > 1.01);
+            assert!((eval(MetricKind::ShapeSize, n, &rot, false).unwrap().0 - 1.0).abs() > 0.1);
             let mut flip = id;
             flip[0][0] = -1.0;
             assert!(eval(MetricKind::InverseMeanRatio, n, &flip, false).is_none());
@@ -399,6 +442,7 @@ mod tests {
             MetricKind::InverseMeanRatio,
             MetricKind::ConditionNumber,
             MetricKind::TargetShapeSize,
+            MetricKind::ShapeSize,
         ] {
             for eps in [1e-2, 0.3, 2.0] {
                 for s in [s3, inv3, flat3] {

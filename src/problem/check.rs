@@ -27,7 +27,7 @@ impl ProblemOptions<'_> {
     /// The options' own consistency and the reference's fit to `mesh`, without
     /// building anything: callers can refuse bad input before any work.
     pub fn check(&self, mesh: &Mesh) -> Result<()> {
-        if self.metric == MetricKind::TargetShapeSize && self.reference.is_none() {
+        if self.metric == MetricKind::TargetShapeSize && self.reference.is_none() && !self.target.is_constructed() {
             return Err(Error::InvalidArgument(
                 "the target-matrix metric (tmp) needs a reference mesh (--reference) for its targets W".into(),
             ));
@@ -35,6 +35,24 @@ impl ProblemOptions<'_> {
         if self.metric == MetricKind::TargetShapeSize && self.template == Template::Average {
             return Err(Error::InvalidArgument(
                 "the average template needs a quality in (0, 1] (imr, cn); use the harmonic template with tmp".into(),
+            ));
+        }
+        if self.target.is_constructed() && self.reference.is_some() {
+            return Err(Error::InvalidArgument(format!(
+                "targets come either from a reference mesh or from '{}', not both",
+                self.target.name()
+            )));
+        }
+        if self.target.is_constructed() && self.metric.every_corner() {
+            return Err(Error::InvalidArgument(format!(
+                "the {} metric measures every corner against the octant corner and takes no targets",
+                self.metric
+            )));
+        }
+        if self.metric == MetricKind::ShapeSize && !self.target.is_constructed() && self.reference.is_none() {
+            return Err(Error::InvalidArgument(
+                "the shape+size metric needs targets with a size: input, size:FIELD, metric:FIELD or a reference mesh"
+                    .into(),
             ));
         }
         match self.reference {

@@ -120,6 +120,9 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
     // the rezoning paper's metrics: every corner against the octant corner,
     // each weighted 1 / (corners in the mesh)
     let every = opts.metric.every_corner();
+    // constructed targets (input, size or metric field), per used corner
+    let targets = super::targets::build(mesh, points, flip, opts.target, opts.length_unit)?;
+    let own = reference.is_some() || targets.is_some();
     let used_by = |e: usize| {
         if every {
             mesh.element_corners(e)
@@ -148,7 +151,7 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
     let kind_index = |k: ElementKind| ElementKind::ALL.iter().position(|&a| a == k).unwrap();
     let mut shapes: Vec<CornerShape> = Vec::new();
     let mut kind_shape: [Option<u32>; ElementKind::ALL.len()] = [None; ElementKind::ALL.len()];
-    if reference.is_none() {
+    if !own {
         const NK: usize = ElementKind::ALL.len();
         let first: [usize; NK] = elem_order
             .par_iter()
@@ -197,14 +200,10 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
     };
     // with a reference, every corner's own shape, deduplicated afterwards
     let mut own_shapes: Vec<CornerShape> = Vec::new();
-    if reference.is_some() {
+    if own {
         own_shapes = vec![CornerShape::from_w(&OCTANT, dim).expect("the octant corner is valid"); total];
     }
-    let own_lens: Vec<usize> = if reference.is_some() {
-        chunk_len.clone()
-    } else {
-        vec![0; nchunks]
-    };
+    let own_lens: Vec<usize> = if own { chunk_len.clone() } else { vec![0; nchunks] };
     let parts: Vec<_> = split_by(&mut out.corners, &chunk_len)
         .into_iter()
         .zip(split_by(&mut out.corner_element, &chunk_len))
@@ -235,6 +234,15 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
                         let w = corner_matrix(rp, &rvs, c, dim);
                         own_out[at + j] = CornerShape::from_w(&w, dim).ok_or_else(|| refused(c))?;
                     }
+                } else if let Some(t) = &targets {
+                    for (j, w) in t.of(old_e).iter().enumerate() {
+                        own_out[at + j] = CornerShape::from_w(w, dim).ok_or_else(|| {
+                            Error::InvalidMesh(format!(
+                                "the target of element {old_e} ({kind}) at its corner at vertex {} is degenerate",
+                                vs[used[j][0]]
+                            ))
+                        })?;
+                    }
                 } else if let (None, Some(c)) = (kind_shape[kind_index(kind)], used.first()) {
                     return Err(refused(c));
                 }
@@ -263,7 +271,7 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
         })
         .collect();
     filled.into_iter().collect::<Result<Vec<()>>>()?;
-    if reference.is_some() {
+    if own {
         number_shapes(&own_shapes, &mut out.corner_shape, &mut out.shapes);
     }
     Ok(out)

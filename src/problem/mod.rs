@@ -24,6 +24,7 @@ pub mod boundary;
 mod check;
 mod corners;
 mod numbering;
+pub mod targets;
 
 #[cfg(feature = "mpi")]
 pub(crate) use adjacency::sharing_neighbours;
@@ -32,6 +33,7 @@ pub use boundary::{Boundary, BoundaryMode, Sliding};
 pub use check::check;
 pub use corners::{Corners, corners, element_vertices};
 pub use numbering::{MeshGraph, Numbering, order};
+pub use targets::{InputTargets, Target};
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -60,6 +62,12 @@ pub struct ProblemOptions<'a> {
     pub order_seed: u64,
     /// Fixed boundary (the default) or sliding on it.
     pub boundary: Boundary,
+    /// Constructed targets W (`reference` is the other way to give them).
+    pub target: Target<'a>,
+    /// The length the problem's coordinates are in, in the mesh's units (the
+    /// solve's frame: `Frame::scale`); size and metric fields are divided by
+    /// it. 0 means 1.
+    pub length_unit: f64,
 }
 
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]

@@ -616,6 +616,12 @@ pub(crate) fn in_mesh_frame<T>(
     });
     let problem = ProblemOptions {
         reference: reference.as_ref(),
+        length_unit: frame.scale
+            * if problem.length_unit > 0.0 {
+                problem.length_unit
+            } else {
+                1.0
+            },
         ..*problem
     };
     let in_frame = local(mesh);

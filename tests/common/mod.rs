@@ -256,7 +256,7 @@ pub fn problem(mesh: &Mesh, reference: &Mesh, metric: MetricKind, template: Temp
     let opts = ProblemOptions {
         metric,
         template,
-        reference: (metric == MetricKind::TargetShapeSize).then_some(reference),
+        reference: matches!(metric, MetricKind::TargetShapeSize | MetricKind::ShapeSize).then_some(reference),
         ..Default::default()
     };
     Problem::with_options(mesh, &opts).unwrap()

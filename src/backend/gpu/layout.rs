@@ -117,6 +117,7 @@ pub(crate) const METRIC_IMR: u32 = 0;
 pub(crate) const METRIC_CN: u32 = 1;
 pub(crate) const METRIC_TMP: u32 = 2;
 pub(crate) const METRIC_RJ: u32 = 3;
+pub(crate) const METRIC_SS: u32 = 4;
 pub(crate) const TEMPLATE_HARMONIC: u32 = 0;
 pub(crate) const TEMPLATE_AVERAGE: u32 = 1;
 /// `ModelUniform::closed`: the structured general path, the tetrahedral
@@ -136,6 +137,7 @@ pub(crate) const PRELUDE_CONSTANTS: &[(&str, u32)] = &[
     ("METRIC_CN", METRIC_CN),
     ("METRIC_TMP", METRIC_TMP),
     ("METRIC_RJ", METRIC_RJ),
+    ("METRIC_SS", METRIC_SS),
     ("TEMPLATE_HARMONIC", TEMPLATE_HARMONIC),
     ("TEMPLATE_AVERAGE", TEMPLATE_AVERAGE),
 ];
@@ -189,6 +191,7 @@ impl ModelUniform {
                 MetricKind::ConditionNumber | MetricKind::ConditionNumberPaper => METRIC_CN,
                 MetricKind::TargetShapeSize => METRIC_TMP,
                 MetricKind::ReferenceJacobian => METRIC_RJ,
+                MetricKind::ShapeSize => METRIC_SS,
             },
             tmpl: match m.template {
                 Template::Harmonic => TEMPLATE_HARMONIC,

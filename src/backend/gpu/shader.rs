@@ -7,7 +7,7 @@
 //! built from it, and a test checks it against naga's reflection of the WGSL.
 
 use super::context::{GpuContext, KernelForms};
-use super::layout::{CLOSED_PLANAR, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_TMP, ModelUniform};
+use super::layout::{CLOSED_PLANAR, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_SS, METRIC_TMP, ModelUniform};
 use std::collections::HashSet;
 
 /// Floating-point precision of the device arithmetic.
@@ -232,10 +232,20 @@ pub enum Form {
     Cn,
     Tmp,
     Rj,
+    /// Shape and size against the targets (`smetric::shape_size`).
+    Ss,
 }
 
 impl Form {
-    pub const ALL: [Form; 6] = [Form::Fast, Form::Planar, Form::Imr, Form::Cn, Form::Tmp, Form::Rj];
+    pub const ALL: [Form; 7] = [
+        Form::Fast,
+        Form::Planar,
+        Form::Imr,
+        Form::Cn,
+        Form::Tmp,
+        Form::Rj,
+        Form::Ss,
+    ];
 
     /// The instance the model uniform asks for (`ModelUniform::of`).
     pub(crate) fn of(model: &ModelUniform) -> Form {
@@ -266,6 +276,7 @@ impl Form {
             METRIC_CN => Form::Cn,
             METRIC_TMP => Form::Tmp,
             METRIC_RJ => Form::Rj,
+            METRIC_SS => Form::Ss,
             m => unreachable!("metric id {m} has no kernel form"),
         }
     }
@@ -280,6 +291,7 @@ impl Form {
             Form::Cn => "CN",
             Form::Tmp => "TMP",
             Form::Rj => "RJ",
+            Form::Ss => "SS",
         }
     }
 }
@@ -798,6 +810,7 @@ mod tests {
             MetricKind::TargetShapeSize,
             MetricKind::ConditionNumberPaper,
             MetricKind::ReferenceJacobian,
+            MetricKind::ShapeSize,
         ];
         let mut planar = 0;
         for metric in metrics {

@@ -1,0 +1,878 @@
+//! Targets: the corner matrix W each corner is measured against (S = A W^-1).
+//!
+//! A target is built from a per-element metric tensor G (symmetric positive
+//! definite, in length^2: the ideal element's edges have unit length in
+//! G^-1, so an isotropic element of edge h has G = h^2 I) and an orientation:
+//! W_c = G^(1/2) Q R_c, where R_c is corner c's matrix in the kind's ideal
+//! element (unit edges; [`reference_points`]) and Q a rotation. G carries
+//! size, aspect and the direction of anisotropy; skew is ideal.
+//!
+//! - [`Target::Ideal`]: no targets here; every corner is measured against its
+//!   kind's ideal corner (the classic shape objective).
+//! - [`Target::Input`]: G from the input's own corners, regularised (see
+//!   [`InputTargets`]), so that perturbation noise goes and boundary layers,
+//!   grading and anisotropy stay.
+//! - [`Target::Size`]: G = h^2 I from a scalar point-data field h (an edge
+//!   length), averaged over the element's vertices.
+//! - [`Target::Metric`]: G = M^-1 from a symmetric-tensor point-data field M
+//!   (Mmg's and Gmsh's convention: unit edge length in M; 3 components
+//!   m11 m12 m22 in 2D, 6 components m11 m12 m13 m22 m23 m33 in 3D),
+//!   averaged over the element's vertices.
+//!
+//! Q is the rotation nearest to the element's own Jacobian seen in G's unit
+//! space, snapped onto G's eigenvectors for the kinds whose ideal has right
+//! angles (quadrilaterals and hexahedra: every axis; prisms: the extrusion
+//! axis), so a target rectangle in a boundary layer is a rectangle and not a
+//! sheared one. Rotations on the right of T do not change the metrics of an
+//! isotropic G, so Q matters only where G is anisotropic.
+
+use crate::error::{Error, Result};
+use crate::mesh::topology::{Csr, vertex_elements};
+use crate::mesh::{ElementKind, Mesh};
+use crate::metric::mat3::{Mat3, Vec3, det, sub, transpose};
+use rayon::prelude::*;
+use std::borrow::Cow;
+
+/// Where each corner's target W comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Target<'a> {
+    /// Each kind's ideal corner: equilateral or right-angled, unit-free.
+    #[default]
+    Ideal,
+    /// The input's own corners, regularised.
+    Input(InputTargets),
+    /// A scalar point-data field: the target edge length.
+    Size(&'a str),
+    /// A symmetric-tensor point-data field: unit edge length in it.
+    Metric(&'a str),
+}
+
+impl Target<'_> {
+    /// Whether per-corner targets are built (everything but `Ideal`).
+    pub fn is_constructed(&self) -> bool {
+        !matches!(self, Target::Ideal)
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            Target::Ideal => "ideal".into(),
+            Target::Input(_) => "input".into(),
+            Target::Size(f) => format!("size:{f}"),
+            Target::Metric(f) => format!("metric:{f}"),
+        }
+    }
+}
+
+/// How the input's targets are regularised: `passes` rounds in which each
+/// element's log G is replaced by the value at its centroid of the
+/// least-squares affine fit of log G over the elements sharing a vertex with
+/// it (itself included). An affine fit reproduces linear trends exactly,
+/// also at a wall where the neighbourhood is one-sided, so geometric grading
+/// (log-linear in the layer index) and smooth anisotropy stay while the
+/// noise of perturbed vertices averages out. 0 passes: the input's own
+/// (noisy) corners.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct InputTargets {
+    pub passes: usize,
+}
+
+impl Default for InputTargets {
+    fn default() -> Self {
+        InputTargets { passes: 2 }
+    }
+}
+
+/// Vertex coordinates of `kind`'s ideal element (unit edges), in the
+/// vertex order of the mesh's kinds; its first corner is
+/// [`ideal_corner`](crate::metric::corner::ideal_corner). `None` for polyhedra, whose corners are measured
+/// against the octant corner.
+pub fn reference_points(kind: ElementKind) -> Option<&'static [Vec3]> {
+    const H: f64 = 0.866_025_403_784_438_6; // sqrt(3) / 2
+    const T6: f64 = 0.288_675_134_594_812_9; // sqrt(3) / 6
+    const Z: f64 = 0.816_496_580_927_726; // sqrt(2 / 3)
+    Some(match kind {
+        ElementKind::Triangle => &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, H, 0.0]],
+        ElementKind::Quadrilateral => &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+        ElementKind::Tetrahedron => &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, H, 0.0], [0.5, T6, Z]],
+        ElementKind::Hexahedron => &[
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [0.0, 1.0, 1.0],
+        ],
+        ElementKind::Prism => &[
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, H, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [0.5, H, 1.0],
+        ],
+        ElementKind::Polyhedron => return None,
+    })
+}
+
+pub(crate) fn mul(a: &Mat3, b: &Mat3) -> Mat3 {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+/// Corner matrix (columns = edges from the corner vertex) of local corner
+/// `c` at the element's points `x`, in the leading n x n block (the rest
+/// identity, so every matrix here stays invertible in 2D).
+pub(crate) fn corner_matrix(x: &[Vec3], c: &[usize; 4], n: usize) -> Mat3 {
+    let mut a = IDENTITY;
+    for col in 0..n {
+        let e = sub(&x[c[col + 1]], &x[c[0]]);
+        for row in 0..n {
+            a[row][col] = e[row];
+        }
+    }
+    a
+}
+
+const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// Eigenvalues and eigenvectors (columns of V) of a symmetric matrix by
+/// cyclic Jacobi rotations (exact to rounding for 3x3).
+pub fn sym_eigen(m: &Mat3) -> (Vec3, Mat3) {
+    let mut a = *m;
+    let mut v = IDENTITY;
+    for _ in 0..50 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if off <= 1e-30 * diag || off == 0.0 {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q] == 0.0 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            let mut r = IDENTITY;
+            r[p][p] = c;
+            r[q][q] = c;
+            r[p][q] = s;
+            r[q][p] = -s;
+            a = mul(&transpose(&r), &mul(&a, &r));
+            v = mul(&v, &r);
+        }
+    }
+    ([a[0][0], a[1][1], a[2][2]], v)
+}
+
+/// V f(Lambda) V^T for a symmetric matrix.
+pub fn sym_fn(m: &Mat3, f: impl Fn(f64) -> f64) -> Mat3 {
+    let (l, v) = sym_eigen(m);
+    let fl = l.map(f);
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| v[i][k] * fl[k] * v[j][k]).sum()))
+}
+
+/// The rotation of the polar decomposition M = Q U, `None` unless det M > 0.
+fn polar_rotation(m: &Mat3) -> Option<Mat3> {
+    if !(det(m) > 0.0) {
+        return None;
+    }
+    let mtm = mul(&transpose(m), m);
+    let inv_sqrt = sym_fn(&mtm, |l| 1.0 / l.max(f64::MIN_POSITIVE).sqrt());
+    let q = mul(m, &inv_sqrt);
+    q.iter().flatten().all(|v| v.is_finite()).then_some(q)
+}
+
+/// Q with its columns snapped onto G's eigenvectors (`axes`: which columns;
+/// the others are re-orthogonalised), kept as it is where that would not be
+/// a rotation.
+fn snap(q: &Mat3, v: &Mat3, axes: &[usize], n: usize) -> Mat3 {
+    let col = |m: &Mat3, j: usize| -> Vec3 { [m[0][j], m[1][j], m[2][j]] };
+    let mut out = *q;
+    let mut used = [false; 3];
+    for &i in axes {
+        let qi = col(q, i);
+        let (k, d) = (0..n)
+            .filter(|&k| !used[k])
+            .map(|k| (k, crate::metric::mat3::dot(&qi, &col(v, k))))
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .unwrap();
+        used[k] = true;
+        for r in 0..3 {
+            out[r][i] = d.signum() * v[r][k];
+        }
+    }
+    if axes.len() == 1 && n == 3 {
+        // prism: the base axes re-orthogonalised against the snapped axis 2
+        let a2 = col(&out, 2);
+        let q0 = col(q, 0);
+        let d = crate::metric::mat3::dot(&q0, &a2);
+        let mut a0 = [q0[0] - d * a2[0], q0[1] - d * a2[1], q0[2] - d * a2[2]];
+        let len = crate::metric::mat3::dot(&a0, &a0).sqrt();
+        if !(len > 1e-12) {
+            return *q;
+        }
+        a0 = a0.map(|x| x / len);
+        let a1 = crate::metric::shess::cross(&a2, &a0);
+        for r in 0..3 {
+            out[r][0] = a0[r];
+            out[r][1] = a1[r];
+        }
+    }
+    if det(&out) > 0.5 { out } else { *q }
+}
+
+/// The corners a target is built for: the ones the objective uses.
+fn used_corners(mesh: &Mesh, e: usize) -> Result<Cow<'static, [[usize; 4]]>> {
+    mesh.optimised_corners(e)
+        .map_err(|m| Error::InvalidMesh(format!("element {e} ({}): {m}", mesh.kinds[e])))
+}
+
+/// The corners an element's metric is read from: all of them (a simplex's
+/// corners all see the same affine map).
+fn all_corners(mesh: &Mesh, e: usize) -> Result<Cow<'static, [[usize; 4]]>> {
+    mesh.element_corners(e)
+        .map_err(|m| Error::InvalidMesh(format!("element {e} ({}): {m}", mesh.kinds[e])))
+}
+
+/// Element `e`'s vertex positions, read in the problem's order (reversed for
+/// a planar mesh wound clockwise).
+fn element_points(mesh: &Mesh, points: &[Vec3], e: usize, flip: bool) -> Vec<Vec3> {
+    super::corners::element_vertices(mesh, e, flip)
+        .iter()
+        .map(|&v| points[v as usize])
+        .collect()
+}
+
+/// Corner c's matrix in the ideal element, or the octant corner for polyhedra.
+fn reference_corner(kind: ElementKind, c: &[usize; 4], n: usize) -> Mat3 {
+    match reference_points(kind) {
+        Some(r) => corner_matrix(r, c, n),
+        None => IDENTITY,
+    }
+}
+
+/// Each element's G from its own corners: the mean over its corners of
+/// (A_c R_c^-1)(A_c R_c^-1)^T (for an affine image J of the ideal element,
+/// exactly J J^T).
+pub fn element_metrics(mesh: &Mesh, points: &[Vec3], flip: bool) -> Result<Vec<Mat3>> {
+    let n = mesh.dim();
+    (0..mesh.num_elements())
+        .into_par_iter()
+        .map(|e| {
+            let kind = mesh.kinds[e];
+            let x = element_points(mesh, points, e, flip);
+            let cs = all_corners(mesh, e)?;
+            let mut g = [[0.0; 3]; 3];
+            for c in cs.iter() {
+                let rinv =
+                    crate::metric::mat3::inverse(&reference_corner(kind, c, n)).expect("ideal corners are valid");
+                let j = mul(&corner_matrix(&x, c, n), &rinv);
+                let jjt = mul(&j, &transpose(&j));
+                for r in 0..n {
+                    for s in 0..n {
+                        g[r][s] += jjt[r][s] / cs.len() as f64;
+                    }
+                }
+            }
+            for k in n..3 {
+                g[k][k] = 1.0;
+            }
+            Ok(g)
+        })
+        .collect()
+}
+
+/// Per-corner targets: `offsets[e]..offsets[e + 1]` index element e's used
+/// corners (in [`Mesh::optimised_corners`] order) in `w`.
+#[derive(Clone, Debug, Default)]
+pub struct CornerTargets {
+    pub offsets: Vec<usize>,
+    pub w: Vec<Mat3>,
+}
+
+impl CornerTargets {
+    pub fn of(&self, e: usize) -> &[Mat3] {
+        &self.w[self.offsets[e]..self.offsets[e + 1]]
+    }
+}
+
+/// The targets of `target` for `mesh` at `points` (in the problem's frame:
+/// lengths of the size and metric fields are divided by `unit`), `None` for
+/// [`Target::Ideal`].
+pub fn build(mesh: &Mesh, points: &[Vec3], flip: bool, target: Target, unit: f64) -> Result<Option<CornerTargets>> {
+    let n = mesh.dim();
+    let unit = if unit > 0.0 { unit } else { 1.0 };
+    let g = match target {
+        Target::Ideal => return Ok(None),
+        Target::Input(opts) => {
+            let mut g = element_metrics(mesh, points, flip)?;
+            let logs: Vec<Mat3> = g.iter().map(|m| sym_fn(m, |l| l.max(f64::MIN_POSITIVE).ln())).collect();
+            let smoothed = regularise(mesh, points, logs, opts.passes);
+            for (gi, l) in g.iter_mut().zip(&smoothed) {
+                *gi = sym_fn(l, f64::exp);
+            }
+            g
+        }
+        Target::Size(name) => {
+            let h = point_field(mesh, name, 1)?;
+            (0..mesh.num_elements())
+                .map(|e| {
+                    let vs = mesh.element(e);
+                    let mean = vs.iter().map(|&v| h[v as usize][0]).sum::<f64>() / vs.len() as f64 / unit;
+                    let mut g = IDENTITY;
+                    for k in 0..n {
+                        g[k][k] = mean * mean;
+                    }
+                    g
+                })
+                .collect()
+        }
+        Target::Metric(name) => {
+            let comps = if n == 2 { 3 } else { 6 };
+            let m = point_field(mesh, name, comps)?;
+            let tensor = |t: &[f64]| -> Mat3 {
+                if n == 2 {
+                    [[t[0], t[1], 0.0], [t[1], t[2], 0.0], [0.0, 0.0, 1.0]]
+                } else {
+                    [[t[0], t[1], t[2]], [t[1], t[3], t[4]], [t[2], t[4], t[5]]]
+                }
+            };
+            for (v, t) in m.iter().enumerate() {
+                let (l, _) = sym_eigen(&tensor(t));
+                if !l.iter().all(|x| *x > 0.0 && x.is_finite()) {
+                    return Err(Error::InvalidArgument(format!(
+                        "metric field '{name}' is not positive definite at point {v} (eigenvalues {:.3e}, {:.3e}{})",
+                        l[0],
+                        l[1],
+                        if n == 3 {
+                            format!(", {:.3e}", l[2])
+                        } else {
+                            String::new()
+                        }
+                    )));
+                }
+            }
+            (0..mesh.num_elements())
+                .map(|e| {
+                    let vs = mesh.element(e);
+                    let mut mean = [[0.0; 3]; 3];
+                    for &v in vs {
+                        let t = tensor(&m[v as usize]);
+                        for r in 0..3 {
+                            for s in 0..3 {
+                                mean[r][s] += t[r][s] / vs.len() as f64;
+                            }
+                        }
+                    }
+                    // lengths in the frame: M (1 / length^2) times unit^2
+                    let inv = sym_fn(&mean, |l| 1.0 / l);
+                    let mut g = inv.map(|r| r.map(|x| x / (unit * unit)));
+                    if n == 2 {
+                        g[2] = [0.0, 0.0, 1.0];
+                        g[0][2] = 0.0;
+                        g[1][2] = 0.0;
+                    }
+                    g
+                })
+                .collect()
+        }
+    };
+    Ok(Some(from_metrics(mesh, points, flip, &g)?))
+}
+
+/// A point-data field of `comps` components as f64 tuples, checked finite
+/// (and positive for a scalar size).
+fn point_field(mesh: &Mesh, name: &str, comps: usize) -> Result<Vec<Vec<f64>>> {
+    let names = || {
+        mesh.data
+            .point
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let a = mesh.data.point.iter().find(|a| a.name == name).ok_or_else(|| {
+        Error::InvalidArgument(format!(
+            "the mesh has no point-data field '{name}' (its point fields: {})",
+            if mesh.data.point.is_empty() {
+                "none".into()
+            } else {
+                names()
+            }
+        ))
+    })?;
+    if a.components != comps {
+        return Err(Error::InvalidArgument(format!(
+            "point-data field '{name}' has {} components; a {} target needs {comps}",
+            a.components,
+            if comps == 1 { "size" } else { "metric" }
+        )));
+    }
+    (0..mesh.num_points())
+        .map(|v| {
+            let t: Vec<f64> = (0..comps).map(|k| a.get_f64(v * comps + k)).collect();
+            if !t.iter().all(|x| x.is_finite()) || (comps == 1 && !(t[0] > 0.0)) {
+                return Err(Error::InvalidArgument(format!(
+                    "point-data field '{name}' has value {:?} at point {v}; {}",
+                    t,
+                    if comps == 1 {
+                        "a size must be positive and finite"
+                    } else {
+                        "values must be finite"
+                    }
+                )));
+            }
+            Ok(t)
+        })
+        .collect()
+}
+
+/// W_c = G^(1/2) Q R_c for every used corner (see the module doc).
+pub fn from_metrics(mesh: &Mesh, points: &[Vec3], flip: bool, g: &[Mat3]) -> Result<CornerTargets> {
+    let n = mesh.dim();
+    let per: Vec<Result<Vec<Mat3>>> = (0..mesh.num_elements())
+        .into_par_iter()
+        .map(|e| {
+            let kind = mesh.kinds[e];
+            let x = element_points(mesh, points, e, flip);
+            let root = sym_fn(&g[e], |l| l.max(f64::MIN_POSITIVE).sqrt());
+            let inv_root = sym_fn(&g[e], |l| 1.0 / l.max(f64::MIN_POSITIVE).sqrt());
+            let used = used_corners(mesh, e)?;
+            let metric_space = |c: &[usize; 4]| {
+                let rinv =
+                    crate::metric::mat3::inverse(&reference_corner(kind, c, n)).expect("ideal corners are valid");
+                mul(&inv_root, &mul(&corner_matrix(&x, c, n), &rinv))
+            };
+            let q_of = |m: &Mat3| {
+                let q = polar_rotation(m).unwrap_or(IDENTITY);
+                let (_, v) = sym_eigen(&g[e]);
+                let v = if n == 2 {
+                    // the 2D eigenvectors of the leading block (z is its own)
+                    let (_, v2) = sym_eigen(&[
+                        [g[e][0][0], g[e][0][1], 0.0],
+                        [g[e][1][0], g[e][1][1], 0.0],
+                        [0.0, 0.0, 0.0],
+                    ]);
+                    let mut v = v2;
+                    // keep the xy eigenvectors first
+                    let zcol = (0..3)
+                        .max_by(|&a, &b| v2[2][a].abs().total_cmp(&v2[2][b].abs()))
+                        .unwrap();
+                    let cols: Vec<usize> = (0..3).filter(|&k| k != zcol).chain([zcol]).collect();
+                    for r in 0..3 {
+                        for (j, &k) in cols.iter().enumerate() {
+                            v[r][j] = v2[r][k];
+                        }
+                    }
+                    v
+                } else {
+                    v
+                };
+                match kind {
+                    ElementKind::Quadrilateral => snap(&q, &v, &[0, 1], 2),
+                    ElementKind::Hexahedron => snap(&q, &v, &[0, 1, 2], 3),
+                    ElementKind::Prism => snap(&q, &v, &[2], 3),
+                    _ => q,
+                }
+            };
+            let element_q = if kind == ElementKind::Polyhedron {
+                None
+            } else {
+                // the mean metric-space Jacobian over all corners
+                let cs = all_corners(mesh, e)?;
+                let mut m = [[0.0; 3]; 3];
+                for c in cs.iter() {
+                    let mc = metric_space(c);
+                    for r in 0..3 {
+                        for s in 0..3 {
+                            m[r][s] += mc[r][s] / cs.len() as f64;
+                        }
+                    }
+                }
+                Some(q_of(&m))
+            };
+            Ok(used
+                .iter()
+                .map(|c| {
+                    let q = element_q.unwrap_or_else(|| q_of(&metric_space(c)));
+                    let w = mul(&root, &mul(&q, &reference_corner(kind, c, n)));
+                    if n == 2 {
+                        [[w[0][0], w[0][1], 0.0], [w[1][0], w[1][1], 0.0], [0.0, 0.0, 1.0]]
+                    } else {
+                        w
+                    }
+                })
+                .collect())
+        })
+        .collect();
+    let mut out = CornerTargets {
+        offsets: vec![0],
+        w: Vec::new(),
+    };
+    for p in per {
+        out.w.extend(p?);
+        out.offsets.push(out.w.len());
+    }
+    Ok(out)
+}
+
+/// `passes` rounds of the local affine fit of the symmetric matrices `vals`
+/// (one per element) over each element's vertex neighbours (see [`InputTargets`]).
+fn regularise(mesh: &Mesh, points: &[Vec3], mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
+    if passes == 0 {
+        return vals;
+    }
+    let n = mesh.dim();
+    let ve = vertex_elements(mesh);
+    let centroid: Vec<Vec3> = (0..mesh.num_elements())
+        .map(|e| {
+            let vs = mesh.element(e);
+            let mut c = [0.0; 3];
+            for &v in vs {
+                for k in 0..3 {
+                    c[k] += points[v as usize][k] / vs.len() as f64;
+                }
+            }
+            c
+        })
+        .collect();
+    let nb = element_neighbours(mesh, &ve);
+    for _ in 0..passes {
+        vals = (0..mesh.num_elements())
+            .into_par_iter()
+            .map(|e| affine_fit_at(e, nb.of(e), &centroid, &vals, n))
+            .collect();
+    }
+    vals
+}
+
+/// Elements sharing a vertex with each element (itself included), sorted.
+fn element_neighbours(mesh: &Mesh, ve: &Csr) -> Csr {
+    crate::mesh::topology::build_par(mesh.num_elements(), |e, out| {
+        // `out` holds the chunk's earlier entries too: sort only this one's
+        let from = out.len();
+        for &v in mesh.element(e) {
+            out.extend_from_slice(ve.of(v as usize));
+        }
+        out[from..].sort_unstable();
+        let mut kept = from;
+        for i in from..out.len() {
+            if i == from || out[i] != out[kept - 1] {
+                out[kept] = out[i];
+                kept += 1;
+            }
+        }
+        out.truncate(kept);
+    })
+}
+
+/// The least-squares affine fit of `vals` over the elements `nb` (centroids
+/// relative to element e's), evaluated at e's centroid; the plain mean where
+/// the centroids do not span the dimension.
+fn affine_fit_at(e: usize, nb: &[u32], centroid: &[Vec3], vals: &[Mat3], n: usize) -> Mat3 {
+    let k = n + 1;
+    let mut m = [[0.0f64; 4]; 4];
+    let mut rhs = [[[0.0f64; 3]; 3]; 4];
+    let ce = centroid[e];
+    // Offsets are measured in the metric halfway (log-Euclidean) between the
+    // two elements, which makes them close to offsets in the mesh's logical
+    // index space: there a geometric layer's log G is linear, also where the
+    // growth makes it curved in physical space, so the fit reproduces it.
+    let local: Vec<[f64; 3]> = nb
+        .iter()
+        .map(|&j| {
+            let d = sub(&centroid[j as usize], &ce);
+            let half: Mat3 =
+                std::array::from_fn(|r| std::array::from_fn(|s| 0.5 * (vals[e][r][s] + vals[j as usize][r][s])));
+            let m = sym_fn(&half, |x| (-0.5 * x).exp());
+            std::array::from_fn(|r| (0..n).map(|s| m[r][s] * d[s]).sum())
+        })
+        .collect();
+    // lengths relative to the neighbourhood's spread keep the system scaled
+    let spread = local
+        .iter()
+        .flat_map(|d| d.iter().take(n))
+        .fold(0.0f64, |a, x| a.max(x.abs()));
+    let spread = if spread > 0.0 && spread.is_finite() {
+        spread
+    } else {
+        1.0
+    };
+    for (&j, d) in nb.iter().zip(&local) {
+        let phi: [f64; 4] = std::array::from_fn(|i| {
+            if i == 0 {
+                1.0
+            } else if i <= n {
+                d[i - 1] / spread
+            } else {
+                0.0
+            }
+        });
+        for a in 0..k {
+            for b in 0..k {
+                m[a][b] += phi[a] * phi[b];
+            }
+            for r in 0..3 {
+                for s in 0..3 {
+                    rhs[a][r][s] += phi[a] * vals[j as usize][r][s];
+                }
+            }
+        }
+    }
+    // the value at the centroid is the first unknown: solve M c = rhs by
+    // Gaussian elimination with partial pivoting
+    let count = nb.len() as f64;
+    let mean = rhs[0].map(|r| r.map(|x| x / count));
+    let scale = m[0][0];
+    for col in 0..k {
+        let piv = (col..k)
+            .max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))
+            .unwrap();
+        if !(m[piv][col].abs() > 1e-8 * scale) {
+            return mean;
+        }
+        m.swap(col, piv);
+        rhs.swap(col, piv);
+        for row in 0..k {
+            if row != col {
+                let f = m[row][col] / m[col][col];
+                for c2 in col..k {
+                    m[row][c2] -= f * m[col][c2];
+                }
+                for r in 0..3 {
+                    for s in 0..3 {
+                        rhs[row][r][s] -= f * rhs[col][r][s];
+                    }
+                }
+            }
+        }
+    }
+    let out = rhs[0].map(|r| r.map(|x| x / m[0][0]));
+    if out.iter().flatten().all(|x| x.is_finite()) {
+        out
+    } else {
+        mean
+    }
+}
+
+/// Per element, the ratio of its G's largest to smallest principal length
+/// (sqrt of the eigenvalue ratio): 1 for an ideal element's affine image
+/// under a scaled rotation.
+pub fn element_aspects(g: &[Mat3], n: usize) -> Vec<f64> {
+    g.iter()
+        .map(|m| {
+            let (l, _) = sym_eigen(m);
+            let l = &l[..];
+            let lead: Vec<f64> = if n == 2 {
+                // the z eigenvalue is the 1 set by element_metrics
+                let mut v = l.to_vec();
+                let z = (0..3)
+                    .min_by(|&a, &b| (v[a] - 1.0).abs().total_cmp(&(v[b] - 1.0).abs()))
+                    .unwrap();
+                v.remove(z);
+                v
+            } else {
+                l.to_vec()
+            };
+            let hi = lead.iter().cloned().fold(f64::MIN, f64::max);
+            let lo = lead.iter().cloned().fold(f64::MAX, f64::min);
+            if lo > 0.0 { (hi / lo).sqrt() } else { f64::INFINITY }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::corner::ideal_corner;
+
+    #[test]
+    fn reference_elements_start_at_the_ideal_corner_and_have_positive_corners() {
+        for kind in ElementKind::ALL {
+            let Some(r) = reference_points(kind) else { continue };
+            let n = kind.dim();
+            let w = corner_matrix(r, &kind.corners()[0], n);
+            let id = ideal_corner(kind);
+            for i in 0..n {
+                for j in 0..n {
+                    assert!((w[i][j] - id[i][j]).abs() < 1e-15, "{kind}");
+                }
+            }
+            for c in kind.corners() {
+                let a = corner_matrix(r, c, n);
+                assert!(det(&a) > 0.1, "{kind} corner {c:?}");
+                // every corner of the ideal element is ideal: eta = 1
+                let eta = crate::metric::corner::corner_eta(&a, &crate::metric::mat3::inverse(&id).unwrap(), n);
+                if kind.is_simplex() || matches!(kind, ElementKind::Quadrilateral | ElementKind::Hexahedron) {
+                    assert!((eta.unwrap() - 1.0).abs() < 1e-12, "{kind} corner {c:?}: {eta:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn eigen_decomposition_reconstructs() {
+        let m = [[4.0, 1.0, 0.5], [1.0, 3.0, -0.2], [0.5, -0.2, 0.2]];
+        let back = sym_fn(&m, |l| l);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((back[i][j] - m[i][j]).abs() < 1e-13);
+            }
+        }
+        let r = sym_fn(&m, |l| l.abs().sqrt());
+        let (l, _) = sym_eigen(&m);
+        assert!(l.iter().all(|x| *x > 0.0));
+        let sq = mul(&r, &r);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((sq[i][j] - m[i][j]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn affine_fit_reproduces_a_geometric_layer_at_the_wall_and_inside() {
+        // two columns of unit width, rows of height 0.01 * 1.5^j: log G is
+        // linear in the row index but curved in y, and the fit in the
+        // halfway metric gives every element back its own log G
+        let rows = 6;
+        let h: Vec<f64> = (0..rows).map(|j| 0.01 * 1.5f64.powi(j as i32)).collect();
+        let mut centroid = Vec::new();
+        let mut vals = Vec::new();
+        let mut y = 0.0;
+        for hj in &h {
+            for col in 0..2 {
+                centroid.push([col as f64 + 0.5, y + 0.5 * hj, 0.0]);
+                vals.push([[0.0, 0.0, 0.0], [0.0, 2.0 * hj.ln(), 0.0], [0.0, 0.0, 0.0]]);
+            }
+            y += hj;
+        }
+        for (e, rows_in) in [(0usize, 0..2u32), (5, 1..4), (10, 4..6)] {
+            let nb: Vec<u32> = rows_in.flat_map(|j| [2 * j, 2 * j + 1]).collect();
+            let fit = affine_fit_at(e, &nb, &centroid, &vals, 2);
+            for r in 0..3 {
+                for c in 0..3 {
+                    assert!(
+                        (fit[r][c] - vals[e][r][c]).abs() < 1e-12,
+                        "element {e}: {fit:?} vs {:?}",
+                        vals[e]
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// What a mesh was built to have, as the default target choice reads it.
+/// Stretching that was built on purpose (boundary layers, anisotropic
+/// refinement) is coherent: neighbours are stretched alike, so it survives
+/// the regularisation of [`InputTargets`]; a distorted or perturbed
+/// isotropic mesh's stretching is noise that the regularisation averages
+/// away. The intent is read from the regularised metric.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Intent {
+    /// Share of the (non-inverted) elements whose regularised aspect
+    /// (`element_aspects` of the `Input` targets' G) is at least [`ANISOTROPIC_ASPECT`].
+    pub anisotropic_share: f64,
+    /// The median and the largest regularised element aspect.
+    pub median_aspect: f64,
+    pub max_aspect: f64,
+    /// The same share for the raw (unregularised) aspects.
+    pub raw_share: f64,
+    /// The 99th over the 1st percentile of the regularised elements'
+    /// thicknesses (their smallest principal length): a boundary layer or a
+    /// graded mesh spans decades, a uniformly stretched one does not.
+    pub thickness_range: f64,
+}
+
+/// An element stretched at least this much after regularisation was made so on purpose.
+pub const ANISOTROPIC_ASPECT: f64 = 4.0;
+/// The share of such elements above which a mesh is smoothed towards its
+/// own (input) targets by default.
+pub const ANISOTROPIC_SHARE: f64 = 0.02;
+
+impl Intent {
+    /// The mesh's anisotropy is intended: keep it (input targets).
+    pub fn keeps_input(&self) -> bool {
+        self.anisotropic_share >= ANISOTROPIC_SHARE
+    }
+
+    /// One line for a user.
+    pub fn describe(&self) -> String {
+        format!(
+            "{:.1}% of the elements are stretched {ANISOTROPIC_ASPECT}:1 or more coherently with their neighbours (median aspect {:.2}, largest {:.3e}; {:.1}% before regularisation; thicknesses span {:.1}x)",
+            100.0 * self.anisotropic_share,
+            self.median_aspect,
+            self.max_aspect,
+            100.0 * self.raw_share,
+            self.thickness_range
+        )
+    }
+}
+
+/// The [`Intent`] of `mesh` at `points` (inverted elements are left out).
+pub fn intent(mesh: &Mesh, points: &[Vec3]) -> Result<Intent> {
+    let pts = crate::metric::oriented(mesh, points);
+    let g = element_metrics(mesh, &pts, false)?;
+    let logs: Vec<Mat3> = g.iter().map(|m| sym_fn(m, |l| l.max(f64::MIN_POSITIVE).ln())).collect();
+    let smooth: Vec<Mat3> = regularise(mesh, &pts, logs, InputTargets::default().passes)
+        .iter()
+        .map(|l| sym_fn(l, f64::exp))
+        .collect();
+    let valid: Vec<bool> = (0..mesh.num_elements())
+        .map(|e| crate::metric::element_min_det(mesh, &pts, e) > 0.0)
+        .collect();
+    let pick = |g: &[Mat3]| -> Vec<f64> {
+        let mut a: Vec<f64> = element_aspects(g, mesh.dim())
+            .into_iter()
+            .zip(&valid)
+            .filter(|&(a, &ok)| ok && a.is_finite())
+            .map(|(a, _)| a)
+            .collect();
+        a.sort_unstable_by(f64::total_cmp);
+        a
+    };
+    let share = |a: &[f64]| a.iter().filter(|&&x| x >= ANISOTROPIC_ASPECT).count() as f64 / a.len().max(1) as f64;
+    let (raw, reg) = (pick(&g), pick(&smooth));
+    if reg.is_empty() {
+        return Ok(Intent {
+            anisotropic_share: 0.0,
+            median_aspect: 1.0,
+            max_aspect: 1.0,
+            raw_share: 0.0,
+            thickness_range: 1.0,
+        });
+    }
+    Ok(Intent {
+        anisotropic_share: share(&reg),
+        median_aspect: reg[reg.len() / 2],
+        max_aspect: *reg.last().unwrap(),
+        raw_share: share(&raw),
+        thickness_range: {
+            let n = mesh.dim();
+            let mut sz: Vec<f64> = smooth
+                .iter()
+                .zip(&valid)
+                .filter(|&(_, &ok)| ok)
+                .map(|(m, _)| {
+                    let (l, _) = sym_eigen(m);
+                    // in 2D the z eigenvalue is the 1 of element_metrics
+                    let mut l = l.to_vec();
+                    if n == 2 {
+                        let z = (0..3)
+                            .min_by(|&a, &b| (l[a] - 1.0).abs().total_cmp(&(l[b] - 1.0).abs()))
+                            .unwrap();
+                        l.remove(z);
+                    }
+                    l.iter().cloned().fold(f64::MAX, f64::min).max(0.0).sqrt()
+                })
+                .collect();
+            sz.sort_unstable_by(f64::total_cmp);
+            sz[sz.len() * 99 / 100] / sz[sz.len() / 100].max(f64::MIN_POSITIVE)
+        },
+    })
+}
