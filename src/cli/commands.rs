@@ -112,7 +112,7 @@ impl ObjectiveArgs {
     /// The `--target` spec as the library's [`Target`].
     fn target(&self) -> Result<Target<'_>> {
         let Some(spec) = self.target.as_deref() else {
-            return Ok(Target::Ideal);
+            return Ok(Target::Auto);
         };
         let field = |name: &'static str, rest: &str| -> Result<()> {
             if rest.is_empty() {
@@ -123,6 +123,7 @@ impl ObjectiveArgs {
             Ok(())
         };
         Ok(match spec {
+            "auto" => Target::Auto,
             "ideal" => Target::Ideal,
             "input" => Target::Input(InputTargets::default()),
             s if s.starts_with("reference:") => Target::Ideal,
@@ -137,7 +138,7 @@ impl ObjectiveArgs {
                 }
                 _ => {
                     return Err(Error::InvalidArgument(format!(
-                        "--target '{spec}': expected ideal, input, size:FIELD, metric:FIELD or reference:MESH"
+                        "--target '{spec}': expected auto, ideal, input, size:FIELD, metric:FIELD or reference:MESH"
                     )));
                 }
             },
@@ -145,10 +146,11 @@ impl ObjectiveArgs {
     }
 
     pub(super) fn options<'a>(&'a self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
+        let target = self.target()?;
         Ok(ProblemOptions {
-            metric: self.metric,
+            metric: self.metric.unwrap_or(target.default_metric()),
             template: self.template,
-            target: self.target()?,
+            target,
             reference,
             ordering: self.order,
             order_seed: self.order_seed,
@@ -333,6 +335,9 @@ fn run_with_rules(
     let params = solver.params()?;
     // refuse what cannot be smoothed before printing anything
     options.check(mesh)?;
+    // the default target is decided on the input, before any untangling
+    let (resolved, target_note) = options.resolved(mesh)?;
+    let options = &resolved;
     let bad = metric::inverted_elements(mesh, &mesh.points);
     if !bad.is_empty() && !untangle {
         return Err(Error::inverted(bad));
@@ -354,6 +359,9 @@ fn run_with_rules(
         println!("== initial mesh ==\n{before}");
         for c in rule_counts {
             println!("{}: {} vertices", c.rule, c.vertices);
+        }
+        if let Some(note) = &target_note {
+            println!("{note}\n");
         }
         if options.boundary.mode == BoundaryMode::Slide {
             let skin = classify(mesh, &mesh.points, options.boundary.feature_angle);

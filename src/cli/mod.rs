@@ -314,9 +314,12 @@ pub struct StopArgs {
 #[derive(Args, Debug, Clone)]
 pub struct ObjectiveArgs {
     /// imr: inverse mean ratio |S|^2/(n det S^(2/n)); cn: condition number |S||S^-1|/n;
-    /// tmp: target-matrix |S - I|^2 (needs --reference). S = A W^-1 at each element corner.
-    #[arg(long, value_enum, default_value_t = MetricKind::default())]
-    pub metric: MetricKind,
+    /// tmp: target-matrix |S - I|^2 (needs --reference); shape-size: imr + tau + 1/tau - 2
+    /// with tau = det S, which keeps the targets' sizes too. S = A W^-1 at each element
+    /// corner. Default: imr, or shape-size with constructed targets (--target input, size:,
+    /// metric:).
+    #[arg(long, value_enum)]
+    pub metric: Option<MetricKind>,
     /// harmonic: minimise the mean metric (for imr: the harmonic mean of the mean ratios);
     /// average: maximise the mean quality 1/metric (imr, cn).
     #[arg(long, value_enum, default_value_t = Template::default())]
@@ -324,11 +327,11 @@ pub struct ObjectiveArgs {
     /// Reference mesh with the same connectivity: its corners are the targets W.
     #[arg(long, value_name = "MESH")]
     pub reference: Option<PathBuf>,
-    /// Targets W per corner: ideal (each kind's ideal corner, the default), input (the
+    /// Targets W per corner: auto (the default: input where the mesh has a boundary layer
+    /// or wall grading, ideal otherwise), ideal (each kind's ideal corner), input (the
     /// input's own corners, regularised: keeps boundary layers, grading and anisotropy),
     /// size:FIELD (a point-data edge length), metric:FIELD (a point-data metric tensor, unit
-    /// edges in it) or reference:MESH (as --reference). Use --metric shape-size to keep the
-    /// targets' sizes as well as their shapes.
+    /// edges in it) or reference:MESH (as --reference).
     #[arg(long, value_name = "SPEC")]
     pub target: Option<String>,
     /// Vertex order. rbfs (default; reverse breadth-first from the boundary), cuthill-mckee

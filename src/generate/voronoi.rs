@@ -35,6 +35,7 @@ use super::prism::LONG_WAVE_AMPLITUDE;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::metric::inverted_elements;
+use crate::metric::mat3::cross;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::HashMap;
@@ -298,14 +299,6 @@ impl Cell {
 
 fn dot(a: &Vec3, b: &Vec3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn dist_sq(a: &Vec3, b: &Vec3) -> f64 {

@@ -9,6 +9,7 @@
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::mesh::frame::{bounding_box, box_center};
+use crate::metric::mat3::cross;
 use crate::metric::mat3::{Vec3, dot, sub};
 use std::borrow::Cow;
 
@@ -23,14 +24,6 @@ pub struct Plane {
     pub origin: Vec3,
     /// e1, e2 (in the plane) and the unit normal n = e1 x e2.
     pub axes: [Vec3; 3],
-}
-
-fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn unit(a: Vec3) -> Vec3 {

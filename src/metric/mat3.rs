@@ -174,3 +174,12 @@ mod tests {
         }
     }
 }
+
+/// The cross product a × b.
+pub fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}

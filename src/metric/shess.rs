@@ -20,6 +20,7 @@
 //! CPU twin of `shaders/metric/shess.wgsl` (same names, same sum orders).
 
 use super::mat3::{Mat3, Vec3, mul_vec};
+use crate::metric::mat3::cross;
 
 /// Most rank-one terms a metric and template need (the condition number's
 /// four plus the average template's one).
@@ -54,14 +55,6 @@ pub struct Row {
     pu: Vec3,
     pv: Vec3,
     w: [Vec3; 3],
-}
-
-pub fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn dot(a: &Vec3, b: &Vec3) -> f64 {

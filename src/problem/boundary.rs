@@ -34,6 +34,7 @@
 use super::numbering::Numbering;
 use crate::mesh::topology::Csr;
 use crate::mesh::{ElementKind, Mesh};
+use crate::metric::mat3::cross;
 use crate::metric::mat3::{Mat3, Vec3, dot, sub};
 use std::collections::{HashMap, VecDeque};
 
@@ -143,14 +144,6 @@ pub struct SkinClasses {
     pub projector: Vec<Mat3>,
     pub candidates: Csr,
     pub primitives: Vec<[Vec3; 3]>,
-}
-
-fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn norm(a: &Vec3) -> f64 {

@@ -70,6 +70,50 @@ pub struct ProblemOptions<'a> {
     pub length_unit: f64,
 }
 
+impl<'a> ProblemOptions<'a> {
+    /// These options with the default target ([`Target::Auto`]) decided for
+    /// `mesh`, and a line for the user where that decision keeps the input's
+    /// stretching. Input targets (with the shape+size metric, which keeps the
+    /// targets' sizes) are chosen when the metric is the default inverse
+    /// mean ratio, no reference mesh is given, no element is inverted or a
+    /// polyhedron, and the mesh's [`Intent`](targets::Intent) shows a
+    /// boundary layer or wall grading; otherwise the ideal objective, as
+    /// before. Anything but `Auto` is returned as it is.
+    pub fn resolved(&self, mesh: &Mesh) -> crate::error::Result<(ProblemOptions<'a>, Option<String>)> {
+        let ideal = ProblemOptions {
+            target: Target::Ideal,
+            ..*self
+        };
+        if self.target != Target::Auto {
+            return Ok((*self, None));
+        }
+        if self.metric != MetricKind::InverseMeanRatio
+            || self.reference.is_some()
+            || mesh.kinds.iter().any(|k| *k == crate::mesh::ElementKind::Polyhedron)
+            || !crate::metric::inverted_elements(mesh, &mesh.points).is_empty()
+        {
+            return Ok((ideal, None));
+        }
+        let intent = targets::intent(mesh, &mesh.points)?;
+        if !intent.keeps_input() {
+            return Ok((ideal, None));
+        }
+        let input = ProblemOptions {
+            target: Target::Input(InputTargets::default()),
+            metric: MetricKind::ShapeSize,
+            ..*self
+        };
+        if input.check(mesh).is_err() {
+            return Ok((ideal, None));
+        }
+        let note = format!(
+            "targets: input (the mesh's own sizes and stretching, regularised) with the shape-size metric, since {}; ask for the ideal shape with target ideal",
+            intent.describe()
+        );
+        Ok((input, Some(note)))
+    }
+}
+
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Problem {
     /// Metric dimension: 2 (x and y move) or 3.

@@ -608,6 +608,7 @@ pub(crate) fn in_mesh_frame<T>(
     keep_failed: bool,
     run: impl FnOnce(&Problem, &mut Vec<Vec3>) -> Result<T>,
 ) -> Result<T> {
+    let (problem, _) = problem.resolved(mesh)?;
     let frame = Frame::of(&mesh.points);
     let local = |m: &Mesh| -> Vec<Vec3> { m.points.iter().map(|q| frame.to_local(q)).collect() };
     let reference = problem.reference.map(|r| Mesh {
@@ -622,7 +623,7 @@ pub(crate) fn in_mesh_frame<T>(
             } else {
                 1.0
             },
-        ..*problem
+        ..problem
     };
     let in_frame = local(mesh);
     let original = std::mem::replace(&mut mesh.points, in_frame);
