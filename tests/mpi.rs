@@ -785,3 +785,42 @@ fn pieces_set_up_on_the_ranks_are_written_back_by_them() {
     refused(2, &pvtu, &["--boundary", "slide"], "only the fixed boundary");
     refused(4, &pvtu, &[], "3 pieces for 4 ranks");
 }
+
+/// A boundary layer gets the default's input targets on every rank, built
+/// from the whole mesh: two ranks give the single-process answer.
+#[test]
+fn input_targets_on_two_ranks_match_one_process() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layer.vtu");
+    let o = Command::new(BIN)
+        .args([
+            "generate",
+            "boundary-layer",
+            "--cells",
+            "20",
+            "--layers",
+            "10",
+            "--perturb",
+            "random-shortest:0.3",
+            "-o",
+        ])
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mesh = meshsmooth::io::read(&input).unwrap();
+    for method in ["newton", "nlcg"] {
+        let one = smooth(None, &input, dir.path(), method);
+        let two = smooth(Some(2), &input, dir.path(), method);
+        for run in [&one, &two] {
+            assert!(run.stdout.contains("targets: input"), "{method}: {}", run.stdout);
+        }
+        assert!(two.stdout.contains("mpi (2 ranks)"), "{method}: not partitioned");
+        assert_eq!(two.objective.len(), one.objective.len(), "{method}: iteration count");
+        let (a, b) = (one.objective.last().unwrap(), two.objective.last().unwrap());
+        assert!((a - b).abs() <= 1e-8 * a.abs(), "{method}: F {a} vs {b}");
+        let dx = max_rel(&one.points, &two.points);
+        assert!(dx <= 1e-8, "{method}: iterates differ by {dx:e}");
+        assert!(inverted_elements(&mesh, &two.points).is_empty());
+    }
+}

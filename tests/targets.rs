@@ -42,7 +42,7 @@ fn layer_mesh() -> Mesh {
     mesh
 }
 
-/// Interior vertices moved by up to `alpha` of their shortest edge in x and y.
+/// Interior vertices moved by up to `alpha` of their shortest edge along each axis.
 fn perturbed(mesh: &Mesh, alpha: f64, seed: u64) -> Mesh {
     let mut out = mesh.clone();
     let skin = meshsmooth::mesh::topology::skin_vertices(mesh);
@@ -58,10 +58,10 @@ fn perturbed(mesh: &Mesh, alpha: f64, seed: u64) -> Mesh {
             .iter()
             .map(|&u| {
                 let q = mesh.points[u as usize];
-                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt()
+                (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt()
             })
             .fold(f64::INFINITY, f64::min);
-        for k in 0..2 {
+        for k in 0..mesh.dim() {
             out.points[v][k] += alpha * h * rng.random_range(-1.0..1.0);
         }
     }
@@ -126,6 +126,12 @@ fn input_targets_keep_a_boundary_layer_that_the_ideal_objective_destroys() {
         info.iterations, info.stop
     );
     assert!(metric::inverted_elements(&kept, &kept.points).is_empty());
+    // the report's wall-normal first-layer change reads the same heights
+    let reported = meshsmooth::problem::targets::first_layer_change(&start, &base.points, &kept.points).unwrap();
+    assert!(reported.vertices >= NX - 1, "{reported}");
+    assert!((reported.median_change - mk).abs() < 0.01, "{reported} vs {mk}");
+    let thickened = meshsmooth::problem::targets::first_layer_change(&start, &base.points, &ideal.points).unwrap();
+    assert!(thickened.median_ratio > 3.0, "{thickened}");
     // the ideal objective thickens the first layer several times over
     assert!(mi > 2.0, "ideal: {mi}");
     // input targets keep it within 8% (median) and 20% (max)
@@ -413,4 +419,75 @@ fn a_gmsh_boundary_layer_survives_smoothing_with_the_default_targets() {
     let (med, _) = wall_distance_error(&ideal, &base, &layer);
     eprintln!("ideal: first layer median |d/d0 - 1| {med:.3}");
     assert!(med > 1.0, "ideal: {med}");
+}
+
+#[test]
+fn a_hex_box_graded_toward_a_wall_keeps_its_first_layer() {
+    // first cell 1e-3 growing by 1.5: the layer the ideal objective thickens
+    let base = generate::graded_hex_box(6, 1e-3, 1.5).unwrap();
+    let start = perturbed(&base, 0.3, 5);
+    let (chosen, _) = ProblemOptions::default().resolved(&start).unwrap();
+    assert_eq!(chosen.target, Target::Input(InputTargets::default()));
+    let skin = meshsmooth::mesh::topology::skin_vertices(&base);
+    let first: Vec<usize> = (0..base.num_points())
+        .filter(|&v| !skin[v] && (base.points[v][2] - 1e-3).abs() < 1e-12)
+        .collect();
+    assert!(first.len() >= 25, "{}", first.len());
+    let error = |m: &Mesh| {
+        let mut e: Vec<f64> = first
+            .iter()
+            .map(|&v| (m.points[v][2] / base.points[v][2] - 1.0).abs())
+            .collect();
+        e.sort_unstable_by(f64::total_cmp);
+        (e[e.len() / 2], *e.last().unwrap())
+    };
+    let mut kept = start.clone();
+    smooth(&mut kept, &ProblemOptions::default());
+    let mut ideal = start.clone();
+    smooth(
+        &mut ideal,
+        &ProblemOptions {
+            target: Target::Ideal,
+            ..Default::default()
+        },
+    );
+    let ((mk, xk), (mi, _), (mp, _)) = (error(&kept), error(&ideal), error(&start));
+    eprintln!(
+        "hex first layer |h/h0 - 1| median/max: default {mk:.3}/{xk:.3}, ideal {mi:.3} median, perturbed {mp:.3}"
+    );
+    assert!(metric::inverted_elements(&kept, &kept.points).is_empty());
+    assert!(mk < 0.10, "default: {mk}");
+    assert!(mi > 1.0, "ideal: {mi}");
+}
+
+#[test]
+fn the_mesquite_meshes_keep_the_ideal_target_by_default() {
+    // their F and iterations stay those of the ideal objective
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
+    if !dir.exists() {
+        assert!(std::env::var_os("CI").is_none(), "CI must have ../shared/meshes");
+        eprintln!("skipping: ../shared/meshes is not here");
+        return;
+    }
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .chain(std::fs::read_dir(dir.join("planar")).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "vtk"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10, "{files:?}");
+    for f in files {
+        // (meshes with pyramids are refused by the reader, and never smoothed)
+        let mesh = match meshsmooth::io::read(&f) {
+            Ok(m) => m,
+            Err(e) => {
+                assert!(e.to_string().contains("pyramid"), "{}: {e}", f.display());
+                continue;
+            }
+        };
+        let (chosen, note) = ProblemOptions::default().resolved(&mesh).unwrap();
+        assert_eq!(chosen.target, Target::Ideal, "{}: {note:?}", f.display());
+        assert_eq!(chosen.metric, MetricKind::InverseMeanRatio);
+    }
 }

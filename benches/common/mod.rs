@@ -54,3 +54,23 @@ pub fn gpu_contexts(base: &GpuOptions) -> Vec<(String, GpuContext)> {
         })
         .collect()
 }
+
+/// The lines a results file opens with: what ran, where and when.
+pub fn provenance(command: &str) -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|c| {
+            c.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let date = std::process::Command::new("date")
+        .args(["-u", "+%Y-%m-%d"])
+        .output()
+        .ok()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default();
+    format!("Machine: {cpu}, {threads} threads. Command: `{command}`. Date: {date}.\n")
+}

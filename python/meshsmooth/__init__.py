@@ -99,6 +99,8 @@ class Result:
             reordering paper's COT, RT and the number of sweep orderings).
         untangle: what untangling a tangled input did first (the keys of
             :func:`untangle`'s ``info``), or None for an untangled input.
+        targets: with ``target="auto"``, the line saying why the mesh's own
+            (input) targets were chosen; None where the ideal shape was.
     """
 
     points: np.ndarray
@@ -120,7 +122,8 @@ class Result:
         self.quality = info["quality"]
         self._report: Dict[str, Any] = info["report"]
         self.untangle: Optional[Dict[str, Any]] = info.get("untangle")
-        self.info = {k: v for k, v in info.items() if k not in ("history", "quality", "report", "untangle")}
+        self.targets: Optional[str] = info.get("targets")
+        self.info = {k: v for k, v in info.items() if k not in ("history", "quality", "report", "untangle", "targets")}
 
     def report(self) -> Dict[str, Any]:
         """The quality report of the result (the keys of ``meshsmooth quality --json``)."""
@@ -257,7 +260,7 @@ def _checked(
     fixed: Optional[npt.ArrayLike],
     boundary: str,
     method: str,
-    metric: str,
+    metric: Optional[str],
     template: str,
     device: str,
     precision: str,
@@ -270,6 +273,8 @@ def _checked(
     if boundary not in ("fixed", "slide"):
         raise ValueError(f"boundary must be 'fixed' or 'slide', got {boundary!r}")
     for arg, value in (("method", method), ("metric", metric), ("template", template), ("device", device), ("precision", precision)):
+        if arg == "metric" and value is None:
+            continue
         if not isinstance(value, str):
             raise TypeError(f"{arg} must be a string, got {type(value).__name__}")
     kinds, offsets, conn = _flatten(blocks)
@@ -281,7 +286,9 @@ def smooth(
     cells: CellsLike,
     *,
     method: str = "newton",
-    metric: str = "imr",
+    metric: Optional[str] = None,
+    target: str = "auto",
+    fields: Optional[Dict[str, npt.ArrayLike]] = None,
     template: str = "harmonic",
     fixed: Optional[npt.ArrayLike] = None,
     boundary: str = "fixed",
@@ -319,8 +326,19 @@ def smooth(
             coordinate descent, per-vertex Newton), "bcd-colored" (the same,
             colour by colour), "nlcg" (nonlinear conjugate gradients with a
             strong-Wolfe line search) or "laplace" (smart Laplacian, CPU only).
-        metric: "imr" (inverse mean ratio), "cn" (condition number) or "tmp"
-            (target matrix; needs a reference, not available here).
+        metric: "imr" (inverse mean ratio), "cn" (condition number),
+            "shape-size" (keeps the targets' sizes as well as their shapes)
+            or "tmp" (target matrix). None: "imr", or "shape-size" with
+            constructed targets.
+        target: where each corner's target comes from: "auto" (the default:
+            "input" with shape-size where the mesh has a boundary layer or
+            wall grading, as ``Result.info["targets"]`` then says, "ideal"
+            otherwise), "ideal" (each kind's ideal corner), "input" (the
+            input's own corners, regularised), "size:NAME" (a scalar field
+            of target edge lengths in ``fields``) or "metric:NAME" (a
+            symmetric-tensor field, 3 or 6 components, unit edges in it).
+        fields: point-data arrays by name, of shape (n,) or (n, k), for the
+            size and metric targets.
         template: "harmonic" (minimise the mean metric) or "average" (maximise
             the mean quality 1/metric).
         fixed: vertices that must not move besides the boundary skin (fixed
@@ -398,8 +416,18 @@ def smooth(
         preconditioner=str(preconditioner),
         negative_curvature=str(negative_curvature),
         inversion_fraction=float(inversion_fraction),
+        target=str(target),
+        fields=_fields(fields, p.shape[0]),
     )
     return Result(np.ascontiguousarray(out[:, : p.shape[1]]), info)
+
+
+def _fields(fields: Optional[Dict[str, npt.ArrayLike]], n: int) -> Optional[Dict[str, np.ndarray]]:
+    if fields is None:
+        return None
+    if not isinstance(fields, dict):
+        raise TypeError(f"fields must be a dict of name -> array, got {type(fields).__name__}")
+    return {str(k): np.ascontiguousarray(np.asarray(v, dtype=np.float64)) for k, v in fields.items()}
 
 
 class UntangleResult:
@@ -562,10 +590,14 @@ def to_meshio(
     return meshio.Mesh(p, blocks, point_data=point_data or {}, cell_data=cell_data or {}, field_data=field_data or {})
 
 
-def _smooth_parts(points: np.ndarray, parts: List[Tuple[str, Any]], kwargs: Dict[str, Any]) -> Tuple[np.ndarray, Result]:
+def _smooth_parts(
+    points: np.ndarray, parts: List[Tuple[str, Any]], kwargs: Dict[str, Any], point_data: Optional[Dict[str, Any]] = None
+) -> Tuple[np.ndarray, Result]:
     """New positions for all `points` of a mesh given as meshio-named cell
     blocks: the blocks of the highest dimension are optimised, the vertices of
-    lower ones fixed, points no optimised cell uses left where they are."""
+    lower ones fixed, points no optimised cell uses left where they are. A
+    size or metric target reads its field from `point_data` unless
+    ``fields`` is given."""
     arrays = from_meshio(_Parts(points, parts))
     n = len(arrays.points)
     user_fixed = _check_fixed(kwargs.pop("fixed", None), n)
@@ -577,7 +609,12 @@ def _smooth_parts(points: np.ndarray, parts: List[Tuple[str, Any]], kwargs: Dict
     new_id = np.full(n, -1, dtype=np.int64)
     new_id[used] = np.arange(len(used))
     cells = [(t, new_id[a]) for t, a in arrays.cells]
-    result = smooth(arrays.points[used], cells, fixed=None if fixed is None else fixed[used], **kwargs)
+    fields = kwargs.pop("fields", None)
+    if fields is None and point_data and str(kwargs.get("target", "")).startswith(("size:", "metric:")):
+        fields = {k: v for k, v in point_data.items() if np.asarray(v).dtype.kind in "fiu" and len(v) == n}
+    if fields is not None:
+        fields = {str(k): np.asarray(v, dtype=np.float64)[used] for k, v in fields.items()}
+    result = smooth(arrays.points[used], cells, fixed=None if fixed is None else fixed[used], fields=fields, **kwargs)
     new_points = np.array(points, dtype=np.float64, copy=True)
     new_points[used, : result.points.shape[1]] = result.points
     return new_points, result
@@ -600,7 +637,9 @@ def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
     of the returned mesh."""
     import meshio  # type: ignore[import-untyped, unused-ignore]
 
-    points, result = _smooth_parts(np.asarray(mesh.points), [_block_parts(c) for c in mesh.cells], kwargs)
+    points, result = _smooth_parts(
+        np.asarray(mesh.points), [_block_parts(c) for c in mesh.cells], kwargs, dict(mesh.point_data)
+    )
     out = meshio.Mesh(
         points,
         [(c.type, c.data) for c in mesh.cells],
@@ -629,7 +668,7 @@ def smooth_pyvista(grid: Any, **kwargs: Any) -> Any:
         if name is None:
             raise ValueError(f"grid: unsupported VTK cell type {int(vtk_type)}")
         parts.append((name, np.asarray(data)))
-    points, result = _smooth_parts(np.asarray(grid.points), parts, kwargs)
+    points, result = _smooth_parts(np.asarray(grid.points), parts, kwargs, dict(grid.point_data))
     out = grid.copy()
     out.points = points
     # an attribute PyVista does not know about would warn on assignment

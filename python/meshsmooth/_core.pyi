@@ -15,7 +15,7 @@ def smooth(
     conn: npt.NDArray[np.uint32],
     fixed: Optional[npt.NDArray[np.bool_]],
     method: str,
-    metric: str,
+    metric: Optional[str],
     template: str,
     boundary: str,
     feature_angle: float,
@@ -36,6 +36,8 @@ def smooth(
     preconditioner: str = "auto",
     negative_curvature: str = "iterate",
     inversion_fraction: float = 0.7,
+    target: str = "auto",
+    fields: Optional[Dict[str, npt.NDArray[np.float64]]] = None,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def quality(
     points: npt.NDArray[np.float64],

@@ -6,8 +6,9 @@
 
 use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
 use meshsmooth::io::{self, Format};
+use meshsmooth::mesh::data::{DataArray, ValueType, Values};
 use meshsmooth::metric::smetric::MetricKind;
-use meshsmooth::problem::{Boundary, ProblemOptions};
+use meshsmooth::problem::{Boundary, ProblemOptions, Target};
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::newton::NewtonParams;
 use meshsmooth::solve::{self, Device, Method, Options, Params, Record, StopReason};
@@ -62,6 +63,37 @@ fn stop_name(s: StopReason) -> &'static str {
 /// A mesh from the flat arrays: points (n, 3), kind codes (indices into
 /// `ElementKind::ALL`), CSR offsets and connectivity, optional fixed flags;
 /// validated as every reader validates.
+/// Point-data arrays (name -> (n,) or (n, k) float array) for the size and
+/// metric targets.
+fn add_point_fields(mesh: &mut Mesh, fields: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+    let Some(fields) = fields else { return Ok(()) };
+    for (name, value) in fields.iter() {
+        let name: String = name.extract()?;
+        let arr: numpy::PyReadonlyArrayDyn<'_, f64> = value.extract().map_err(|_| {
+            PyValueError::new_err(format!(
+                "fields[{name:?}] must be a float64 array of one value or row per point"
+            ))
+        })?;
+        let a = arr.as_array();
+        let shape = a.shape().to_vec();
+        let components = match shape.as_slice() {
+            [n] if *n == mesh.num_points() => 1,
+            [n, k] if *n == mesh.num_points() && *k > 0 => *k,
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "fields[{name:?}] has shape {shape:?}; expected ({0},) or ({0}, k), one row per point",
+                    mesh.num_points()
+                )));
+            }
+        };
+        let values: Vec<f64> = a.iter().copied().collect();
+        mesh.data
+            .point
+            .push(DataArray::new(name, ValueType::F64, components, Values::Float(values)));
+    }
+    Ok(())
+}
+
 fn build_mesh(
     points: &PyReadonlyArray2<f64>,
     kinds: &PyReadonlyArray1<u8>,
@@ -120,7 +152,7 @@ fn report_dict<'py>(py: Python<'py>, mesh: &Mesh) -> PyResult<Bound<'py, PyAny>>
 
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false, order="rbfs", order_seed=0, reorder_every=None, inner_iterations=1, target_objective=None, preconditioner="auto", negative_curvature="iterate", inversion_fraction=0.7))]
+#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false, order="rbfs", order_seed=0, reorder_every=None, inner_iterations=1, target_objective=None, preconditioner="auto", negative_curvature="iterate", inversion_fraction=0.7, target="auto", fields=None))]
 fn smooth<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -129,7 +161,7 @@ fn smooth<'py>(
     conn: PyReadonlyArray1<'py, u32>,
     fixed: Option<PyReadonlyArray1<'py, bool>>,
     method: &str,
-    metric: &str,
+    metric: Option<&str>,
     template: &str,
     boundary: &str,
     feature_angle: f64,
@@ -150,8 +182,16 @@ fn smooth<'py>(
     preconditioner: &str,
     negative_curvature: &str,
     inversion_fraction: f64,
+    target: &str,
+    fields: Option<Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
     let mut mesh = build_mesh(&points, &kinds, &offsets, &conn, fixed.as_ref())?;
+    add_point_fields(&mut mesh, fields.as_ref())?;
+    let target = Target::parse(target).map_err(py_err)?;
+    let metric = match metric {
+        Some(m) => parse(m)?,
+        None => target.default_metric(),
+    };
     let method: Method = parse(method)?;
     if !(feature_angle > 0.0 && feature_angle < 180.0) {
         return Err(PyValueError::new_err(format!(
@@ -159,7 +199,8 @@ fn smooth<'py>(
         )));
     }
     let problem = ProblemOptions {
-        metric: parse(metric)?,
+        metric,
+        target,
         template: parse(template)?,
         boundary: Boundary {
             mode: parse(boundary)?,
@@ -236,8 +277,12 @@ fn smooth<'py>(
     // the first exception raised by the callback or a signal handler (Ctrl-C)
     let mut raised: Option<PyErr> = None;
     let mut untangled: Option<solve::UntangleInfo> = None;
+    let mut target_note: Option<String> = None;
     let solved = py.detach(|| -> meshsmooth::Result<Option<solve::Info>> {
         problem.check(&mesh)?;
+        // the default target is decided on the input, before any untangling
+        let (problem, note) = problem.resolved(&mesh)?;
+        target_note = note;
         let ctx = if use_gpu {
             Some(GpuContext::new(&gpu_options)?)
         } else {
@@ -319,6 +364,7 @@ fn smooth<'py>(
     };
     let d = PyDict::new(py);
     d.set_item("untangle", untangle_dict)?;
+    d.set_item("targets", target_note)?;
     d.set_item("method", info.method.name())?;
     d.set_item("device", &info.device)?;
     d.set_item("iterations", info.iterations)?;

@@ -12,7 +12,7 @@ use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report;
 use meshsmooth::partition::{self, Partitioner};
 use meshsmooth::problem::boundary::{VertexClass, classify};
-use meshsmooth::problem::{BoundaryMode, InputTargets, ProblemOptions, Target};
+use meshsmooth::problem::{BoundaryMode, ProblemOptions, Target};
 use meshsmooth::report::quality_report;
 use meshsmooth::solve::{self, Info, Method, Params};
 use meshsmooth::{Error, Mesh, Result, metric};
@@ -109,40 +109,14 @@ impl ObjectiveArgs {
         }
     }
 
-    /// The `--target` spec as the library's [`Target`].
+    /// The `--target` spec as the library's [`Target`] (`reference:MESH`
+    /// is read as the reference mesh instead, and leaves the ideal corners).
     fn target(&self) -> Result<Target<'_>> {
-        let Some(spec) = self.target.as_deref() else {
-            return Ok(Target::Auto);
-        };
-        let field = |name: &'static str, rest: &str| -> Result<()> {
-            if rest.is_empty() {
-                return Err(Error::InvalidArgument(format!(
-                    "--target {name}: needs the point-data field's name ({name}:NAME)"
-                )));
-            }
-            Ok(())
-        };
-        Ok(match spec {
-            "auto" => Target::Auto,
-            "ideal" => Target::Ideal,
-            "input" => Target::Input(InputTargets::default()),
-            s if s.starts_with("reference:") => Target::Ideal,
-            s => match s.split_once(':') {
-                Some(("size", f)) => {
-                    field("size", f)?;
-                    Target::Size(f)
-                }
-                Some(("metric", f)) => {
-                    field("metric", f)?;
-                    Target::Metric(f)
-                }
-                _ => {
-                    return Err(Error::InvalidArgument(format!(
-                        "--target '{spec}': expected auto, ideal, input, size:FIELD, metric:FIELD or reference:MESH"
-                    )));
-                }
-            },
-        })
+        match self.target.as_deref() {
+            None => Ok(Target::Auto),
+            Some(s) if s.starts_with("reference:") => Ok(Target::Ideal),
+            Some(s) => Target::parse(s).map_err(|e| Error::InvalidArgument(format!("--target: {e}"))),
+        }
     }
 
     pub(super) fn options<'a>(&'a self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
@@ -433,6 +407,9 @@ fn run_with_rules(
                 "node displacement, % of the average local spacing: min {:.1}, avg {:.1}, max {:.1}\n",
                 displacement.min, displacement.avg, displacement.max
             ),
+        }
+        if let Some(change) = meshsmooth::problem::targets::first_layer_change(mesh, &start, &mesh.points) {
+            println!("{change}\n");
         }
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);

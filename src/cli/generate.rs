@@ -156,5 +156,14 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             perturb(&mut mesh, &a.perturb)?;
             save(&a.out, &mesh)
         }
+        GenerateCommand::BoundaryLayer(a) => {
+            positive(&[a.cells], "--cells")?;
+            let mut mesh = match a.dim {
+                2 => generate::boundary_layer_2d(a.cells, a.first, a.growth, a.layers)?,
+                _ => generate::graded_hex_box(a.cells, a.first, a.growth)?,
+            };
+            perturb(&mut mesh, &a.perturb)?;
+            save(&a.out, &mesh)
+        }
     }
 }

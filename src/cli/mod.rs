@@ -407,6 +407,9 @@ pub enum GenerateCommand {
     Prism(PrismArgs),
     /// A tetrahedral box graded toward one corner (element volume max:min about RATIO).
     Graded(GradedArgs),
+    /// A mesh graded toward a wall: the unit square with a quad boundary layer on y = 0 under
+    /// triangles (--dim 2), or the unit cube of hexahedra graded toward z = 0 (--dim 3).
+    BoundaryLayer(BoundaryLayerArgs),
     /// The Newton paper's heterogeneous meshes (Table 3): the unit cube less a clipped corner,
     /// graded toward it in geometric layers, interior vertices jittered.
     Hetero(HeteroArgs),
@@ -420,8 +423,9 @@ pub enum GenerateCommand {
 /// Perturbation of the interior vertices, shared by the generators.
 #[derive(Args, Debug)]
 pub struct PerturbArgs {
-    /// random:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA (ALPHA in units of the
-    /// local edge length; OMEGA in waves across the bounding box times 2 pi).
+    /// random:ALPHA, random-shortest:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA
+    /// (ALPHA in units of the vertex's mean edge length, random-shortest: of its shortest, the
+    /// scale of a boundary layer; OMEGA in waves across the bounding box times 2 pi).
     #[arg(long)]
     pub perturb: Option<String>,
     /// Fraction of the interior vertices to perturb.
@@ -562,6 +566,29 @@ pub struct GradedArgs {
     /// Element volume max:min.
     #[arg(long, default_value_t = 1e3)]
     pub ratio: f64,
+    #[command(flatten)]
+    pub perturb: PerturbArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct BoundaryLayerArgs {
+    /// 2: quads on the wall, triangles above; 3: hexahedra graded toward the wall.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
+    pub dim: u8,
+    /// Cells along the wall (and the far-field cell size 1/CELLS).
+    #[arg(long, default_value_t = 24)]
+    pub cells: usize,
+    /// Height of the first cell on the wall.
+    #[arg(long, default_value_t = 1e-3)]
+    pub first: f64,
+    /// Ratio of each layer's height to the one below.
+    #[arg(long, default_value_t = 1.25)]
+    pub growth: f64,
+    /// --dim 2: quad layers (the hexahedra of --dim 3 grow until they reach 1/CELLS).
+    #[arg(long, default_value_t = 12)]
+    pub layers: usize,
     #[command(flatten)]
     pub perturb: PerturbArgs,
     #[command(flatten)]

@@ -19,6 +19,9 @@ use crate::metric::{element_min_det, inverted_elements};
 pub enum Perturbation {
     /// `x + alpha h r`, each coordinate of `r` uniform in [-1, 1].
     Random { alpha: f64 },
+    /// The same with `h` the vertex's shortest edge: the scale of a
+    /// boundary layer's thin cells, which the mean edge overshoots.
+    RandomShortest { alpha: f64 },
     /// `x + alpha h [1, 0, 0]` (the paper's "R" shift).
     ShiftR { alpha: f64 },
     /// `x + alpha h [1, 1, 0] / sqrt(2)` (the paper's "NE" shift, normalised
@@ -34,6 +37,7 @@ impl Perturbation {
     pub fn alpha(&self) -> f64 {
         match *self {
             Perturbation::Random { alpha }
+            | Perturbation::RandomShortest { alpha }
             | Perturbation::ShiftR { alpha }
             | Perturbation::ShiftNe { alpha }
             | Perturbation::Oscillatory { alpha, .. } => alpha,
@@ -46,6 +50,7 @@ impl fmt::Display for Perturbation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Perturbation::Random { alpha } => write!(f, "random:{alpha}"),
+            Perturbation::RandomShortest { alpha } => write!(f, "random-shortest:{alpha}"),
             Perturbation::ShiftR { alpha } => write!(f, "shift-r:{alpha}"),
             Perturbation::ShiftNe { alpha } => write!(f, "shift-ne:{alpha}"),
             Perturbation::Oscillatory { alpha, omega } => write!(f, "osc:{alpha}:{omega}"),
@@ -53,7 +58,7 @@ impl fmt::Display for Perturbation {
     }
 }
 
-const SYNTAX: &str = "expected random:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA";
+const SYNTAX: &str = "expected random:ALPHA, random-shortest:ALPHA, shift-r:ALPHA, shift-ne:ALPHA or osc:ALPHA:OMEGA";
 
 fn parse_number(text: &str, what: &str, whole: &str) -> Result<f64> {
     let v: f64 = text
@@ -87,11 +92,12 @@ impl FromStr for Perturbation {
         };
         let name = parts[0].to_ascii_lowercase();
         match name.as_str() {
-            "random" | "shift-r" | "shift-ne" => {
+            "random" | "random-shortest" | "shift-r" | "shift-ne" => {
                 arity(2)?;
                 let alpha = parse_number(parts[1], "alpha", s)?;
                 Ok(match name.as_str() {
                     "random" => Perturbation::Random { alpha },
+                    "random-shortest" => Perturbation::RandomShortest { alpha },
                     "shift-r" => Perturbation::ShiftR { alpha },
                     _ => Perturbation::ShiftNe { alpha },
                 })
@@ -212,7 +218,7 @@ fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions, guard: bool) -> Resu
     };
     order.truncate(count);
 
-    let h = mean_edge_lengths(mesh);
+    let h = edge_lengths(mesh, matches!(p, Perturbation::RandomShortest { .. }));
     let (lo, hi) = crate::mesh::frame::bounding_box(&mesh.points);
     let planar = mesh.dim() == 2;
     let ve = vertex_elements(mesh);
@@ -260,7 +266,9 @@ fn shuffle(items: &mut [usize], rng: &mut ChaCha8Rng) {
 
 fn displacement(p: &Perturbation, x: [f64; 3], h: f64, lo: &[f64; 3], hi: &[f64; 3], rng: &mut ChaCha8Rng) -> [f64; 3] {
     match *p {
-        Perturbation::Random { alpha } => std::array::from_fn(|_| alpha * h * rng.random_range(-1.0..=1.0)),
+        Perturbation::Random { alpha } | Perturbation::RandomShortest { alpha } => {
+            std::array::from_fn(|_| alpha * h * rng.random_range(-1.0..=1.0))
+        }
         Perturbation::ShiftR { alpha } => [alpha * h, 0.0, 0.0],
         Perturbation::ShiftNe { alpha } => {
             let s = alpha * h * std::f64::consts::FRAC_1_SQRT_2;
@@ -278,24 +286,23 @@ fn displacement(p: &Perturbation, x: [f64; 3], h: f64, lo: &[f64; 3], hi: &[f64;
     }
 }
 
-/// Mean length of the edges at each vertex.
-fn mean_edge_lengths(mesh: &Mesh) -> Vec<f64> {
+/// Mean (or, with `shortest`, the shortest) length of the edges at each vertex.
+fn edge_lengths(mesh: &Mesh, shortest: bool) -> Vec<f64> {
     let nb = vertex_neighbours(mesh);
     (0..mesh.num_points())
         .map(|v| {
             let others = nb.of(v);
             let x = mesh.points[v];
-            let sum: f64 = others
-                .iter()
-                .map(|&w| {
-                    let y = mesh.points[w as usize];
-                    ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
-                })
-                .sum();
+            let lengths = others.iter().map(|&w| {
+                let y = mesh.points[w as usize];
+                ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
+            });
             if others.is_empty() {
                 0.0
+            } else if shortest {
+                lengths.fold(f64::INFINITY, f64::min)
             } else {
-                sum / others.len() as f64
+                lengths.sum::<f64>() / others.len() as f64
             }
         })
         .collect()

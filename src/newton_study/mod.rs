@@ -246,6 +246,7 @@ fn perturbed(suite: Suite, name: String, optimal: &Mesh, p: Perturbation, fracti
 fn short(p: Perturbation) -> String {
     match p {
         Perturbation::Random { alpha } => format!("random:{alpha:.3e}"),
+        Perturbation::RandomShortest { alpha } => format!("random-shortest:{alpha:.3e}"),
         Perturbation::ShiftR { alpha } => format!("shift-r:{alpha:.4}"),
         Perturbation::ShiftNe { alpha } => format!("shift-ne:{alpha:.4}"),
         Perturbation::Oscillatory { alpha, omega } => format!("osc:{alpha:.3e}:{omega:.4}"),

@@ -94,6 +94,9 @@ impl<'a> ProblemOptions<'a> {
         {
             return Ok((ideal, None));
         }
+        if targets::raw_anisotropic_share(mesh, &mesh.points)? < targets::ANISOTROPIC_SHARE {
+            return Ok((ideal, None));
+        }
         let intent = targets::intent(mesh, &mesh.points)?;
         if !intent.keeps_input() {
             return Ok((ideal, None));

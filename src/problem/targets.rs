@@ -52,10 +52,37 @@ pub enum Target<'a> {
     Metric(&'a str),
 }
 
-impl Target<'_> {
+impl<'a> Target<'a> {
     /// Whether per-corner targets are built (everything but `Ideal`).
     pub fn is_constructed(&self) -> bool {
         !matches!(self, Target::Ideal | Target::Auto)
+    }
+
+    /// A target spec as the front ends spell it: auto, ideal, input,
+    /// size:FIELD or metric:FIELD (a reference mesh is given as a mesh).
+    pub fn parse(spec: &'a str) -> Result<Target<'a>> {
+        let field = |rest: &'a str, kind: &str| -> Result<&'a str> {
+            if rest.is_empty() {
+                return Err(Error::InvalidArgument(format!(
+                    "target '{spec}' needs the point-data field's name ({kind}:NAME)"
+                )));
+            }
+            Ok(rest)
+        };
+        Ok(match spec {
+            "auto" => Target::Auto,
+            "ideal" => Target::Ideal,
+            "input" => Target::Input(InputTargets::default()),
+            s => match s.split_once(':') {
+                Some(("size", f)) => Target::Size(field(f, "size")?),
+                Some(("metric", f)) => Target::Metric(field(f, "metric")?),
+                _ => {
+                    return Err(Error::InvalidArgument(format!(
+                        "unknown target '{spec}': expected auto, ideal, input, size:FIELD, metric:FIELD or reference:MESH"
+                    )));
+                }
+            },
+        })
     }
 
     /// The metric a front end uses when none is named: shape+size where
@@ -559,18 +586,20 @@ fn regularise(mesh: &Mesh, points: &[Vec3], mut vals: Vec<Mat3>, passes: usize) 
     for pass in 0..passes * (1 + ALONG_PER_PASS) {
         let across = pass < passes;
         let eigen: Vec<(Vec3, Mat3)> = vals.par_iter().map(sym_eigen).collect();
+        let quarter = quarters(&eigen);
         vals = (0..mesh.num_elements())
             .into_par_iter()
             .map(|e| {
                 let nb = nb.of(e);
-                let local = logical_offsets(e, nb, &centroid, &vals, &eigen, n);
                 if across {
+                    let local = logical_offsets(e, nb, &centroid, &quarter, &eigen, n);
                     return fit_log_metric(&local, n, |i| nb[i] as usize, &vals, &eigen);
                 }
                 // along a layer: its own row only, in the layer's coordinates
                 let Some((axis, 1.0)) = distinct_axis(&eigen[e], n) else {
                     return vals[e];
                 };
+                let local = logical_offsets(e, nb, &centroid, &quarter, &eigen, n);
                 let (_, v) = &eigen[e];
                 let tangents: Vec<Vec3> = (0..3)
                     .map(|k| [v[0][k], v[1][k], v[2][k]])
@@ -583,6 +612,45 @@ fn regularise(mesh: &Mesh, points: &[Vec3], mut vals: Vec<Mat3>, passes: usize) 
                     .map(|&i| std::array::from_fn(|k| tangents.get(k).map_or(0.0, |t| dot(&local[i], t))))
                     .collect();
                 fit_log_metric(&along, n - 1, |i| nb[row[i]] as usize, &vals, &eigen)
+            })
+            .collect();
+    }
+    vals
+}
+
+/// exp(-L / 4) of each log-metric L, from its eigen decomposition.
+fn quarters(eigen: &[(Vec3, Mat3)]) -> Vec<Mat3> {
+    eigen
+        .par_iter()
+        .map(|(l, v)| {
+            let f = l.map(|x| (-0.25 * x).exp());
+            std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|k| v[r][k] * f[k] * v[c][k]).sum()))
+        })
+        .collect()
+}
+
+/// `passes` rounds of the plain mean of log G over the elements sharing a
+/// vertex: what the default's detection reads the mesh through. It is the
+/// cheap cousin of [`regularise`] (a tetrahedron has about 100 such
+/// neighbours, and every smoothing run with the default target pays for
+/// the detection); the thresholds of [`Intent::keeps_input`] were measured
+/// with it.
+fn mean_regularise(mesh: &Mesh, mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
+    let nb = element_neighbours(mesh, &vertex_elements(mesh));
+    for _ in 0..passes {
+        vals = (0..mesh.num_elements())
+            .into_par_iter()
+            .map(|e| {
+                let js = nb.of(e);
+                let mut m = [[0.0; 3]; 3];
+                for &j in js {
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            m[r][c] += vals[j as usize][r][c] / js.len() as f64;
+                        }
+                    }
+                }
+                m
             })
             .collect();
     }
@@ -614,6 +682,7 @@ fn layer_growths(mesh: &Mesh, points: &[Vec3], logs: &[Mat3]) -> Vec<f64> {
     let n = mesh.dim();
     let (centroid, nb) = neighbourhoods(mesh, points);
     let eigen: Vec<(Vec3, Mat3)> = logs.par_iter().map(sym_eigen).collect();
+    let quarter = quarters(&eigen);
     let dot = |a: &Vec3, b: &Vec3| (0..3).map(|i| a[i] * b[i]).sum::<f64>();
     (0..mesh.num_elements())
         .into_par_iter()
@@ -634,7 +703,7 @@ fn layer_growths(mesh: &Mesh, points: &[Vec3], logs: &[Mat3]) -> Vec<f64> {
                 return None;
             }
             let nbs = nb.of(e);
-            let local = logical_offsets(e, nbs, &centroid, logs, &eigen, n);
+            let local = logical_offsets(e, nbs, &centroid, &quarter, &eigen, n);
             let ratios: Vec<f64> = nbs
                 .iter()
                 .zip(&local)
@@ -727,7 +796,7 @@ fn element_neighbours(mesh: &Mesh, ve: &Csr) -> Csr {
 #[cfg(test)]
 fn affine_fit_at(e: usize, nb: &[u32], centroid: &[Vec3], vals: &[Mat3], n: usize) -> Mat3 {
     let eigen: Vec<(Vec3, Mat3)> = vals.iter().map(sym_eigen).collect();
-    let local = logical_offsets(e, nb, centroid, vals, &eigen, n);
+    let local = logical_offsets(e, nb, centroid, &quarters(&eigen), &eigen, n);
     affine_fit(&local, n, |i| vals[nb[i] as usize])
 }
 
@@ -741,11 +810,16 @@ fn affine_fit_at(e: usize, nb: &[u32], centroid: &[Vec3], vals: &[Mat3], n: usiz
 /// wall, and without the turn they read as cells nearer the wall and thicken
 /// the layer pass after pass. The turn fades out as e's stretching does
 /// (full from an aspect of 2), where axes mean nothing.
+///
+/// `quarter[e]` is exp(-log G_e / 4) (see [`quarters`]): the halfway
+/// metric's exp(-(log G_e + log G_j) / 4) is taken as the symmetric product
+/// of the two, exact where the axes agree and without an eigen
+/// decomposition per pair (a tetrahedron has about 100 neighbours).
 fn logical_offsets(
     e: usize,
     nb: &[u32],
     centroid: &[Vec3],
-    vals: &[Mat3],
+    quarter: &[Mat3],
     eigen: &[(Vec3, Mat3)],
     n: usize,
 ) -> Vec<Vec3> {
@@ -755,8 +829,8 @@ fn logical_offsets(
         .map(|&j| {
             let j = j as usize;
             let d = sub(&centroid[j], &ce);
-            let half: Mat3 = std::array::from_fn(|r| std::array::from_fn(|s| 0.5 * (vals[e][r][s] + vals[j][r][s])));
-            let m = sym_fn(&half, |x| (-0.5 * x).exp());
+            let (ab, ba) = (mul(&quarter[e], &quarter[j]), mul(&quarter[j], &quarter[e]));
+            let m: Mat3 = std::array::from_fn(|r| std::array::from_fn(|s| 0.5 * (ab[r][s] + ba[r][s])));
             let md: Vec3 = std::array::from_fn(|r| (0..n).map(|s| m[r][s] * d[s]).sum());
             match axis {
                 Some((a, weight)) if j != e => {
@@ -914,6 +988,91 @@ pub fn element_aspects(g: &[Mat3], n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// How the first cells on the walls changed between `before` and `after`:
+/// for every skin vertex whose elements include a stretched one (aspect
+/// [`ANISOTROPIC_ASPECT`] or more at `before`), the free vertex of those
+/// elements nearest to it across the layer (at most twice the element's
+/// thickness away) is its first-layer vertex, and the height is the
+/// distance between the two. `None` where no wall has a stretched layer.
+pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Option<LayerChange> {
+    let pts = crate::metric::oriented(mesh, before);
+    let g = element_metrics(mesh, &pts, false).ok()?;
+    let n = mesh.dim();
+    let aspects = element_aspects(&g, n);
+    // an element's thickness: its smallest principal length (in 2D among the in-plane axes)
+    let thickness: Vec<f64> = g
+        .iter()
+        .map(|m| {
+            let (l, v) = sym_eigen(m);
+            (0..3)
+                .filter(|&k| n == 3 || v[2][k].abs() < 0.5)
+                .map(|k| l[k])
+                .fold(f64::INFINITY, f64::min)
+                .max(0.0)
+                .sqrt()
+        })
+        .collect();
+    let skin = crate::mesh::topology::skin_vertices(mesh);
+    let ve = vertex_elements(mesh);
+    let dist = |p: &[Vec3], a: usize, b: usize| sub(&p[a], &p[b]).iter().map(|x| x * x).sum::<f64>().sqrt();
+    let mut ratios: Vec<f64> = (0..mesh.num_points())
+        .filter(|&w| skin[w])
+        .filter_map(|w| {
+            // across the layer from the wall: an edge about as long as the
+            // stretched element is thin (a side wall's neighbours lie along it)
+            ve.of(w)
+                .iter()
+                .map(|&e| e as usize)
+                .filter(|&e| aspects[e] >= ANISOTROPIC_ASPECT)
+                .flat_map(|e| mesh.element(e).iter().map(move |&u| (u as usize, e)))
+                .filter(|&(u, e)| !skin[u] && !mesh.is_fixed(u) && dist(before, u, w) <= 2.0 * thickness[e])
+                .map(|(u, _)| u)
+                .min_by(|&a, &b| dist(before, a, w).total_cmp(&dist(before, b, w)))
+                .map(|u| dist(after, u, w) / dist(before, u, w))
+        })
+        .filter(|r| r.is_finite())
+        .collect();
+    if ratios.is_empty() {
+        return None;
+    }
+    ratios.sort_unstable_by(f64::total_cmp);
+    let mut changes: Vec<f64> = ratios.iter().map(|r| (r - 1.0).abs()).collect();
+    changes.sort_unstable_by(f64::total_cmp);
+    Some(LayerChange {
+        vertices: ratios.len(),
+        median_ratio: ratios[ratios.len() / 2],
+        min_ratio: ratios[0],
+        max_ratio: *ratios.last().unwrap(),
+        median_change: changes[changes.len() / 2],
+    })
+}
+
+/// What [`first_layer_change`] measured: the first-layer heights after over
+/// before, at `vertices` wall vertices.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct LayerChange {
+    pub vertices: usize,
+    pub median_ratio: f64,
+    pub min_ratio: f64,
+    pub max_ratio: f64,
+    /// The median of |after / before - 1|.
+    pub median_change: f64,
+}
+
+impl std::fmt::Display for LayerChange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "first-layer height on the walls, after / before ({} wall vertices with a stretched layer): median {:.3} (median change {:.1}%), range {:.3} to {:.3}",
+            self.vertices,
+            self.median_ratio,
+            100.0 * self.median_change,
+            self.min_ratio,
+            self.max_ratio
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1028,18 +1187,22 @@ pub const ANISOTROPIC_ASPECT: f64 = 4.0;
 /// own (input) targets by default.
 pub const ANISOTROPIC_SHARE: f64 = 0.02;
 
-/// Thresholds of [`Intent::keeps_input`]. Measured (regularised values):
-/// Gmsh channels with a BoundaryLayer field (growth 1.25) read a growth of
-/// 1.248 with a median aspect of 1.07 to 1.5; Mesquite's stretched test
-/// meshes read cub_fru 1.185 (median aspect 4.5, span 24x), shest_grid32
-/// 1.152 (median 2.5, span 5x), shashkov and shashkov_quad 1.000 (median
-/// 11, span 5x to 6x), and are smoothed toward the ideal shape as before.
+/// Thresholds of [`Intent::keeps_input`]. Measured (after the detection's
+/// regularisation): Gmsh channels with a BoundaryLayer field (growth 1.25)
+/// read 15% to 31% stretched, a median aspect of 1.06 to 1.26 and a growth
+/// of 1.248; Mesquite's stretched test meshes read cub_fru 65% stretched,
+/// median aspect 4.6, growth 1.152, span 17x; shest_grid32 3.7%, median
+/// 2.2, growth 1.5 (from its few stretched cells); shashkov and
+/// shashkov_quad 96% to 98%, median 10, growth 1.000; they are smoothed
+/// toward the ideal shape as before.
 pub const LAYER_GROWTH: f64 = 1.05;
 /// Below this median aspect the mesh's bulk is isotropic and a graded,
 /// stretched minority is a layer.
 pub const ISOTROPIC_BULK: f64 = 2.0;
-/// A mesh stretched throughout keeps its stretching when it grows at least
-/// this much per cell, or spans at least [`GRADED_RANGE`] in thickness.
+/// A mesh stretched throughout (at least this share of stretched cells)...
+pub const STRETCHED_THROUGHOUT: f64 = 0.25;
+/// ...keeps its stretching when it grows at least this much per cell, or
+/// spans at least [`GRADED_RANGE`] in thickness: wall grading.
 pub const STRONG_GROWTH: f64 = 1.25;
 pub const GRADED_RANGE: f64 = 100.0;
 
@@ -1050,15 +1213,16 @@ const INTENT_PASSES: usize = 2;
 impl Intent {
     /// The mesh's stretching was built on purpose: keep it (input targets).
     /// Coherent stretched cells whose thickness grows from cell to cell, and
-    /// either a bulk that is isotropic (a boundary layer on walls) or a
-    /// growth or a thickness span that only wall grading produces; merely
-    /// stretched or distorted meshes have none of these.
+    /// either a bulk that is isotropic (a boundary layer on walls) or, in a
+    /// mesh stretched throughout, a growth or a thickness span that only
+    /// wall grading produces; merely stretched or distorted meshes have
+    /// none of these.
     pub fn keeps_input(&self) -> bool {
+        let wall_graded = self.anisotropic_share >= STRETCHED_THROUGHOUT
+            && (self.growth >= STRONG_GROWTH || self.thickness_range >= GRADED_RANGE);
         self.anisotropic_share >= ANISOTROPIC_SHARE
             && self.growth >= LAYER_GROWTH
-            && (self.median_aspect < ISOTROPIC_BULK
-                || self.growth >= STRONG_GROWTH
-                || self.thickness_range >= GRADED_RANGE)
+            && (self.median_aspect < ISOTROPIC_BULK || wall_graded)
     }
 
     /// One line for a user.
@@ -1075,12 +1239,22 @@ impl Intent {
     }
 }
 
+/// The share of elements stretched [`ANISOTROPIC_ASPECT`]:1 or more as they
+/// are, before any regularisation: a cheap bound for the default's
+/// decision, since averaging neighbours does not make a mesh more coherently
+/// stretched than its elements are.
+pub fn raw_anisotropic_share(mesh: &Mesh, points: &[Vec3]) -> Result<f64> {
+    let pts = crate::metric::oriented(mesh, points);
+    let a = element_aspects(&element_metrics(mesh, &pts, false)?, mesh.dim());
+    Ok(a.iter().filter(|&&x| x >= ANISOTROPIC_ASPECT).count() as f64 / a.len().max(1) as f64)
+}
+
 /// The [`Intent`] of `mesh` at `points` (inverted elements are left out).
 pub fn intent(mesh: &Mesh, points: &[Vec3]) -> Result<Intent> {
     let pts = crate::metric::oriented(mesh, points);
     let g = element_metrics(mesh, &pts, false)?;
     let logs: Vec<Mat3> = g.iter().map(|m| sym_fn(m, |l| l.max(f64::MIN_POSITIVE).ln())).collect();
-    let smoothed_logs = regularise(mesh, &pts, logs, INTENT_PASSES);
+    let smoothed_logs = mean_regularise(mesh, logs, INTENT_PASSES);
     let smooth: Vec<Mat3> = smoothed_logs.iter().map(|l| sym_fn(l, f64::exp)).collect();
     let mut growths = layer_growths(mesh, &pts, &smoothed_logs);
     growths.sort_unstable_by(f64::total_cmp);
