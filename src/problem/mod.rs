@@ -89,7 +89,7 @@ impl<'a> ProblemOptions<'a> {
         }
         if self.metric != MetricKind::InverseMeanRatio
             || self.reference.is_some()
-            || mesh.kinds.iter().any(|k| *k == crate::mesh::ElementKind::Polyhedron)
+            || mesh.kinds.contains(&crate::mesh::ElementKind::Polyhedron)
             || !crate::metric::inverted_elements(mesh, &mesh.points).is_empty()
         {
             return Ok((ideal, None));

@@ -1128,7 +1128,7 @@ mod tests {
         // linear in the row index but curved in y, and the fit in the
         // halfway metric gives every element back its own log G
         let rows = 6;
-        let h: Vec<f64> = (0..rows).map(|j| 0.01 * 1.5f64.powi(j as i32)).collect();
+        let h: Vec<f64> = (0..rows).map(|j| 0.01 * 1.5f64.powi(j)).collect();
         let mut centroid = Vec::new();
         let mut vals = Vec::new();
         let mut y = 0.0;
