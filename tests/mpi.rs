@@ -809,7 +809,7 @@ fn input_targets_on_two_ranks_match_one_process() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mesh = meshsmooth::io::read(&input).unwrap();
-    for method in ["newton", "nlcg"] {
+    for method in ["newton", "bcd-colored"] {
         let one = smooth(None, &input, dir.path(), method);
         let two = smooth(Some(2), &input, dir.path(), method);
         for run in [&one, &two] {
