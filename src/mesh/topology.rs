@@ -100,6 +100,20 @@ pub fn vertex_elements(mesh: &Mesh) -> Csr {
     Csr::from_pairs(mesh.num_points(), pairs)
 }
 
+/// Sorts `out[from..]` (one entry being built by [`build_par`], after the
+/// chunk's earlier entries) and drops its repeated items.
+pub fn sort_dedup_tail(out: &mut Vec<u32>, from: usize) {
+    out[from..].sort_unstable();
+    let mut keep = from;
+    for i in from..out.len() {
+        if keep == from || out[i] != out[keep - 1] {
+            out[keep] = out[i];
+            keep += 1;
+        }
+    }
+    out.truncate(keep);
+}
+
 /// Lists built in parallel, one entry at a time: `fill(i, out)` appends
 /// entry `i`'s items to `out`. Chunks of entries are built independently and
 /// concatenated, so no global sort of (entry, item) pairs is needed.

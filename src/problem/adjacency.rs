@@ -139,15 +139,7 @@ pub(crate) fn sharing_neighbours(elements: &Csr, n: usize) -> Csr {
         for &e in vertex_elements.of(v) {
             out.extend(elements.of(e as usize).iter().filter(|&&w| w as usize != v));
         }
-        out[from..].sort_unstable();
-        let mut keep = from;
-        for i in from..out.len() {
-            if keep == from || out[i] != out[keep - 1] {
-                out[keep] = out[i];
-                keep += 1;
-            }
-        }
-        out.truncate(keep);
+        crate::mesh::topology::sort_dedup_tail(out, from);
     })
 }
 

@@ -778,15 +778,7 @@ fn element_neighbours(mesh: &Mesh, ve: &Csr) -> Csr {
         for &v in mesh.element(e) {
             out.extend_from_slice(ve.of(v as usize));
         }
-        out[from..].sort_unstable();
-        let mut kept = from;
-        for i in from..out.len() {
-            if i == from || out[i] != out[kept - 1] {
-                out[kept] = out[i];
-                kept += 1;
-            }
-        }
-        out.truncate(kept);
+        crate::mesh::topology::sort_dedup_tail(out, from);
     })
 }
 

@@ -96,15 +96,7 @@ pub(crate) fn corner_rows(p: &Problem, free_vertex: &[u32], free_index: &[u32], 
         if !upper {
             row.push(i as u32);
         }
-        row[from..].sort_unstable();
-        let mut keep = from;
-        for k in from..row.len() {
-            if keep == from || row[k] != row[keep - 1] {
-                row[keep] = row[k];
-                keep += 1;
-            }
-        }
-        row.truncate(keep);
+        crate::mesh::topology::sort_dedup_tail(row, from);
     })
 }
 
