@@ -2,7 +2,9 @@
 //! write it. Run: cargo run --release --example smooth_file -- IN.vtk OUT.vtk
 //! (without arguments it writes and smooths a perturbed box in a temp folder).
 
-use meshsmooth::solve::{self, Method, Options, Params};
+use meshsmooth::Smoother;
+use meshsmooth::smoother::Event;
+use meshsmooth::solve::Method;
 
 fn main() -> meshsmooth::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -24,16 +26,18 @@ fn main() -> meshsmooth::Result<()> {
     };
     // -- the README example --
     let mut mesh = meshsmooth::io::read(&input)?;
-    let before = meshsmooth::report::quality_report(&mesh, &mesh.points);
-    let opts = Options::cpu(Method::Newton, &Params::default());
-    let info = solve::smooth_mesh(&mut mesh, &Default::default(), &opts, &mut |rec| {
-        eprintln!("iteration {}: F = {:.8}", rec.iteration, rec.objective);
+    // the command line's defaults: auto device, auto targets, untangling first
+    let mut smoother = Smoother::default();
+    smoother.method = Method::Newton;
+    let report = smoother.smooth_observed(&mut mesh, &mut |event| {
+        if let Event::Iteration(rec) = event {
+            eprintln!("iteration {}: F = {:.8}", rec.iteration, rec.objective);
+        }
         true // return false to stop early
     })?;
-    let after = meshsmooth::report::quality_report(&mesh, &mesh.points);
     println!(
-        "{before}\n{after}\n{:?} after {} iterations",
-        info.stop, info.iterations
+        "{}\n{}\n{} after {} iterations on {}",
+        report.start.quality, report.quality, report.info.stop, report.info.iterations, report.info.device
     );
     // refuses to write an inverted element; adds the quality as cell data
     meshsmooth::io::write_mesh(&output, &mesh, meshsmooth::io::Format::VtkAscii)

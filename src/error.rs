@@ -25,8 +25,7 @@ pub enum Error {
 
     /// The mesh has inverted or degenerate elements; optimisation needs a feasible start.
     #[error(
-        "mesh has {count} inverted or degenerate element(s) (first ids: {}); untangle it first (meshsmooth untangle, \
-         or smooth without --no-untangle)",
+        "mesh has {count} inverted or degenerate element(s) (first ids: {}); it must be untangled first",
         fmt_ids(first)
     )]
     Inverted { count: usize, first: Vec<usize> },
@@ -53,6 +52,12 @@ pub enum Error {
     /// A caller passed an unusable option.
     #[error("invalid argument: {0}")]
     InvalidArgument(String),
+
+    /// A setting of [`Smoother`](crate::Smoother) is unusable: `option` is its
+    /// name (a settings key, a Python keyword), `message` what is wrong and
+    /// what it takes.
+    #[error("invalid option {option}: {message}")]
+    InvalidOption { option: &'static str, message: String },
 }
 
 /// Where in a file a parse error happened.

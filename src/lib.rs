@@ -19,7 +19,9 @@ pub use backend::cpu::objective;
 pub mod plot;
 pub mod problem;
 pub mod report;
+pub mod smoother;
 pub mod solve;
 
 pub use error::{Error, Result};
 pub use mesh::{ElementKind, Mesh};
+pub use smoother::{DeviceChoice, Smoother};

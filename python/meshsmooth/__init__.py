@@ -293,7 +293,7 @@ def smooth(
     fixed: Optional[npt.ArrayLike] = None,
     boundary: str = "fixed",
     feature_angle: float = 30.0,
-    device: str = "cpu",
+    device: str = "auto",
     precision: str = "auto",
     adapter: Optional[str] = None,
     tol: float = 1e-6,
@@ -349,7 +349,9 @@ def smooth(
         feature_angle: with ``boundary="slide"``, faces meeting at more than
             this many degrees form a feature edge, and an edge turning by more
             than it makes a corner.
-        device: "cpu" (f64 on all cores) or "gpu" (wgpu; bcd runs colour by colour).
+        device: "auto" (a hardware GPU when there is one, else the CPU;
+            ``Result.info["notes"]`` says why the CPU was chosen), "cpu" (f64
+            on all cores) or "gpu" (wgpu; bcd runs colour by colour).
         precision: GPU arithmetic "f32", "f64" or "auto" (f64 where the adapter has it).
         adapter: use the GPU adapter whose name contains this.
         tol: stop when the 2-norm of the free-vertex gradient of F, with
@@ -400,26 +402,29 @@ def smooth(
     p, mesh = _checked(points, cells, fixed, boundary, method, metric, template, device, precision)
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 0:
         raise ValueError(f"max_iter must be a non-negative integer, got {max_iter!r}")
-    out, info = _core.smooth(
-        *mesh,
-        method, metric, template, boundary, float(feature_angle), device, precision, adapter,
-        float(tol),
-        int(max_iter),
-        None if time_limit is None else float(time_limit),
-        callback,
-        untangle=bool(untangle),
-        order=str(order),
-        order_seed=int(order_seed),
+    settings = _settings(
+        method=method, metric=metric, target=target, template=template, boundary=boundary,
+        feature_angle=float(feature_angle), device=device, precision=precision, adapter=adapter,
+        tol=float(tol), max_iter=int(max_iter),
+        time_limit=None if time_limit is None else float(time_limit),
+        untangle=bool(untangle), order=str(order), order_seed=int(order_seed),
         reorder_every=None if reorder_every is None else int(reorder_every),
         inner_iterations=int(inner_iterations),
         target_objective=None if target_objective is None else float(target_objective),
-        preconditioner=str(preconditioner),
-        negative_curvature=str(negative_curvature),
+        preconditioner=str(preconditioner), negative_curvature=str(negative_curvature),
         inversion_fraction=float(inversion_fraction),
-        target=str(target),
-        fields=_fields(fields, p.shape[0]),
     )
+    out, info = _core.smooth(*mesh, settings, callback, fields=_fields(fields, p.shape[0]))
     return Result(np.ascontiguousarray(out[:, : p.shape[1]]), info)
+
+
+def _settings(**settings: Any) -> str:
+    """The settings as the JSON object the library's ``Smoother`` reads: the
+    keys are the keywords, and every check and default is the library's (the
+    command line's)."""
+    import json
+
+    return json.dumps(settings)
 
 
 def _fields(fields: Optional[Dict[str, npt.ArrayLike]], n: int) -> Optional[Dict[str, np.ndarray]]:
@@ -468,7 +473,7 @@ def untangle(
     fixed: Optional[npt.ArrayLike] = None,
     boundary: str = "fixed",
     feature_angle: float = 30.0,
-    device: str = "cpu",
+    device: str = "auto",
     precision: str = "auto",
     adapter: Optional[str] = None,
 ) -> UntangleResult:
@@ -484,12 +489,11 @@ def untangle(
         RuntimeError: the GPU failed.
     """
     p, mesh = _checked(points, cells, fixed, boundary, method, metric, template, device, precision)
-    out, info = _core.smooth(
-        *mesh,
-        method, metric, template, boundary, float(feature_angle), device, precision, adapter,
-        1e-6, 1000, None, None,
-        untangle_only=True,
+    settings = _settings(
+        method=method, metric=metric, template=template, boundary=boundary,
+        feature_angle=float(feature_angle), device=device, precision=precision, adapter=adapter,
     )
+    out, info = _core.smooth(*mesh, settings, None, untangle_only=True)
     return UntangleResult(np.ascontiguousarray(out[:, : p.shape[1]]), info)
 
 

@@ -4,21 +4,19 @@
 //! become a `Mesh`, the library runs with the GIL released, and the results
 //! come back as numpy arrays and dicts.
 
-use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
+use meshsmooth::backend::gpu;
 use meshsmooth::io::{self, Format};
 use meshsmooth::mesh::data::{DataArray, ValueType, Values};
 use meshsmooth::metric::smetric::MetricKind;
-use meshsmooth::problem::{Boundary, ProblemOptions, Target};
 use meshsmooth::report::quality_report;
-use meshsmooth::solve::newton::NewtonParams;
-use meshsmooth::solve::{self, Device, Method, Options, Params, Record, StopReason};
-use meshsmooth::{ElementKind, Error, Mesh, metric_report};
+use meshsmooth::smoother::Event;
+use meshsmooth::solve::{Record, StopReason};
+use meshsmooth::{ElementKind, Error, Mesh, Smoother, metric_report};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::Path;
-use std::time::Duration;
 
 /// The library's error as the Python exception a caller expects: bad input
 /// (mesh, options, file content) is a `ValueError`, a failing device a
@@ -35,17 +33,6 @@ fn py_err(e: Error) -> PyErr {
 
 fn parse<T: std::str::FromStr<Err = Error>>(s: &str) -> PyResult<T> {
     s.parse().map_err(py_err)
-}
-
-fn precision(s: &str) -> PyResult<Precision> {
-    match s {
-        "f32" => Ok(Precision::F32),
-        "f64" => Ok(Precision::F64),
-        "auto" => Ok(Precision::Auto),
-        _ => Err(PyValueError::new_err(format!(
-            "precision must be 'f32', 'f64' or 'auto', got {s:?}"
-        ))),
-    }
 }
 
 fn stop_name(s: StopReason) -> &'static str {
@@ -150,9 +137,18 @@ fn report_dict<'py>(py: Python<'py>, mesh: &Mesh) -> PyResult<Bound<'py, PyAny>>
     py.import("json")?.call_method1("loads", (json,))
 }
 
+/// The library's default settings as JSON (the Python keywords' defaults are tested against them).
+#[pyfunction]
+fn default_settings() -> String {
+    serde_json::to_string(&Smoother::default()).expect("settings serialise")
+}
+
+/// Smooths (or, `untangle_only`, untangles) the mesh with the settings in
+/// `settings` (a JSON object keyed as the Python keywords): the library's
+/// `Smoother` checks them and runs the one sequence every front end runs.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (points, kinds, offsets, conn, fixed, method, metric, template, boundary, feature_angle, device, precision, adapter, tol, max_iter, time_limit, callback, untangle=true, untangle_only=false, order="rbfs", order_seed=0, reorder_every=None, inner_iterations=1, target_objective=None, preconditioner="auto", negative_curvature="iterate", inversion_fraction=0.7, target="auto", fields=None))]
+#[pyo3(signature = (points, kinds, offsets, conn, fixed, settings, callback=None, untangle_only=false, fields=None))]
 fn smooth<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -160,184 +156,58 @@ fn smooth<'py>(
     offsets: PyReadonlyArray1<'py, i64>,
     conn: PyReadonlyArray1<'py, u32>,
     fixed: Option<PyReadonlyArray1<'py, bool>>,
-    method: &str,
-    metric: Option<&str>,
-    template: &str,
-    boundary: &str,
-    feature_angle: f64,
-    device: &str,
-    precision: &str,
-    adapter: Option<String>,
-    tol: f64,
-    max_iter: usize,
-    time_limit: Option<f64>,
+    settings: &str,
     callback: Option<Py<PyAny>>,
-    untangle: bool,
     untangle_only: bool,
-    order: &str,
-    order_seed: u64,
-    reorder_every: Option<usize>,
-    inner_iterations: usize,
-    target_objective: Option<f64>,
-    preconditioner: &str,
-    negative_curvature: &str,
-    inversion_fraction: f64,
-    target: &str,
     fields: Option<Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
+    let smoother = Smoother::from_json(settings).map_err(py_err)?;
     let mut mesh = build_mesh(&points, &kinds, &offsets, &conn, fixed.as_ref())?;
     add_point_fields(&mut mesh, fields.as_ref())?;
-    let target = Target::parse(target).map_err(py_err)?;
-    let metric = match metric {
-        Some(m) => parse(m)?,
-        None => target.default_metric(),
-    };
-    let method: Method = parse(method)?;
-    if !(feature_angle > 0.0 && feature_angle < 180.0) {
-        return Err(PyValueError::new_err(format!(
-            "feature_angle must be between 0 and 180 degrees, got {feature_angle}"
-        )));
-    }
-    let problem = ProblemOptions {
-        metric,
-        target,
-        template: parse(template)?,
-        boundary: Boundary {
-            mode: parse(boundary)?,
-            feature_angle,
-        },
-        ordering: parse(order)?,
-        order_seed,
-        ..Default::default()
-    };
-    if reorder_every == Some(0) || inner_iterations == 0 {
-        return Err(PyValueError::new_err(
-            "reorder_every and inner_iterations must be at least 1",
-        ));
-    }
-    if reorder_every.is_some() && problem.ordering.sweep().is_none() {
-        return Err(PyValueError::new_err(format!(
-            "reorder_every needs one of the reordering paper's schemes (order='n', 'wqp', 'd-grvm', ...), not {order:?}"
-        )));
-    }
-    if let Some(t) = target_objective
-        && !t.is_finite()
-    {
-        return Err(PyValueError::new_err(format!(
-            "target_objective must be a finite number, got {t}"
-        )));
-    }
-    let gpu_options = GpuOptions {
-        adapter,
-        precision: self::precision(precision)?,
-        ..Default::default()
-    };
-    let use_gpu = match device {
-        "cpu" if gpu_options.precision == Precision::F32 => {
-            return Err(PyValueError::new_err(
-                "the CPU backend computes in f64; precision='f32' needs device='gpu'",
-            ));
-        }
-        "cpu" => false,
-        "gpu" => true,
-        _ => {
-            return Err(PyValueError::new_err(format!(
-                "device must be 'cpu' or 'gpu', got {device:?}"
-            )));
-        }
-    };
-    if let Some(t) = time_limit
-        && !(t >= 0.0 && t.is_finite())
-    {
-        return Err(PyValueError::new_err(format!(
-            "time_limit must be a non-negative number of seconds, got {t}"
-        )));
-    }
-    let newton = NewtonParams {
-        preconditioner: parse(preconditioner)?,
-        negative_curvature: parse(negative_curvature)?,
-        inversion_fraction,
-        ..Default::default()
-    };
-    newton.check().map_err(py_err)?;
-    let params = Params {
-        tol,
-        max_iter,
-        // a limit beyond what a Duration holds is no limit
-        time_limit: time_limit.and_then(|t| Duration::try_from_secs_f64(t).ok()),
-        target_objective,
-        bcd: solve::BcdParams {
-            reorder_every,
-            inner_iterations,
-            ..Default::default()
-        },
-        newton,
-        ..Default::default()
-    };
     // the first exception raised by the callback or a signal handler (Ctrl-C)
     let mut raised: Option<PyErr> = None;
-    let mut untangled: Option<solve::UntangleInfo> = None;
+    let mut notes: Vec<String> = Vec::new();
     let mut target_note: Option<String> = None;
-    let solved = py.detach(|| -> meshsmooth::Result<Option<solve::Info>> {
-        problem.check(&mesh)?;
-        // the default target is decided on the input, before any untangling
-        let (problem, note) = problem.resolved(&mesh)?;
-        target_note = note;
-        let ctx = if use_gpu {
-            Some(GpuContext::new(&gpu_options)?)
-        } else {
-            None
-        };
-        let opts = Options {
-            method,
-            params,
-            device: ctx.as_ref().map_or(Device::Cpu, Device::Gpu),
-            checkpoint_every: None,
-            fail_after: None,
-        };
-        let mut progress = |r: &Record| -> bool {
-            Python::attach(|py| -> PyResult<bool> {
-                py.check_signals()?;
-                let Some(cb) = &callback else { return Ok(true) };
-                let d = PyDict::new(py);
-                d.set_item("iteration", r.iteration)?;
-                d.set_item("seconds", r.seconds)?;
-                d.set_item("objective", r.objective)?;
-                d.set_item("grad_norm", r.grad_norm)?;
-                // only an explicit False stops: a callback returning None goes on
-                Ok(!cb.bind(py).call1((d,))?.is(pyo3::types::PyBool::new(py, false)))
-            })
-            .unwrap_or_else(|e| {
-                raised = Some(e);
-                false
-            })
-        };
-        // a tangled mesh is untangled first (as the CLI's smooth), unless refused
-        if untangle && !meshsmooth::metric::inverted_elements(&mesh, &mesh.points).is_empty() {
-            if let Some(msg) = solve::untangle::convention_problem(&mesh) {
-                return Err(Error::InvalidMesh(msg));
+    let solved = py.detach(|| {
+        let mut observer = |e: Event<'_>| -> bool {
+            match e {
+                Event::Start(start) => {
+                    notes.extend(start.notes.iter().cloned());
+                    target_note = start.targets.clone();
+                    true
+                }
+                Event::Iteration(r) => Python::attach(|py| -> PyResult<bool> {
+                    py.check_signals()?;
+                    let Some(cb) = &callback else { return Ok(true) };
+                    let d = PyDict::new(py);
+                    d.set_item("iteration", r.iteration)?;
+                    d.set_item("seconds", r.seconds)?;
+                    d.set_item("objective", r.objective)?;
+                    d.set_item("grad_norm", r.grad_norm)?;
+                    // only an explicit False stops: a callback returning None goes on
+                    Ok(!cb.bind(py).call1((d,))?.is(pyo3::types::PyBool::new(py, false)))
+                })
+                .unwrap_or_else(|e| {
+                    raised = Some(e);
+                    false
+                }),
+                _ => true,
             }
-            let uopts = Options {
-                method: match method {
-                    Method::Laplace => Method::Newton,
-                    m => m,
-                },
-                ..opts.clone()
-            };
-            let params = solve::UntangleParams::default();
-            untangled = Some(solve::untangle_mesh(&mut mesh, &problem, &uopts, &params, &mut |_| {
-                true
-            })?);
-        }
+        };
         if untangle_only {
-            return Ok(None);
+            smoother
+                .untangle_observed(&mut mesh, &mut observer)
+                .map(|r| (r.untangled, None))
+        } else {
+            smoother
+                .smooth_observed(&mut mesh, &mut observer)
+                .map(|r| (r.untangled, Some(r.info)))
         }
-        solve::smooth_mesh(&mut mesh, &problem, &opts, &mut progress).map(Some)
     });
     if let Some(e) = raised {
         return Err(e);
     }
-    let solved = solved.map_err(py_err)?;
+    let (untangled, solved) = solved.map_err(py_err)?;
     let untangle_dict = match &untangled {
         None => None,
         Some(u) => {
@@ -358,6 +228,7 @@ fn smooth<'py>(
         // untangle only: what untangling did, and the quality of the result
         let d = PyDict::new(py);
         d.set_item("untangle", untangle_dict)?;
+        d.set_item("notes", notes)?;
         d.set_item("quality", io::eta_field(&mesh).into_pyarray(py))?;
         d.set_item("report", report_dict(py, &mesh)?)?;
         return Ok((points_array(py, &mesh.points), d));
@@ -365,6 +236,7 @@ fn smooth<'py>(
     let d = PyDict::new(py);
     d.set_item("untangle", untangle_dict)?;
     d.set_item("targets", target_note)?;
+    d.set_item("notes", notes)?;
     d.set_item("method", info.method.name())?;
     d.set_item("device", &info.device)?;
     d.set_item("iterations", info.iterations)?;
@@ -506,6 +378,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("KIND_NAMES", names)?;
     m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(smooth, m)?)?;
+    m.add_function(wrap_pyfunction!(default_settings, m)?)?;
     m.add_function(wrap_pyfunction!(quality, m)?)?;
     m.add_function(wrap_pyfunction!(read, m)?)?;
     m.add_function(wrap_pyfunction!(write, m)?)?;

@@ -260,7 +260,9 @@ def test_gpu_device_matches_cpu(tet_box):
 def test_stopping_rules(hex_box):
     points, hexes, _ = hex_box
     assert ms.smooth(points, hexes, max_iter=1).stop == "max_iterations"
-    assert ms.smooth(points, hexes, time_limit=0.0).stop == "time_limit"
+    assert ms.smooth(points, hexes, time_limit=1e-9).stop == "time_limit"
+    with pytest.raises(ValueError, match="time_limit must be a positive number of seconds"):
+        ms.smooth(points, hexes, time_limit=0.0)
     assert ms.smooth(points, hexes, time_limit=1e300).stop == "converged"
     with pytest.raises(ValueError, match="time_limit"):
         ms.smooth(points, hexes, time_limit=-1.0)

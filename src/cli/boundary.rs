@@ -1,10 +1,7 @@
 //! `--boundary`, `--feature-angle` and the fixed-vertex rules of `smooth`.
 
 use clap::Args;
-use meshsmooth::io;
-use meshsmooth::mesh::fixing::FixRules;
 use meshsmooth::problem::{Boundary, BoundaryMode};
-use meshsmooth::{Error, Result};
 use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
@@ -31,34 +28,4 @@ pub struct BoundaryArgs {
     /// repeatable.
     #[arg(long, value_name = "FILE")]
     pub fixed_file: Vec<PathBuf>,
-}
-
-impl BoundaryArgs {
-    pub fn boundary(&self) -> Result<Boundary> {
-        let a = self.feature_angle;
-        if !(a > 0.0 && a < 180.0) {
-            return Err(Error::InvalidArgument(format!(
-                "--feature-angle must be between 0 and 180 degrees, got {a}"
-            )));
-        }
-        Ok(Boundary {
-            mode: self.boundary,
-            feature_angle: a,
-        })
-    }
-
-    pub fn rules(&self) -> Result<FixRules> {
-        let fixed_ids = self
-            .fixed_file
-            .iter()
-            .map(|p| Ok((p.display().to_string(), io::read_vertex_ids(p)?)))
-            .collect::<Result<_>>()?;
-        Ok(FixRules {
-            fix_groups: self.fix_group.clone(),
-            free_groups: self.free_group.clone(),
-            fixed_arrays: self.fixed_array.clone(),
-            fixed_ids,
-            release_facets: self.boundary == BoundaryMode::Slide,
-        })
-    }
 }

@@ -1,137 +1,19 @@
 //! The subcommands.
 
-use super::device;
 use super::progress::Progress;
-use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, SolverArgs, StopArgs, UntangleArgs};
+use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, UntangleArgs};
+use meshsmooth::Smoother;
 use meshsmooth::backend::gpu::list_adapters;
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::io::{self, Format};
-use meshsmooth::mesh::fixing::RuleCount;
 use meshsmooth::mesh::sweep_order::SweepOrder;
-use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report;
 use meshsmooth::partition::{self, Partitioner};
-use meshsmooth::problem::boundary::{VertexClass, classify};
-use meshsmooth::problem::{BoundaryMode, ProblemOptions, Target};
 use meshsmooth::report::quality_report;
-use meshsmooth::solve::{self, Info, Method, Params};
+use meshsmooth::smoother::Event;
+use meshsmooth::solve::{self, Info, Method};
 use meshsmooth::{Error, Mesh, Result, metric};
 use std::path::Path;
-use std::time::Duration;
-
-impl SolverArgs {
-    fn params(&self) -> Result<Params> {
-        let mut p = self.stop.params()?;
-        p.newton.negative_curvature = self.negative_curvature;
-        self.objective.sweep_params(&mut p)?;
-        p.newton.preconditioner = self.preconditioner;
-        p.newton.inversion_fraction = self.inversion_fraction;
-        p.newton.check()?;
-        Ok(p)
-    }
-}
-
-impl StopArgs {
-    pub(super) fn params(&self) -> Result<Params> {
-        let (tol, max_iter, time_limit) = (self.tol, self.max_iter, self.time_limit);
-        if !(tol.is_finite() && tol >= 0.0) {
-            return Err(Error::InvalidArgument(format!(
-                "--tol must be a non-negative number, got {tol}"
-            )));
-        }
-        let time_limit = match time_limit {
-            None => None,
-            Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
-            Some(t) => {
-                return Err(Error::InvalidArgument(format!(
-                    "--time-limit must be a positive number of seconds, got {t}"
-                )));
-            }
-        };
-        if let Some(t) = self.target_objective
-            && !t.is_finite()
-        {
-            return Err(Error::InvalidArgument(format!(
-                "--target-objective must be a finite number, got {t}"
-            )));
-        }
-        if !(self.tol_x.is_finite() && self.tol_x >= 0.0) {
-            return Err(Error::InvalidArgument(format!(
-                "--tol-x must be a non-negative number, got {}",
-                self.tol_x
-            )));
-        }
-        let mut params = Params {
-            tol,
-            max_iter,
-            time_limit,
-            target_objective: self.target_objective,
-            ..Params::default()
-        };
-        params.nlcg.tol_x = self.tol_x;
-        Ok(params)
-    }
-}
-
-impl ObjectiveArgs {
-    /// The sequential sweep's strategy and inner iterations into `params`.
-    pub(super) fn sweep_params(&self, params: &mut Params) -> Result<()> {
-        if self.reorder_every == Some(0) {
-            return Err(Error::InvalidArgument("--reorder-every must be at least 1".into()));
-        }
-        if self.inner_iterations == 0 {
-            return Err(Error::InvalidArgument("--inner-iterations must be at least 1".into()));
-        }
-        if self.reorder_every.is_some() && self.order.sweep().is_none() {
-            // a graph numbering is fixed when the problem is built: there is
-            // no list to reorder
-            return Err(Error::InvalidArgument(format!(
-                "--reorder-every needs one of the paper's schemes (--order n, r, wqp, gavm, grvm, lng, d-wqp, d-gavm, d-grvm, d-lng or their reverses), not '{}'",
-                self.order
-            )));
-        }
-        params.bcd.reorder_every = self.reorder_every;
-        params.bcd.inner_iterations = self.inner_iterations;
-        Ok(())
-    }
-
-    /// The reference mesh, read when given.
-    pub(super) fn reference(&self) -> Result<Option<Mesh>> {
-        let from_target = self.target.as_deref().and_then(|t| t.strip_prefix("reference:"));
-        if let (Some(_), Some(_)) = (from_target, &self.reference) {
-            return Err(Error::InvalidArgument(
-                "give the reference mesh once: --reference MESH or --target reference:MESH".into(),
-            ));
-        }
-        match from_target {
-            Some(path) => io::read(Path::new(path)).map(Some),
-            None => self.reference.as_deref().map(io::read).transpose(),
-        }
-    }
-
-    /// The `--target` spec as the library's [`Target`] (`reference:MESH`
-    /// is read as the reference mesh instead, and leaves the ideal corners).
-    fn target(&self) -> Result<Target<'_>> {
-        match self.target.as_deref() {
-            None => Ok(Target::Auto),
-            Some(s) if s.starts_with("reference:") => Ok(Target::Ideal),
-            Some(s) => Target::parse(s).map_err(|e| Error::InvalidArgument(format!("--target: {e}"))),
-        }
-    }
-
-    pub(super) fn options<'a>(&'a self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
-        let target = self.target()?;
-        Ok(ProblemOptions {
-            metric: self.metric.unwrap_or(target.default_metric()),
-            template: self.template,
-            target,
-            reference,
-            ordering: self.order,
-            order_seed: self.order_seed,
-            ..Default::default()
-        })
-    }
-}
 
 pub(super) fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
     match name {
@@ -230,196 +112,124 @@ fn newton_counts(info: &Info) -> String {
     }
 }
 
-/// Untangles a tangled `mesh` in place (a no-op for an untangled one) and
-/// prints the line saying so; with `save_partial` a failure leaves the last
-/// positions in `mesh`.
-fn untangle_phase(
-    mesh: &mut Mesh,
-    options: &ProblemOptions,
-    opts: &solve::Options,
-    save_partial: bool,
+/// What the command line prints as a run goes: the reports before, the
+/// untangling lines, the iterations (a bar on a terminal, a sparse log).
+struct Printer {
     quiet: bool,
-) -> Result<Option<solve::UntangleInfo>> {
-    let bad = metric::inverted_elements(mesh, &mesh.points);
-    if bad.is_empty() {
-        return Ok(None);
-    }
-    if !quiet {
-        println!(
-            "the input is tangled ({} inverted element(s)): untangling first (--no-untangle refuses instead)",
-            bad.len()
-        );
-    }
-    let params = solve::UntangleParams::default();
-    // the inner solves' iterations are untangling's own; the bar is smoothing's
-    let mut progress = |_: &solve::Record| true;
-    let opts = solve::Options {
-        method: match opts.method {
-            Method::Laplace => Method::Newton,
-            m => m,
-        },
-        ..opts.clone()
-    };
-    let info = if save_partial {
-        solve::untangle::untangle_mesh_partial(mesh, options, &opts, &params, &mut progress)?
-    } else {
-        solve::untangle_mesh(mesh, options, &opts, &params, &mut progress)?
-    };
-    println!(
-        "untangled {} inverted corner(s) in {} element(s) on {}: {} round(s) of eps, {} iteration(s), {:.3} s",
-        info.inverted_corners_before, info.inverted_before, info.device, info.rounds, info.iterations, info.seconds
-    );
-    Ok(Some(info))
+    max_iter: usize,
+    progress: Option<Progress>,
 }
 
-/// Smooths `mesh` in place, printing reports and iterations unless `quiet`;
-/// a tangled mesh is untangled first when `untangle` allows.
-fn run_solver(mesh: &mut Mesh, solver: &SolverArgs, quiet: bool, save_partial: bool) -> Result<Info> {
-    run_solver_untangling(mesh, solver, quiet, save_partial, false)
+impl Printer {
+    fn new(quiet: bool, max_iter: usize) -> Printer {
+        Printer {
+            quiet,
+            max_iter,
+            progress: None,
+        }
+    }
+
+    fn event(&mut self, e: Event<'_>) -> bool {
+        match e {
+            Event::Start(start) => {
+                for note in &start.notes {
+                    eprintln!("note: {note}");
+                }
+                if !self.quiet {
+                    println!("== initial mesh ==\n{}", start.quality);
+                    for c in &start.rules {
+                        println!("{}: {} vertices", c.rule, c.vertices);
+                    }
+                    if let Some(note) = &start.targets {
+                        println!("{note}\n");
+                    }
+                    if let Some(s) = &start.sliding {
+                        println!(
+                            "--boundary slide (feature angle {}°): {} vertices slide on boundary faces, {} along feature edges; {} corners fixed\n",
+                            s.feature_angle, s.surface, s.edge, s.corners
+                        );
+                    }
+                }
+            }
+            Event::Untangling { inverted } if !self.quiet => println!(
+                "the input is tangled ({inverted} inverted element(s)): untangling first (--no-untangle refuses instead)"
+            ),
+            Event::Untangled(info) => println!(
+                "untangled {} inverted corner(s) in {} element(s) on {}: {} round(s) of eps, {} iteration(s), {:.3} s",
+                info.inverted_corners_before,
+                info.inverted_before,
+                info.device,
+                info.rounds,
+                info.iterations,
+                info.seconds
+            ),
+            Event::Iteration(r) => {
+                let (max_iter, log) = (self.max_iter, !self.quiet);
+                return self
+                    .progress
+                    .get_or_insert_with(|| Progress::new(max_iter, log))
+                    .update(r);
+            }
+            _ => {}
+        }
+        true
+    }
+
+    fn finish(&mut self, last: Option<&solve::Record>) {
+        if let Some(p) = &mut self.progress {
+            p.finish(last);
+        }
+    }
 }
 
-fn run_solver_untangling(
-    mesh: &mut Mesh,
-    solver: &SolverArgs,
-    quiet: bool,
-    save_partial: bool,
-    untangle: bool,
-) -> Result<Info> {
-    let reference = solver.objective.reference()?;
-    let mut options = solver.objective.options(reference.as_ref())?;
-    options.boundary = solver.boundary.boundary()?;
-    // the rules fix vertices for this run only: the output keeps the file's own flags
-    let file_fixed = mesh.fixed.clone();
-    let rule_counts = solver.boundary.rules()?.apply(mesh)?;
-    let result = run_with_rules(mesh, solver, &options, &rule_counts, quiet, save_partial, untangle);
-    mesh.fixed = file_fixed;
-    result
-}
-
-fn run_with_rules(
-    mesh: &mut Mesh,
-    solver: &SolverArgs,
-    options: &ProblemOptions,
-    rule_counts: &[RuleCount],
-    quiet: bool,
-    save_partial: bool,
-    untangle: bool,
-) -> Result<Info> {
-    let method = solver.method;
-    let params = solver.params()?;
-    // refuse what cannot be smoothed before printing anything
-    options.check(mesh)?;
-    // the default target is decided on the input, before any untangling
-    let (resolved, target_note) = options.resolved(mesh)?;
-    let options = &resolved;
-    let bad = metric::inverted_elements(mesh, &mesh.points);
-    if !bad.is_empty() && !untangle {
-        return Err(Error::inverted(bad));
-    }
-    if let Some(msg) = (!bad.is_empty())
-        .then(|| solve::untangle::convention_problem(mesh))
-        .flatten()
-    {
-        return Err(Error::InvalidMesh(msg));
-    }
-    let untangle_method = if method == Method::Laplace {
-        Method::Newton
-    } else {
-        method
-    };
-    let choice = device::choose(solver.device, &solver.gpu, &[method, untangle_method])?;
-    let before = quality_report(mesh, &mesh.points);
-    if !quiet {
-        println!("== initial mesh ==\n{before}");
-        for c in rule_counts {
-            println!("{}: {} vertices", c.rule, c.vertices);
-        }
-        if let Some(note) = &target_note {
-            println!("{note}\n");
-        }
-        if options.boundary.mode == BoundaryMode::Slide {
-            let skin = classify(mesh, &mesh.points, options.boundary.feature_angle);
-            let count = |k: VertexClass| {
-                (0..mesh.num_points())
-                    .filter(|&v| skin.class[v] == k && (k == VertexClass::Corner || !mesh.is_fixed(v)))
-                    .count()
-            };
-            println!(
-                "--boundary slide (feature angle {}°): {} vertices slide on boundary faces, {} along feature edges; {} corners fixed\n",
-                options.boundary.feature_angle,
-                count(VertexClass::Surface),
-                count(VertexClass::Edge),
-                count(VertexClass::Corner)
-            );
-        }
-    }
-    let phase_opts = solve::Options {
-        method,
-        params: params.clone(),
-        device: choice.device(),
-        checkpoint_every: None,
-        fail_after: None,
-    };
-    untangle_phase(mesh, options, &phase_opts, save_partial, quiet)?;
-    let start = mesh.points.clone();
-    // other metrics get the paper-style table of their own values as well
-    // (the paper-style table reads reference meshes, not constructed targets)
-    let metric_before = (options.metric != MetricKind::InverseMeanRatio && !options.target.is_constructed())
-        .then(|| metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference))
-        .transpose()?;
-    let mut progress = Progress::new(params.max_iter, !quiet);
+/// Smooths `mesh` in place with `s`, printing reports and iterations unless `quiet`.
+fn run_smoother(mesh: &mut Mesh, s: &Smoother, objective: &ObjectiveArgs, quiet: bool) -> Result<Info> {
+    let mut printer = Printer::new(quiet, s.max_iter);
+    let mut observer = |e: Event<'_>| printer.event(e);
     // under mpirun the smoothing is partitioned over the ranks (untangling stays on one)
     #[cfg(feature = "mpi")]
-    let device = {
-        super::ranks::set_gpu(&choice, &solver.gpu);
-        super::ranks::device().unwrap_or(choice.device())
+    let result = match super::ranks::cluster() {
+        Some(c) => s.smooth_distributed(mesh, c, &mut observer),
+        None => s.smooth_observed(mesh, &mut observer),
     };
     #[cfg(not(feature = "mpi"))]
-    let device = choice.device();
-    let opts = solve::Options {
-        method,
-        params,
-        device,
-        checkpoint_every: save_partial.then_some(10),
-        fail_after: None,
-    };
-    let result = solve::smooth_mesh(mesh, options, &opts, &mut |r| progress.update(r));
-    progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
-    let info = result?;
+    let result = s.smooth_observed(mesh, &mut observer);
+    printer.finish(result.as_ref().ok().and_then(|r| r.info.history.last()));
+    let report = result?;
     #[cfg(feature = "mpi")]
-    if let Some(report) = super::ranks::report().filter(|_| !quiet) {
-        println!("\n{report}");
+    if let Some(ranks) = report.ranks.as_ref().filter(|_| !quiet) {
+        println!("\n{ranks}");
     }
+    let info = &report.info;
     if !quiet {
-        println!("\n== optimised mesh ==\n{}", quality_report(mesh, &mesh.points));
-        let displacement = metric_report::displacement_percent(mesh, &start, &mesh.points);
-        match &metric_before {
-            Some(b) => {
-                let after = metric_report::metric_summary(mesh, &mesh.points, options.metric, options.reference)?;
+        println!("\n== optimised mesh ==\n{}", report.quality);
+        let d = report.displacement;
+        match &report.metric {
+            Some((before, after)) => {
                 let table = metric_report::Comparison {
-                    before: b,
-                    after: &after,
-                    displacement: Some(displacement),
+                    before,
+                    after,
+                    displacement: Some(d),
                 };
                 println!("{table}");
             }
             None => println!(
                 "node displacement, % of the average local spacing: min {:.1}, avg {:.1}, max {:.1}\n",
-                displacement.min, displacement.avg, displacement.max
+                d.min, d.avg, d.max
             ),
         }
-        if let Some(change) = meshsmooth::problem::targets::first_layer_change(mesh, &start, &mesh.points) {
+        if let Some(change) = &report.first_layer {
             println!("{change}\n");
         }
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
-    println!("{}", summary(&info, f0));
-    if let Some(order) = options.ordering.sweep() {
+    println!("{}", summary(info, f0));
+    if let Some(order) = s.order.sweep() {
         if info.reorderings > 0 {
             println!(
                 "order {} ({}): COT {:.3} s, RT {:.3} s, TT {:.3} s; {} reordering(s)",
                 order.paper_name(),
-                params_strategy(&solver.objective),
+                params_strategy(objective),
                 info.optimise_seconds,
                 info.reorder_seconds,
                 info.seconds,
@@ -433,50 +243,26 @@ fn run_with_rules(
             );
         }
     }
-    Ok(info)
+    Ok(report.info)
 }
 
 /// `meshsmooth untangle`: the untangling phase alone.
 pub fn untangle(a: &UntangleArgs) -> Result<()> {
     let format = output_format(&a.output, a.format.as_deref())?;
     refuse_overwrite(&a.input, &a.output)?;
+    let settings = a.solver.smoother(true, a.save_partial)?;
     let mut mesh = io::read(&a.input)?;
     if a.drop_data {
         mesh.data = Default::default();
     }
     let start = mesh.points.clone();
     let run = |mesh: &mut Mesh| -> Result<Option<solve::UntangleInfo>> {
-        let params = a.solver.params()?;
-        let reference = a.solver.objective.reference()?;
-        let mut options = a.solver.objective.options(reference.as_ref())?;
-        options.boundary = a.solver.boundary.boundary()?;
-        options.check(mesh)?;
-        let choice = device::choose(a.solver.device, &a.solver.gpu, &[a.solver.method])?;
-        if !a.quiet {
-            println!("== initial mesh ==\n{}", quality_report(mesh, &mesh.points));
+        let mut printer = Printer::new(a.quiet, settings.max_iter);
+        let report = settings.untangle_observed(mesh, &mut |e| printer.event(e))?;
+        if !a.quiet && report.untangled.is_some() {
+            println!("\n== untangled mesh ==\n{}", report.quality);
         }
-        // the rules fix vertices for this run only: the output keeps the file's own flags
-        let file_fixed = mesh.fixed.clone();
-        let rule_counts = a.solver.boundary.rules()?.apply(mesh)?;
-        if !a.quiet {
-            for c in &rule_counts {
-                println!("{}: {} vertices", c.rule, c.vertices);
-            }
-        }
-        let opts = solve::Options {
-            method: a.solver.method,
-            params,
-            device: choice.device(),
-            checkpoint_every: None,
-            fail_after: None,
-        };
-        let info = untangle_phase(mesh, &options, &opts, a.save_partial, a.quiet);
-        mesh.fixed = file_fixed;
-        let info = info?;
-        if !a.quiet {
-            println!("\n== untangled mesh ==\n{}", quality_report(mesh, &mesh.points));
-        }
-        Ok(info)
+        Ok(report.untangled)
     };
     match run(&mut mesh).map_err(|e| io::in_file(&a.input, e)) {
         Ok(None) => println!("{}: no inverted elements; written unchanged", a.input.display()),
@@ -500,6 +286,7 @@ pub fn untangle(a: &UntangleArgs) -> Result<()> {
 }
 
 pub fn smooth(a: &SmoothArgs) -> Result<()> {
+    let settings = a.solver.smoother(!a.no_untangle, a.save_partial)?;
     let pieces = pieces_wanted(&a.output, a.pieces)?;
     let format = match pieces {
         Some(_) => piece_format(a.format.as_deref())?,
@@ -524,7 +311,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     }
     #[cfg(feature = "mpi")]
     if a.partitioner == Partitioner::Pieces {
-        return smooth_pieces(a, pieces, format);
+        return smooth_pieces(a, &settings, pieces, format);
     }
     #[cfg(feature = "mpi")]
     let mut mesh = read_on_ranks(&a.input, a.quiet)?;
@@ -534,8 +321,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         mesh.data = Default::default();
     }
     let start = mesh.points.clone();
-    let solved = run_solver_untangling(&mut mesh, &a.solver, a.quiet, a.save_partial, !a.no_untangle)
-        .map_err(|e| io::in_file(&a.input, e));
+    let solved = run_smoother(&mut mesh, &settings, &a.solver.objective, a.quiet).map_err(|e| io::in_file(&a.input, e));
     let info = match solved {
         Ok(info) => info,
         Err(e) => {
@@ -674,7 +460,7 @@ fn list(items: &[usize]) -> String {
 /// setting up its own part (`Cluster::smooth_pieces`); rank 0 never holds
 /// the whole mesh unless the output is one file.
 #[cfg(feature = "mpi")]
-fn smooth_pieces(a: &SmoothArgs, pieces: Option<Option<usize>>, format: Format) -> Result<()> {
+fn smooth_pieces(a: &SmoothArgs, settings: &Smoother, pieces: Option<Option<usize>>, format: Format) -> Result<()> {
     let refuse = |what: &str| Err(Error::Unsupported(format!("--partitioner pieces: {what}")));
     let Some(cluster) = super::ranks::cluster().filter(|c| c.size() > 1 && is_pvtu(&a.input)) else {
         return refuse(
@@ -691,10 +477,10 @@ fn smooth_pieces(a: &SmoothArgs, pieces: Option<Option<usize>>, format: Format) 
             sources.len()
         ));
     }
-    let rules = a.solver.boundary.rules()?;
-    let boundary = a.solver.boundary.boundary()?;
-    if boundary.mode != BoundaryMode::Fixed
-        || a.solver.objective.reference.is_some()
+    let rules = settings.rules()?;
+    if settings.boundary != meshsmooth::problem::BoundaryMode::Fixed
+        || settings.reference.is_some()
+        || settings.target.starts_with("reference:")
         || !(rules.fix_groups.is_empty() && rules.fixed_arrays.is_empty() && rules.fixed_ids.is_empty())
         || a.drop_data
         || a.save_partial
@@ -703,9 +489,12 @@ fn smooth_pieces(a: &SmoothArgs, pieces: Option<Option<usize>>, format: Format) 
             "only the fixed boundary, the ideal targets and the file's own fixed flags (no --boundary slide, --reference, --fix-*, --drop-data or --save-partial)",
         );
     }
-    let objective = a.solver.objective.options(None)?;
-    let params = a.solver.params()?;
-    let choice = device::choose(a.solver.device, &a.solver.gpu, &[a.solver.method])?;
+    let objective = settings.problem_options(None)?;
+    let params = settings.params()?;
+    let (backend, note) = settings.backend(&[settings.method])?;
+    if let Some(note) = note {
+        eprintln!("note: {note}");
+    }
     let job = solve::pieces::PiecesJob {
         index: a.input.clone(),
         sources,
@@ -718,7 +507,7 @@ fn smooth_pieces(a: &SmoothArgs, pieces: Option<Option<usize>>, format: Format) 
         output: a.output.clone(),
         format,
         pieces: pieces.is_some(),
-        gpu: super::ranks::rank_gpu(&choice, &a.solver.gpu),
+        gpu: super::ranks::rank_gpu(&backend, settings),
     };
     let mut progress = Progress::new(params.max_iter, !a.quiet);
     let result = cluster.smooth_pieces(&job, &mut |r| progress.update(r));
@@ -809,7 +598,8 @@ pub fn demo(a: &DemoArgs) -> Result<()> {
         "meshsmooth demo: a {n}x{n}x{n} box of {} tetrahedra, interior vertices perturbed randomly by 0.3 of the edge length\n",
         mesh.num_elements()
     );
-    run_solver(&mut mesh, &a.solver, false, false)?;
+    let settings = a.solver.smoother(true, false)?;
+    run_smoother(&mut mesh, &settings, &a.solver.objective, false)?;
     if let Some(out) = &a.output {
         io::write_mesh(out, &mesh, Format::from_path(out)?)?;
         println!("wrote {}", out.display());

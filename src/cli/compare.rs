@@ -23,17 +23,20 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     for out in [&a.csv, &a.plot].into_iter().flatten() {
         refuse_overwrite(&a.input, out)?;
     }
-    let mut params = a.stop.params()?;
-    a.objective.sweep_params(&mut params)?;
-    params.newton.preconditioner = a.preconditioner;
+    let mut settings = device::settings(a.device, &a.gpu, &a.stop, Some(&a.objective))?;
+    settings.preconditioner = a.preconditioner;
+    let params = settings.params()?;
     let mesh = io::read(&a.input)?;
-    let reference = a.objective.reference()?;
-    let options = a.objective.options(reference.as_ref())?;
+    let reference = settings.reference_mesh()?;
+    let options = settings.problem_options(reference.as_ref())?;
     // every method needs a version on the device: checked before running any
-    let choice = device::choose(a.device, &a.gpu, methods)?;
+    let (backend, note) = settings.backend(methods)?;
+    if let Some(note) = note {
+        eprintln!("note: {note}");
+    }
     let opts = Options {
         params: params.clone(),
-        device: choice.device(),
+        device: backend.device(),
         ..Default::default()
     };
     let (cmp, infos) =

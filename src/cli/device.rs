@@ -1,82 +1,143 @@
-//! Choosing where a solve runs: `--device cpu|gpu|auto`, `--precision`, `--adapter`.
+//! The command line's arguments as the library's [`Smoother`] settings, and
+//! the library's errors in the command line's words. Every check and default
+//! lives in the library; this only translates.
 
-use super::{DeviceArg, GpuArgs};
-use meshsmooth::backend::gpu::{self, GpuContext, GpuOptions, Precision};
-use meshsmooth::solve::{Device, Method};
-use meshsmooth::{Error, Result};
+use super::boundary::BoundaryArgs;
+use super::{GpuArgs, ObjectiveArgs, SolverArgs, StopArgs};
+use meshsmooth::{DeviceChoice, Error, Result, Smoother};
+use std::collections::BTreeSet;
+use std::path::Path;
 
-/// The backend picked: the CPU, or a GPU context kept alive for the run.
-pub enum Choice {
-    Cpu,
-    Gpu(Box<GpuContext>),
-}
-
-impl Choice {
-    pub fn device(&self) -> Device<'_> {
-        match self {
-            Choice::Cpu => Device::Cpu,
-            Choice::Gpu(ctx) => Device::Gpu(ctx),
-        }
+impl StopArgs {
+    fn fill(&self, s: &mut Smoother) {
+        s.tol = self.tol;
+        s.tol_x = self.tol_x;
+        s.max_iter = self.max_iter;
+        s.time_limit = self.time_limit;
+        s.target_objective = self.target_objective;
     }
 }
 
-/// Picks the backend for `methods`. `auto` takes a hardware GPU when there is
-/// one and every method runs there; software adapters (lavapipe, llvmpipe)
-/// emulate a GPU on the CPU and are slower than the CPU backend, so `auto`
-/// passes them over unless `--adapter` names one.
-pub fn choose(device: DeviceArg, gpu: &GpuArgs, methods: &[Method]) -> Result<Choice> {
-    let opts = GpuOptions {
-        adapter: gpu.adapter.clone(),
-        precision: gpu.precision,
-        ..Default::default()
+impl GpuArgs {
+    fn fill(&self, s: &mut Smoother) {
+        s.precision = self.precision;
+        s.adapter = self.adapter.clone();
+    }
+}
+
+impl ObjectiveArgs {
+    fn fill(&self, s: &mut Smoother) {
+        s.metric = self.metric;
+        s.template = self.template;
+        s.reference = self.reference.clone();
+        s.target = self.target.clone().unwrap_or_else(|| "auto".into());
+        s.order = self.order;
+        s.order_seed = self.order_seed;
+        s.reorder_every = self.reorder_every;
+        s.inner_iterations = self.inner_iterations;
+    }
+}
+
+impl BoundaryArgs {
+    fn fill(&self, s: &mut Smoother) {
+        s.boundary = self.boundary;
+        s.feature_angle = self.feature_angle;
+        s.fix_groups = self.fix_group.clone();
+        s.free_groups = self.free_group.clone();
+        s.fixed_arrays = self.fixed_array.clone();
+        s.fixed_files = self.fixed_file.clone();
+    }
+}
+
+/// The settings of `compare` and `rezone`, which have no boundary rules.
+pub fn settings(
+    device: DeviceChoice,
+    gpu: &GpuArgs,
+    stop: &StopArgs,
+    objective: Option<&ObjectiveArgs>,
+) -> Result<Smoother> {
+    let mut s = Smoother::default();
+    s.device = device;
+    gpu.fill(&mut s);
+    stop.fill(&mut s);
+    if let Some(o) = objective {
+        o.fill(&mut s);
+    }
+    s.validate()?;
+    Ok(s)
+}
+
+impl SolverArgs {
+    /// The settings of `smooth`, `untangle` and `demo`: a `--config` file's,
+    /// with the options given on the command line over them.
+    pub fn smoother(&self, untangle: bool, keep_partial: bool) -> Result<Smoother> {
+        let mut s = Smoother::default();
+        s.method = self.method;
+        s.device = self.device;
+        self.gpu.fill(&mut s);
+        self.stop.fill(&mut s);
+        self.objective.fill(&mut s);
+        self.boundary.fill(&mut s);
+        s.negative_curvature = self.negative_curvature;
+        s.preconditioner = self.preconditioner;
+        s.inversion_fraction = self.inversion_fraction;
+        s.untangle = untangle;
+        s.keep_partial = keep_partial;
+        if let Some(path) = &self.config {
+            s = over_file(path, &s, &self.given)?;
+        }
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// `file`'s settings with those of `cli` whose options were given (`given`:
+/// the clap ids of the arguments on the command line).
+fn over_file(file: &Path, cli: &Smoother, given: &BTreeSet<String>) -> Result<Smoother> {
+    let base = Smoother::from_file(file)?;
+    let to_map = |s: &Smoother| match serde_json::to_value(s).expect("settings serialise") {
+        serde_json::Value::Object(m) => m,
+        _ => unreachable!("settings serialise as an object"),
     };
-    match device {
-        DeviceArg::Cpu => {
-            if gpu.precision == Precision::F32 {
-                return Err(Error::InvalidArgument(
-                    "the CPU backend computes in f64; --precision f32 needs --device gpu".into(),
-                ));
-            }
-            Ok(Choice::Cpu)
+    let mut merged = to_map(&base);
+    for (key, value) in to_map(cli) {
+        if given.contains(arg_id(&key)) {
+            merged.insert(key, value);
         }
-        DeviceArg::Gpu => {
-            for &m in methods {
-                gpu_allowed(m)?;
-            }
-            Ok(Choice::Gpu(Box::new(GpuContext::new(&opts)?)))
-        }
-        DeviceArg::Auto => {
-            if methods.iter().any(|&m| gpu_allowed(m).is_err()) {
-                return Ok(Choice::Cpu);
-            }
-            let adapters = gpu::list_adapters();
-            let hardware = adapters.iter().any(|a| a.compute && a.device_type != "Cpu");
-            if hardware || gpu.adapter.is_some() {
-                return Ok(Choice::Gpu(Box::new(GpuContext::new(&opts)?)));
-            }
-            let found: Vec<String> = adapters
-                .iter()
-                .map(|a| format!("{} ({})", a.name, a.device_type))
-                .collect();
-            eprintln!(
-                "note: no hardware GPU found{}; running on the CPU (--device gpu uses a software adapter)",
-                if found.is_empty() {
-                    String::new()
-                } else {
-                    format!(" (adapters: {})", found.join(", "))
-                }
-            );
-            Ok(Choice::Cpu)
-        }
+    }
+    let mut s: Smoother = serde_json::from_value(serde_json::Value::Object(merged))
+        .map_err(|e| Error::InvalidArgument(format!("{}: {e}", file.display())))?;
+    s.reference_mesh = base.reference_mesh;
+    Ok(s)
+}
+
+/// The clap id of the argument that sets the settings key `key`.
+fn arg_id(key: &str) -> &str {
+    match key {
+        "fix_groups" => "fix_group",
+        "free_groups" => "free_group",
+        "fixed_arrays" => "fixed_array",
+        "fixed_files" => "fixed_file",
+        "untangle" => "no_untangle",
+        "keep_partial" => "save_partial",
+        k => k,
     }
 }
 
-/// Why `method` cannot run on the GPU, if it cannot.
-fn gpu_allowed(method: Method) -> Result<()> {
-    if method == Method::Laplace {
-        return Err(Error::InvalidArgument(format!(
-            "{method} runs on the CPU only (the GPU runs bcd, colour by colour, newton and nlcg); use --device cpu"
-        )));
+/// The flag that sets the settings key `option`.
+fn flag(option: &str) -> String {
+    format!("--{}", arg_id(option).replace('_', "-"))
+}
+
+/// An error as the command line says it: options by their flags, and how to
+/// get past a tangled input.
+pub fn words(e: &Error) -> String {
+    match e {
+        Error::InvalidOption { option, message } => format!("invalid option {}: {message}", flag(option)),
+        Error::Inverted { .. } => format!("{e} (meshsmooth untangle, or smooth without --no-untangle)"),
+        Error::Parse { msg, .. } if msg.contains("must be untangled first") => {
+            format!("{e} (meshsmooth untangle, or smooth without --no-untangle)")
+        }
+        _ => e.to_string(),
     }
-    Ok(())
 }

@@ -13,6 +13,7 @@ mod rezone;
 mod study;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use meshsmooth::DeviceChoice;
 use meshsmooth::backend::gpu::Precision;
 use meshsmooth::generate::HorseshoeKind;
 use meshsmooth::metric::corner_model::Template;
@@ -22,6 +23,7 @@ use meshsmooth::problem::Ordering;
 use meshsmooth::solve::newton::NewtonParams;
 use meshsmooth::solve::pcg::{NegativeCurvature, Preconditioner};
 use meshsmooth::solve::{Method, Params};
+use std::collections::BTreeSet;
 use std::ffi::OsString;
 use std::path::PathBuf;
 
@@ -136,8 +138,8 @@ pub struct RezoneArgs {
     #[arg(long, value_enum, default_value_t = meshsmooth::solve::rezone::DEFAULT_METHOD)]
     pub method: Method,
     /// cpu, gpu or auto (as for smooth); step 1 runs as one GPU kernel there.
-    #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
-    pub device: DeviceArg,
+    #[arg(long, value_enum, default_value_t = DeviceChoice::Auto)]
+    pub device: DeviceChoice,
     #[command(flatten)]
     pub gpu: GpuArgs,
     #[command(flatten)]
@@ -229,8 +231,8 @@ pub struct SolverArgs {
     pub method: Method,
     /// cpu: f64 on all cores; gpu: wgpu (bcd runs colour by colour); auto: a hardware GPU if
     /// there is one, else the CPU.
-    #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
-    pub device: DeviceArg,
+    #[arg(long, value_enum, default_value_t = DeviceChoice::Auto)]
+    pub device: DeviceChoice,
     #[command(flatten)]
     pub gpu: GpuArgs,
     #[command(flatten)]
@@ -253,6 +255,13 @@ pub struct SolverArgs {
     /// the step instead, as the paper's Armijo search does.
     #[arg(long, value_name = "FRACTION", default_value_t = NewtonParams::default().inversion_fraction)]
     pub inversion_fraction: f64,
+    /// Settings from a file (.toml or .json; keys as the Python keywords: method, tol,
+    /// time_limit, target, fix_groups, ...); options given on the command line override it.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// The ids of the arguments given on the command line (for --config).
+    #[arg(skip)]
+    pub given: BTreeSet<String>,
 }
 
 /// Cells of a generated box.
@@ -267,14 +276,6 @@ pub enum BoxType {
 pub enum GridType {
     Quad,
     Tri,
-}
-
-/// Where a solve runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum DeviceArg {
-    Cpu,
-    Gpu,
-    Auto,
 }
 
 /// Which GPU and what arithmetic.
@@ -363,8 +364,8 @@ pub struct CompareArgs {
     #[arg(long, value_enum, default_values_t = [Method::Bcd, Method::Newton], value_delimiter = ',')]
     pub methods: Vec<Method>,
     /// cpu, or gpu (bcd runs as the coloured sweep there; newton too).
-    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
-    pub device: DeviceArg,
+    #[arg(long, value_enum, default_value_t = DeviceChoice::Cpu)]
+    pub device: DeviceChoice,
     #[command(flatten)]
     pub gpu: GpuArgs,
     #[command(flatten)]
@@ -642,13 +643,31 @@ fn on_worker<T: Send>(f: impl FnOnce() -> T + Send) -> T {
 }
 
 fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
-    let cli = match Cli::try_parse_from(args) {
-        Ok(cli) => cli,
+    use clap::{CommandFactory, FromArgMatches};
+    let parsed = Cli::command()
+        .try_get_matches_from(args)
+        .and_then(|m| Cli::from_arg_matches(&m).map(|cli| (cli, m)));
+    let (mut cli, matches) = match parsed {
+        Ok(p) => p,
         Err(e) => {
             let _ = e.print();
             return e.exit_code();
         }
     };
+    // what --config may not override: the options given on the command line
+    if let Some((_, sub)) = matches.subcommand() {
+        let given: BTreeSet<String> = sub
+            .ids()
+            .filter(|id| sub.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine))
+            .map(|id| id.to_string())
+            .collect();
+        match &mut cli.command {
+            Some(Command::Smooth(a)) => a.solver.given = given,
+            Some(Command::Untangle(a)) => a.solver.given = given,
+            Some(Command::Demo(a)) => a.solver.given = given,
+            _ => {}
+        }
+    }
     let result = match cli.command {
         // no command: the demo with its defaults, as `meshsmooth demo` would parse them
         None => match Cli::parse_from(["meshsmooth", "demo"]).command {
@@ -669,7 +688,7 @@ fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
     match result {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", device::words(&e));
             1
         }
     }

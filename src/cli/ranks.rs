@@ -2,9 +2,9 @@
 //! with every solve partitioned over the ranks (`Device::Mpi`); the other
 //! ranks only solve the parts rank 0 sends them.
 
-use super::GpuArgs;
-use super::device::Choice;
+use meshsmooth::Smoother;
 use meshsmooth::partition::Partitioner;
+use meshsmooth::smoother::Backend;
 use meshsmooth::solve::Device;
 use meshsmooth::solve::distributed::{Cluster, RankGpu, Report, follow};
 use std::cell::Cell;
@@ -79,20 +79,11 @@ pub fn set_partitioner(partitioner: Partitioner) {
     }
 }
 
-/// Where the ranks smooth their parts: each on its own GPU context (with
-/// the same adapter and precision options) when rank 0's command runs on a
-/// GPU (`choice`), else on the CPU.
-pub fn set_gpu(choice: &Choice, gpu: &GpuArgs) {
-    if let Some(c) = CLUSTER.with(|c| c.get()) {
-        c.set_gpu(rank_gpu(choice, gpu));
-    }
-}
-
-/// Each rank's GPU options when rank 0's choice is a GPU, else `None` (the CPU).
-pub fn rank_gpu(choice: &Choice, gpu: &GpuArgs) -> Option<RankGpu> {
-    matches!(choice, Choice::Gpu(_)).then(|| RankGpu {
-        adapter: gpu.adapter.clone(),
-        precision: gpu.precision,
+/// Each rank's GPU options when rank 0's backend is a GPU, else `None` (the CPU).
+pub fn rank_gpu(backend: &Backend, settings: &Smoother) -> Option<RankGpu> {
+    matches!(backend, Backend::Gpu(_)).then(|| RankGpu {
+        adapter: settings.adapter.clone(),
+        precision: settings.precision,
     })
 }
 

@@ -30,13 +30,17 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
     };
     let mesh = io::read(&a.input)?;
     metric::refuse_inverted(&mesh).map_err(|e| io::in_file(&a.input, e))?;
-    let params = a.stop.params()?;
-    let choice = device::choose(a.device, &a.gpu, &[a.method])?;
+    let settings = device::settings(a.device, &a.gpu, &a.stop, None)?;
+    let params = settings.params()?;
+    let (backend, note) = settings.backend(&[a.method])?;
+    if let Some(note) = note {
+        eprintln!("note: {note}");
+    }
     let opts = RezoneOptions {
         solve: solve::Options {
             method: a.method,
             params,
-            device: choice.device(),
+            device: backend.device(),
             ..Default::default()
         },
         reference_iters: a.reference_iters,

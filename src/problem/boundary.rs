@@ -51,6 +51,15 @@ pub enum BoundaryMode {
 
 crate::error::from_str_by_name!(BoundaryMode: "boundary");
 
+impl std::fmt::Display for BoundaryMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BoundaryMode::Fixed => "fixed",
+            BoundaryMode::Slide => "slide",
+        })
+    }
+}
+
 /// How the boundary is treated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Boundary {

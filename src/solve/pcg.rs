@@ -60,6 +60,15 @@ pub enum Preconditioner {
 
 crate::error::from_str_by_name!(Preconditioner: "preconditioner", NegativeCurvature: "negative_curvature");
 
+impl std::fmt::Display for NegativeCurvature {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            NegativeCurvature::Direction => "direction",
+            NegativeCurvature::Iterate => "iterate",
+        })
+    }
+}
+
 impl std::fmt::Display for Preconditioner {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {

@@ -17,6 +17,18 @@ pub enum Precision {
     Auto,
 }
 
+crate::error::from_str_by_name!(Precision: "precision");
+
+impl std::fmt::Display for Precision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+            Precision::Auto => "auto",
+        })
+    }
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
     /// Substring of the adapter name (case-insensitive); the environment
