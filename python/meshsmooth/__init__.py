@@ -16,15 +16,26 @@ Example::
 
 The work is done by the Rust library (``meshsmooth._core``) with the GIL
 released; Ctrl-C stops a solve between iterations with ``KeyboardInterrupt``.
+
+numpy is the only dependency. meshio (for :func:`smooth_meshio` and
+:func:`to_meshio`) and PyVista (for :func:`smooth_pyvista`) are optional:
+those functions raise an ImportError naming the missing package.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 from typing import Any, Callable, Dict, List, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
+
+# Mesa's device-select Vulkan layer probes the display server and prints errors
+# ("XDG_RUNTIME_DIR is invalid") on headless machines; as the CLI does, turn it off
+# unless the caller set it (meshsmooth picks adapters itself). Read when wgpu first
+# creates a Vulkan instance, so it must be set before any call into _core.
+os.environ.setdefault("NODEVICE_SELECT", "1")
 
 from . import _core
 
@@ -555,6 +566,19 @@ def devices() -> List[Dict[str, Any]]:
     return list(_core.devices())
 
 
+def _optional(module: str, caller: str) -> Any:
+    """The optional dependency `module` (meshio, pyvista), imported; missing,
+    an ImportError that names it and the function that needs it."""
+    try:
+        return importlib.import_module(module)
+    except ImportError as e:
+        raise ImportError(
+            f"meshsmooth.{caller} needs the optional package {module}, which is not installed "
+            f"(pip install {module})",
+            name=module,
+        ) from e
+
+
 def from_meshio(mesh: Any) -> MeshArrays:
     """The cells of a meshio mesh that meshsmooth optimises (the blocks of
     the highest dimension), with its points; the vertices of its
@@ -587,7 +611,7 @@ def to_meshio(
     field_data: Optional[Dict[str, Any]] = None,
 ) -> Any:
     """A ``meshio.Mesh`` of points and cell blocks (needs meshio)."""
-    import meshio  # type: ignore[import-untyped, unused-ignore]
+    meshio = _optional("meshio", "to_meshio")
 
     p = _check_points(points)
     blocks = _check_cells(cells, p)
@@ -638,8 +662,8 @@ def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
     arguments are :func:`smooth`'s; ``fixed`` adds to the vertices of the
     mesh's lower-dimensional cells, which stay where they are, as do points
     no optimised cell uses. The result of the solve is on ``.meshsmooth_result``
-    of the returned mesh."""
-    import meshio  # type: ignore[import-untyped, unused-ignore]
+    of the returned mesh. Needs meshio."""
+    meshio = _optional("meshio", "smooth_meshio")
 
     points, result = _smooth_parts(
         np.asarray(mesh.points), [_block_parts(c) for c in mesh.cells], kwargs, dict(mesh.point_data)
@@ -666,6 +690,7 @@ def smooth_pyvista(grid: Any, **kwargs: Any) -> Any:
     copy with the new points and all its arrays; keyword arguments as for
     :func:`smooth`, lower-dimensional cells handled as in :func:`smooth_meshio`.
     The result of the solve is on ``.meshsmooth_result`` of the returned grid."""
+    _optional("pyvista", "smooth_pyvista")
     parts = []
     for vtk_type, data in grid.cells_dict.items():
         name = _VTK_TO_MESHIO.get(int(vtk_type))

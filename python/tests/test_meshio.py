@@ -1,11 +1,13 @@
 """The meshio adapters: data arrays survive, fixed vertices stay."""
 
 import numpy as np
-import pytest
 
 import meshsmooth as ms
 
-meshio = pytest.importorskip("meshio")
+from conftest import optional
+
+# without meshio this module skips; test_package.py checks what these functions raise then
+meshio = optional("meshio")
 
 
 def test_meshio_round_trip_keeps_data(tmp_path, tet_box):
@@ -49,7 +51,7 @@ def test_smooth_meshio_honours_fixed(tet_box):
 
 
 def test_smooth_pyvista_keeps_arrays(tet_box):
-    pv = pytest.importorskip("pyvista")
+    pv = optional("pyvista")
     points, tets, interior = tet_box
     cells = np.c_[np.full(len(tets), 4), tets].ravel()
     grid = pv.UnstructuredGrid(cells, np.full(len(tets), 10, dtype=np.uint8), points)

@@ -7,6 +7,8 @@ import pytest
 
 import meshsmooth as ms
 
+from conftest import optional
+
 NX, NY = 24, 14
 
 
@@ -89,7 +91,7 @@ def test_a_size_field_makes_elements_smaller_where_it_is_smaller():
 
 
 def test_smooth_meshio_reads_the_size_field_from_point_data():
-    meshio = pytest.importorskip("meshio")
+    meshio = optional("meshio")
     n = 12
     x, y = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1))
     points = np.c_[x.ravel(), y.ravel(), np.zeros((n + 1) ** 2)]
