@@ -531,11 +531,16 @@ impl Smoother {
                     .map(|a| format!("{} ({})", a.name, a.device_type))
                     .collect();
                 let note = format!(
-                    "no hardware GPU found{}; running on the CPU (the gpu device uses a software adapter)",
+                    "no hardware GPU found{}; running on the CPU{} (the gpu device uses a software adapter)",
                     if found.is_empty() {
                         String::new()
                     } else {
                         format!(" (adapters: {})", found.join(", "))
+                    },
+                    if self.precision == Precision::F32 {
+                        " in f64, not the f32 asked for"
+                    } else {
+                        ""
                     }
                 );
                 Ok((Backend::Cpu, Some(note)))

@@ -479,7 +479,7 @@ def untangle(
     cells: CellsLike,
     *,
     method: str = "newton",
-    metric: str = "imr",
+    metric: Optional[str] = None,
     template: str = "harmonic",
     fixed: Optional[npt.ArrayLike] = None,
     boundary: str = "fixed",

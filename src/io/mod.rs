@@ -177,8 +177,8 @@ fn sniff(data: &[u8]) -> Option<Family> {
 /// Read a mesh, detecting the format from the content (falling back to the
 /// extension), and validate it. A `.pvtu` index is read with all its pieces,
 /// merged into one mesh (see `pvtu`).
-pub fn read(path: &Path) -> Result<Mesh> {
-    read_file(path, true)
+pub fn read(path: impl AsRef<Path>) -> Result<Mesh> {
+    read_file(path.as_ref(), true)
 }
 
 /// The `.pvtu` index at `path`, its pieces read by `read_pieces` (given
