@@ -1,5 +1,6 @@
 //! The subcommands.
 
+use super::device;
 use super::progress::Progress;
 use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, UntangleArgs};
 use meshsmooth::Smoother;
@@ -138,7 +139,7 @@ impl Printer {
                 if !self.quiet {
                     println!("== initial mesh ==\n{}", start.quality);
                     for c in &start.rules {
-                        println!("{}: {} vertices", c.rule, c.vertices);
+                        println!("{} {}: {} vertices", device::flag(c.option), c.value, c.vertices);
                     }
                     if let Some(note) = &start.targets {
                         println!("{note}\n");

@@ -125,7 +125,7 @@ fn arg_id(key: &str) -> &str {
 }
 
 /// The flag that sets the settings key `option`.
-fn flag(option: &str) -> String {
+pub fn flag(option: &str) -> String {
     format!("--{}", arg_id(option).replace('_', "-"))
 }
 

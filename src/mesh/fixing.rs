@@ -34,8 +34,12 @@ pub struct FixRules {
 /// What one rule did.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RuleCount {
-    /// The rule as the command line spells it (`--fix-group inlet`).
-    pub rule: String,
+    /// The setting that made the rule (`fix_groups`, `free_groups`,
+    /// `fixed_arrays`, `fixed_files`, `boundary`: the keys of
+    /// [`Smoother`](crate::Smoother)).
+    pub option: &'static str,
+    /// What it named (`inlet`), and what it did where that is not fixing.
+    pub value: String,
     /// Vertices it fixed (or, for releases, released).
     pub vertices: usize,
 }
@@ -69,7 +73,7 @@ impl FixRules {
         let freed_tags: Vec<(String, BTreeSet<i64>)> = self
             .free_groups
             .iter()
-            .map(|g| Ok((g.clone(), group_tags(mesh, g)?)))
+            .map(|g| Ok((g.clone(), group_tags(mesh, g, "free_groups")?)))
             .collect::<Result<_>>()?;
         if !freed_tags.is_empty() || self.release_facets {
             let skin = if self.release_facets {
@@ -115,19 +119,21 @@ impl FixRules {
             }
             for (k, (g, _)) in freed_tags.iter().enumerate() {
                 report.push(RuleCount {
-                    rule: format!("--free-group {g} (released)"),
+                    option: "free_groups",
+                    value: format!("{g} (released)"),
                     vertices: counts[k],
                 });
             }
             if self.release_facets && counts[freed_tags.len()] > 0 {
                 report.push(RuleCount {
-                    rule: "--boundary slide (boundary faces of the file released)".into(),
+                    option: "boundary",
+                    value: "slide (boundary faces of the file released)".into(),
                     vertices: counts[freed_tags.len()],
                 });
             }
         }
         for g in &self.fix_groups {
-            let tags = group_tags(mesh, g)?;
+            let tags = group_tags(mesh, g, "fix_groups")?;
             let mut hit = vec![false; n];
             if let Some(a) = mesh.data.cell_array(GMSH_PHYSICAL) {
                 for e in 0..mesh.num_elements() {
@@ -143,39 +149,46 @@ impl FixRules {
                     }
                 }
             }
-            report.push(mark(&mut fixed, &hit, format!("--fix-group {g}")));
+            report.push(mark(&mut fixed, &hit, "fix_groups", g.clone()));
         }
         for name in &self.fixed_arrays {
             let a = mesh.data.point.iter().find(|a| &a.name == name).ok_or_else(|| {
                 let names: Vec<&str> = mesh.data.point.iter().map(|a| a.name.as_str()).collect();
-                Error::InvalidArgument(format!(
-                    "--fixed-array {name}: the mesh has no point array of that name (its point arrays: {})",
-                    if names.is_empty() {
-                        "none".into()
-                    } else {
-                        names.join(", ")
-                    }
-                ))
+                Error::InvalidOption {
+                    option: "fixed_arrays",
+                    message: format!(
+                        "{name}: the mesh has no point array of that name (its point arrays: {})",
+                        if names.is_empty() {
+                            "none".into()
+                        } else {
+                            names.join(", ")
+                        }
+                    ),
+                }
             })?;
             if matches!(a.values, Values::Str(_)) {
-                return Err(Error::InvalidArgument(format!(
-                    "--fixed-array {name}: the array holds strings, not numbers"
-                )));
+                return Err(Error::InvalidOption {
+                    option: "fixed_arrays",
+                    message: format!("{name}: the array holds strings, not numbers"),
+                });
             }
             let hit: Vec<bool> = (0..n).map(|v| nonzero(a, v)).collect();
-            report.push(mark(&mut fixed, &hit, format!("--fixed-array {name}")));
+            report.push(mark(&mut fixed, &hit, "fixed_arrays", name.clone()));
         }
         for (source, ids) in &self.fixed_ids {
             let mut hit = vec![false; n];
             for &v in ids {
                 if v >= n {
-                    return Err(Error::InvalidArgument(format!(
-                        "--fixed-file {source}: vertex {v} does not exist (the mesh has {n} vertices, numbered from 0)"
-                    )));
+                    return Err(Error::InvalidOption {
+                        option: "fixed_files",
+                        message: format!(
+                            "{source}: vertex {v} does not exist (the mesh has {n} vertices, numbered from 0)"
+                        ),
+                    });
                 }
                 hit[v] = true;
             }
-            report.push(mark(&mut fixed, &hit, format!("--fixed-file {source}")));
+            report.push(mark(&mut fixed, &hit, "fixed_files", source.clone()));
         }
         mesh.fixed = if fixed.iter().any(|&f| f) { fixed } else { Vec::new() };
         Ok(report)
@@ -187,7 +200,7 @@ fn nonzero(a: &DataArray, v: usize) -> bool {
     (v * k..(v + 1) * k).any(|i| a.get_f64(i) != 0.0)
 }
 
-fn mark(fixed: &mut [bool], hit: &[bool], rule: String) -> RuleCount {
+fn mark(fixed: &mut [bool], hit: &[bool], option: &'static str, value: String) -> RuleCount {
     let mut vertices = 0;
     for (f, &h) in fixed.iter_mut().zip(hit) {
         if h {
@@ -195,11 +208,15 @@ fn mark(fixed: &mut [bool], hit: &[bool], rule: String) -> RuleCount {
             vertices += 1;
         }
     }
-    RuleCount { rule, vertices }
+    RuleCount {
+        option,
+        value,
+        vertices,
+    }
 }
 
 /// The physical tags a group name or number stands for.
-fn group_tags(mesh: &Mesh, group: &str) -> Result<BTreeSet<i64>> {
+fn group_tags(mesh: &Mesh, group: &str, option: &'static str) -> Result<BTreeSet<i64>> {
     let mut present: BTreeSet<i64> = BTreeSet::new();
     for a in [
         mesh.data.cell_array(GMSH_PHYSICAL),
@@ -230,10 +247,10 @@ fn group_tags(mesh: &Mesh, group: &str) -> Result<BTreeSet<i64>> {
         Err(_) => names.iter().filter(|p| p.name == group).map(|p| p.tag as i64).collect(),
     };
     if tags.is_empty() {
-        return Err(Error::InvalidArgument(format!(
-            "no physical group '{group}' in the mesh (its groups: {})",
-            known()
-        )));
+        return Err(Error::InvalidOption {
+            option,
+            message: format!("no physical group '{group}' in the mesh (its groups: {})", known()),
+        });
     }
     Ok(tags)
 }

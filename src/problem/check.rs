@@ -29,7 +29,7 @@ impl ProblemOptions<'_> {
     pub fn check(&self, mesh: &Mesh) -> Result<()> {
         if self.metric == MetricKind::TargetShapeSize && self.reference.is_none() && !self.target.is_constructed() {
             return Err(Error::InvalidArgument(
-                "the target-matrix metric (tmp) needs a reference mesh (--reference) for its targets W".into(),
+                "the target-matrix metric (tmp) needs a reference mesh for its targets W".into(),
             ));
         }
         if self.metric == MetricKind::TargetShapeSize && self.template == Template::Average {
