@@ -1,5 +1,6 @@
-//! Helpers shared by the test files (each includes this with `mod common;`
-//! and uses what it needs).
+//! Helpers shared by the test modules: each test crate's `main.rs` includes
+//! this with `#[path = "../common/mod.rs"] mod common;`, and its modules take
+//! what they need with `use crate::common;`.
 #![allow(dead_code)]
 
 pub mod cli;
@@ -18,8 +19,8 @@ use rand_chacha::ChaCha8Rng;
 
 pub type Tet = [Vec3; 4];
 
-/// A device for the GPU tests: `None` (with the reason printed) on a machine
-/// without an adapter, so the tests skip there — except under `CI`, where a
+/// A device for the GPU tests: `None` (with the reason printed, see [`skipped`])
+/// on a machine without an adapter, so the tests skip there — except under `CI`, where a
 /// missing adapter fails them: CI installs lavapipe and must run them.
 pub fn context(precision: Precision) -> Option<GpuContext> {
     context_with(GpuOptions {
@@ -37,10 +38,21 @@ pub fn context_with(opts: GpuOptions) -> Option<GpuContext> {
         }
         Err(e) if std::env::var_os("CI").is_some() => panic!("no GPU for the GPU tests in CI: {e}"),
         Err(e) => {
-            eprintln!("skipping GPU test: {e}");
+            skipped(&format!("no GPU adapter (set CI to make this fail): {e}"));
             None
         }
     }
+}
+
+/// Says on the real stderr, past the test harness's capture (which shows a
+/// passing test's `eprintln!` only with `--nocapture`), that the running test
+/// skipped its checks and why, so that a skip is never silent.
+pub fn skipped(reason: &str) {
+    use std::io::Write;
+    let thread = std::thread::current();
+    let test = thread.name().unwrap_or("a test");
+    // one write per line, so that lines from tests on other threads do not interleave
+    let _ = std::io::stderr().write_all(format!("{test}: skipped: {reason}\n").as_bytes());
 }
 
 /// An n x n x n Kuhn box of side n (unit cells), every interior vertex

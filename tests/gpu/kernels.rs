@@ -6,7 +6,7 @@
 //! Without an adapter these tests print why and pass — except under `CI`,
 //! where they fail.
 
-mod common;
+use crate::common;
 use common::{KINDS, context, context_with, max_abs_diff, meshes, problem, rel_diff};
 
 use meshsmooth::ElementKind;

@@ -1,7 +1,7 @@
 //! Reference-Jacobian rezoning (the rezoning paper): its shape measure, the
 //! derivatives of F_RJ, step 1's local optimality, and example 1 end to end.
 
-mod common;
+use crate::common;
 
 use meshsmooth::backend::cpu::CpuBackend;
 use meshsmooth::backend::{Backend, EvalSlots, Points, Slot};

@@ -5,7 +5,7 @@ use meshsmooth::io::{self, Format};
 use meshsmooth::metric::inverted_elements;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::cli::{meshsmooth, s, text};
 
 /// A tangled tet box written (unchecked: it is inverted) to `path`.

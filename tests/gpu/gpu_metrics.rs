@@ -3,7 +3,7 @@
 //! the first Newton iterates. Without an adapter these tests print why and
 //! pass — except under `CI`, where they fail.
 
-mod common;
+use crate::common;
 use common::{KINDS, context, max_abs_diff, meshes, models, problem, solve_on};
 
 use meshsmooth::backend::Backend;

@@ -1,7 +1,7 @@
 //! The optimisers on generated meshes: convergence to the known optimum,
 //! monotone decrease, fixed boundary, feasibility, invariances.
 
-mod common;
+use crate::common;
 use common::{perturbed_box, smooth};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::mesh::topology;

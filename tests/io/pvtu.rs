@@ -4,7 +4,7 @@
 //! pieces and ids that disagree with coordinates are errors naming the piece.
 //! The plain CLI writes pieces (--pieces N) that read back as its whole output.
 
-mod common;
+use crate::common;
 
 use meshsmooth::generate::{PerturbOptions, Perturbation, mixed_block, perturb};
 use meshsmooth::io::{self, CellData, Format, GLOBAL_CELL_IDS, GLOBAL_POINT_IDS};

@@ -4,7 +4,7 @@
 //! edges, corners), a cylinder (curved side, flat caps, circular rims) and a
 //! planar grid, on the CPU and against it on the GPU.
 
-mod common;
+use crate::common;
 
 use common::{context, options};
 use meshsmooth::Mesh;

@@ -2,7 +2,7 @@
 //! changes nothing but the coordinates — the same F, the same iterations,
 //! the same mesh in the new units — for every method on the CPU and the GPU.
 
-mod common;
+use crate::common;
 use common::{context, options, perturbed_box};
 
 use meshsmooth::Mesh;

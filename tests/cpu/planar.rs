@@ -4,7 +4,7 @@
 //! plane (its constant coordinate bit for bit where it has one), fixed
 //! vertices untouched. A mesh that is not flat is refused with its deviation.
 
-mod common;
+use crate::common;
 use common::options;
 
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};

@@ -3,7 +3,7 @@
 //! enough to check by hand, the static and dynamic strategies, and that the
 //! order changes the path but not the optimum nor the output numbering.
 
-mod common;
+use crate::common;
 use meshsmooth::Mesh;
 use meshsmooth::backend::Backend;
 use meshsmooth::backend::cpu::CpuBackend;

@@ -5,7 +5,7 @@
 //! and gradient gathers follow the device's corner order), all handed back in
 //! the problem's numbering.
 
-mod common;
+use crate::common;
 use common::{context, context_with, max_abs_diff, perturbed_box, solve_on};
 
 use meshsmooth::backend::gpu::{DeviceLayout, GpuBackend, GpuOptions, Precision};

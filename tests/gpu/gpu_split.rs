@@ -5,7 +5,7 @@
 //! `gpu_matches_cpu.rs` and `gpu_newton.rs`) and the unsplit device's bit
 //! for bit (only the addressing differs).
 
-mod common;
+use crate::common;
 use common::{assert_histories_agree, context, context_with, max_abs_diff, perturbed_box, solve_on};
 
 use meshsmooth::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};

@@ -2,7 +2,6 @@
 //! more edges than recursive coordinate bisection on generated meshes, and
 //! both give every part its share of the vertices. The cuts are computed
 //! from the vertex graph here, not taken from either partitioner's report.
-#![cfg(feature = "metis")]
 
 use meshsmooth::Mesh;
 use meshsmooth::generate::{mixed_block, tet_box};

@@ -11,9 +11,8 @@
 //! rank runs its part on its own GPU context (lavapipe here, shared by the
 //! ranks): Newton, coloured BCD, NLCG, a sliding boundary and a planar mesh
 //! against one GPU process in f64, and an f32 case. Needs `mpirun` (Open MPI).
-#![cfg(feature = "mpi")]
 
-mod common;
+use crate::common;
 
 use meshsmooth::Mesh;
 use meshsmooth::backend::gpu::Precision;

@@ -3,7 +3,7 @@
 //! Without an adapter these tests print why and pass — except under `CI`,
 //! where they fail.
 
-mod common;
+use crate::common;
 use common::{assert_histories_agree, context, max_abs_diff, perturbed_box, solve_on};
 
 use meshsmooth::backend::gpu::Precision;

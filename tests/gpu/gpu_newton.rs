@@ -3,7 +3,7 @@
 //! result. (Each kernel on its own is in `kernels.rs`.) Without an adapter
 //! these tests print why and pass — except under `CI`, where they fail.
 
-mod common;
+use crate::common;
 use common::{assert_histories_agree, context, max_abs_diff, options, perturbed_box, rel_diff, solve_on};
 
 use meshsmooth::Error;
@@ -177,7 +177,7 @@ fn laplace_is_refused_on_the_gpu_and_newton_runs_there() {
     assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
 }
 
-/// Timings for the report: `cargo test --release --test gpu_newton -- --ignored --nocapture`.
+/// Timings for the report: `cargo test --release --test gpu gpu_newton:: -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn newton_timings() {

@@ -2,7 +2,7 @@
 //! coloured sweep, a full solve. Without an adapter these tests print why and
 //! pass — except under `CI`, where they fail.
 
-mod common;
+use crate::common;
 use common::{Tet, context, options, perturbed_box, random_tets, solve_on};
 
 use meshsmooth::backend::Backend;

@@ -4,7 +4,7 @@ use meshsmooth::io;
 use meshsmooth::metric::inverted_elements;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::cli::{meshsmooth, s, text};
 
 fn hex_box(dir: &Path) -> std::path::PathBuf {

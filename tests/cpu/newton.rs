@@ -1,7 +1,7 @@
 //! Inexact Newton: PCG against dense solves, negative curvature, the
 //! assembled Hessian against finite differences, agreement with BCD.
 
-mod common;
+use crate::common;
 use common::perturbed_box;
 use meshsmooth::backend::Backend;
 use meshsmooth::backend::cpu::CpuBackend;

@@ -4,7 +4,7 @@
 //! smoothed result within 1% of what smoothing reaches from an untangled
 //! start of the same mesh.
 
-mod common;
+use crate::common;
 use common::prism_stack;
 
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};

@@ -2,7 +2,7 @@
 //! reading and writing VTK polyhedra, the objective's derivatives and the
 //! solvers on polyhedra.
 
-mod common;
+use crate::common;
 use common::{options, voronoi_box};
 
 use meshsmooth::generate::{self, VoronoiOptions};

@@ -1,7 +1,7 @@
 //! `meshsmooth study newton-bcd` (the Newton vs coordinate descent paper's
 //! section 4) and the heterogeneous clipped cubes of its Table 3.
 
-mod common;
+use crate::common;
 
 use common::cli::{meshsmooth, s, text};
 use meshsmooth::generate::{HeteroOptions, hetero_tet_box};

@@ -3,7 +3,7 @@
 //! optimum for every metric and element kind, never accepts an inverted
 //! element, and stops on its step tolerance.
 
-mod common;
+use crate::common;
 use common::{KINDS, meshes, models, perturbed_box, problem, solve_on};
 
 use meshsmooth::metric;
@@ -169,7 +169,7 @@ fn a_step_below_tol_x_stops_nlcg() {
 
 /// The line search's evaluations per iteration, with the paper's fixed
 /// bracketing increment and with the doubling one, for the README:
-/// `cargo test --release --test nlcg -- --ignored --nocapture`.
+/// `cargo test --release --test cpu nlcg:: -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn nlcg_line_search_costs() {

@@ -1,7 +1,7 @@
 //! Finite-difference checks of the analytic metric derivatives, known values,
 //! and invariances of the inverse mean ratio.
 
-mod common;
+use crate::common;
 use common::Tet;
 use meshsmooth::metric::{TetShape, tet_det};
 

@@ -4,7 +4,7 @@
 //! on the GPU against the CPU's. Without an adapter these tests print why
 //! and pass — except under `CI`, where they fail.
 
-mod common;
+use crate::common;
 use common::{KINDS, context, meshes, rel_diff};
 
 use meshsmooth::backend::cpu::CpuBackend;

@@ -1,0 +1,13 @@
+//! Reading and writing meshes: round trips, bad input, other tools' files and
+//! partitioned (`.pvtu`) output.
+//!
+//! Each module is one former test crate (same file name): `cargo test --test io MODULE::`
+//! runs one.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bad_input_io;
+mod interop;
+mod io_roundtrip;
+mod pvtu;
