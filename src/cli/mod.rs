@@ -10,6 +10,7 @@ mod progress;
 #[cfg(feature = "mpi")]
 pub(crate) mod ranks;
 mod rezone;
+#[cfg(feature = "studies")]
 mod study;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -63,10 +64,12 @@ pub enum Command {
     /// shape measure (cn-paper).
     Rezone(RezoneArgs),
     /// Reproduce a paper's study on a generated mesh.
+    #[cfg(feature = "studies")]
     #[command(subcommand)]
     Study(StudyCommand),
 }
 
+#[cfg(feature = "studies")]
 #[derive(Subcommand, Debug)]
 pub enum StudyCommand {
     /// The vertex-reordering study: a baseline (N, static) for a fixed time sets the target
@@ -79,6 +82,7 @@ pub enum StudyCommand {
     NewtonBcd(NewtonStudyArgs),
 }
 
+#[cfg(feature = "studies")]
 #[derive(Args, Debug)]
 pub struct NewtonStudyArgs {
     /// Output folder (newton-study.md, newton-study.csv, ratios.csv, fig*.svg).
@@ -92,6 +96,7 @@ pub struct NewtonStudyArgs {
     pub seed: u64,
 }
 
+#[cfg(feature = "studies")]
 #[derive(Args, Debug)]
 pub struct OrderStudyArgs {
     /// Output folder (order-study.md, order-study.csv).
@@ -663,7 +668,9 @@ fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Compare(a)) => compare::compare(&a),
         Some(Command::Devices) => commands::devices(),
         Some(Command::Generate(g)) => generate::generate(&g),
+        #[cfg(feature = "studies")]
         Some(Command::Study(StudyCommand::Order(a))) => study::order(&a),
+        #[cfg(feature = "studies")]
         Some(Command::Study(StudyCommand::NewtonBcd(a))) => study::newton_bcd(&a),
     };
     match result {
