@@ -17,7 +17,6 @@
 //! apart): a BCD iteration is one coloured sweep, a Newton iteration one
 //! assembly, PCG solve and line search.
 
-use clap::ValueEnum;
 use meshsmooth::backend::gpu::{GpuContext, GpuOptions, KernelForms, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
 use meshsmooth::problem::Problem;
@@ -39,7 +38,7 @@ fn main() {
     let max_binding_bytes = arg("--max-binding-mib").map(|s| s.parse::<u64>().expect("--max-binding-mib M") << 20);
     let max_storage_buffers = arg("--max-storage-buffers").map(|s| s.parse().expect("--max-storage-buffers K"));
     let forms = arg("--forms").map_or(KernelForms::Auto, |s| {
-        KernelForms::from_str(&s, true).expect("--forms auto|closed|general")
+        s.parse::<KernelForms>().expect("--forms auto|closed|general")
     });
     let precisions = match arg("--precision").as_deref() {
         Some("f32") => vec![Precision::F32],

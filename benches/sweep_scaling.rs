@@ -65,7 +65,8 @@ fn main() {
         .map(|s| s.parse().expect("--max-tets N"))
         .unwrap_or(usize::MAX);
     let layout = arg("--layout").map_or(DeviceLayout::default(), |s| {
-        <DeviceLayout as clap::ValueEnum>::from_str(&s, true).expect("--layout by-valence|by-colour|problem")
+        s.parse::<DeviceLayout>()
+            .expect("--layout by-valence|by-colour|problem")
     });
     let listed: Option<Vec<usize>> =
         arg("--tet-sizes").map(|s| s.split(',').map(|n| n.parse().expect("--tet-sizes N,N")).collect());

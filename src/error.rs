@@ -105,29 +105,108 @@ impl Error {
     }
 }
 
-/// Parses a `clap::ValueEnum` in any case; an unknown name is an error that
-/// says which option it was for (`what`) and lists the names it takes.
-pub fn parse_value_enum<T: clap::ValueEnum>(what: &str, s: &str) -> Result<T> {
-    T::from_str(s, true).map_err(|_| {
-        let names: Vec<String> = T::value_variants()
+/// An option enum that users name by string: on the command line (where,
+/// with feature `cli`, it also derives `clap::ValueEnum` with the same
+/// names), in the Python API and in configuration files.
+pub trait Named: Sized + Copy + 'static {
+    /// Every variant that may be named, in declaration order, with its name.
+    const NAMES: &'static [(&'static str, Self)];
+
+    /// The variant called `s`, in any (ASCII) case.
+    fn by_name(s: &str) -> Option<Self> {
+        Self::NAMES
             .iter()
-            .filter_map(|v| v.to_possible_value())
-            .map(|p| format!("'{}'", p.get_name()))
-            .collect();
+            .find(|(name, _)| name.eq_ignore_ascii_case(s))
+            .map(|&(_, v)| v)
+    }
+}
+
+/// Parses a [`Named`] enum in any case; an unknown name is an error that
+/// says which option it was for (`what`) and lists the names it takes.
+pub fn parse_value_enum<T: Named>(what: &str, s: &str) -> Result<T> {
+    T::by_name(s).ok_or_else(|| {
+        let names: Vec<String> = T::NAMES.iter().map(|(name, _)| format!("'{name}'")).collect();
         Error::InvalidArgument(format!("{what} must be one of {}, got {s:?}", names.join(", ")))
     })
 }
 
-/// `FromStr` for option enums through [`parse_value_enum`], as the Python
-/// API and configuration files name them.
-macro_rules! from_str_by_name {
-    ($($t:ty: $what:literal),* $(,)?) => {$(
+/// [`Named`] for an option enum from its variants' names (clap's spelling:
+/// kebab-case unless `#[value(name = ...)]` says otherwise; a
+/// `#[value(skip)]` variant is left out) and, given the option's name
+/// (`Type: "what" { ... }`), `FromStr` through [`parse_value_enum`], as the
+/// Python API and configuration files name them. A unit test checks every
+/// table against clap's derive (feature `cli`).
+macro_rules! by_name {
+    ($t:ty { $($v:ident = $name:literal),* $(,)? }) => {
+        impl $crate::error::Named for $t {
+            const NAMES: &'static [(&'static str, Self)] = &[$(($name, <$t>::$v)),*];
+        }
+    };
+    ($t:ty: $what:literal { $($v:ident = $name:literal),* $(,)? }) => {
+        $crate::error::by_name!($t { $($v = $name),* });
         impl std::str::FromStr for $t {
             type Err = $crate::Error;
             fn from_str(s: &str) -> $crate::Result<Self> {
                 $crate::error::parse_value_enum($what, s)
             }
         }
-    )*};
+    };
 }
-pub(crate) use from_str_by_name;
+pub(crate) use by_name;
+
+/// The error of a solver whose accepted step inverted an element.
+pub(crate) fn accepted_step_inverted() -> Error {
+    Error::InvalidMesh("an accepted step inverted an element (solver bug)".into())
+}
+
+#[cfg(all(test, feature = "cli"))]
+mod tests {
+    use super::Named;
+    use clap::ValueEnum;
+
+    /// The by-name table of `T` and clap's derive name the same variants, in
+    /// the same order, with the same names and no aliases.
+    fn same_names<T: Named + ValueEnum + PartialEq + std::fmt::Debug>() {
+        let clap: Vec<(String, T)> = T::value_variants()
+            .iter()
+            .filter_map(|v| {
+                let p = v.to_possible_value()?;
+                assert_eq!(p.get_name_and_aliases().count(), 1, "{v:?} has aliases");
+                Some((p.get_name().to_string(), *v))
+            })
+            .collect();
+        let ours: Vec<(String, T)> = T::NAMES.iter().map(|(n, v)| (n.to_string(), *v)).collect();
+        assert_eq!(ours, clap, "{}", std::any::type_name::<T>());
+        for (name, v) in &ours {
+            assert_eq!(T::by_name(&name.to_uppercase()), Some(*v));
+            assert_eq!(<T as ValueEnum>::from_str(&name.to_uppercase(), true).ok(), Some(*v));
+        }
+        assert_eq!(T::by_name("no-such-name"), None);
+    }
+
+    #[test]
+    fn by_name_tables_match_the_clap_derives() {
+        use crate::generate::HorseshoeKind;
+        use crate::metric::corner_model::Template;
+        use crate::metric::smetric::MetricKind;
+        use crate::partition::Partitioner;
+        use crate::problem::BoundaryMode;
+        use crate::solve::Method;
+        use crate::solve::pcg::{NegativeCurvature, Preconditioner};
+        same_names::<Template>();
+        same_names::<MetricKind>();
+        same_names::<Partitioner>();
+        same_names::<HorseshoeKind>();
+        same_names::<BoundaryMode>();
+        same_names::<NegativeCurvature>();
+        same_names::<Preconditioner>();
+        same_names::<Method>();
+        #[cfg(feature = "gpu")]
+        {
+            use crate::backend::gpu::{DeviceLayout, KernelForms, Precision};
+            same_names::<Precision>();
+            same_names::<KernelForms>();
+            same_names::<DeviceLayout>();
+        }
+    }
+}

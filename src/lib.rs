@@ -2,17 +2,27 @@
 //!
 //! Data flows `io -> Mesh -> Problem -> solve -> positions -> io`; see the
 //! README for the command-line tool and a library example.
+//!
+//! Cargo features: `gpu` (the wgpu backend, `backend::gpu` and
+//! `solve::Device::Gpu`), `cli` (the `meshsmooth` tool; implies `gpu`),
+//! `studies` (the two papers' studies, `newton_study` and `order_study`), all
+//! on by default; `mpi` (partitioned runs, `solve::Device::Mpi`, with or
+//! without `gpu`) and `metis`. Without default features the crate is the
+//! CPU library alone.
 
 pub mod backend;
 pub mod compare;
 pub mod error;
+#[cfg(feature = "studies")]
 pub mod finding;
 pub mod generate;
 pub mod io;
 pub mod mesh;
 pub mod metric;
 pub mod metric_report;
+#[cfg(feature = "studies")]
 pub mod newton_study;
+#[cfg(feature = "studies")]
 pub mod order_study;
 pub mod partition;
 pub use backend::cpu::objective;

@@ -21,7 +21,9 @@
 //! # Ok::<(), meshsmooth::Error>(())
 //! ```
 
-use crate::backend::gpu::{self, GpuContext, GpuOptions, Precision};
+#[cfg(feature = "gpu")]
+use crate::backend::gpu::{self, GpuContext, GpuOptions};
+use crate::backend::settings::Precision;
 use crate::error::{Error, Result};
 use crate::mesh::fixing::{FixRules, RuleCount};
 use crate::metric::corner_model::Template;
@@ -40,7 +42,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Where a run goes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[non_exhaustive]
 pub enum DeviceChoice {
     /// A hardware GPU when there is one and every method of the run has a GPU
@@ -55,7 +58,7 @@ pub enum DeviceChoice {
     Gpu,
 }
 
-crate::error::from_str_by_name!(DeviceChoice: "device");
+crate::error::by_name!(DeviceChoice: "device" { Auto = "auto", Cpu = "cpu", Gpu = "gpu" });
 
 impl std::fmt::Display for DeviceChoice {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -275,6 +278,7 @@ pub enum Backend {
     /// The f64 reference backend.
     Cpu,
     /// A wgpu device.
+    #[cfg(feature = "gpu")]
     Gpu(Box<GpuContext>),
 }
 
@@ -283,6 +287,7 @@ impl Backend {
     pub fn device(&self) -> Device<'_> {
         match self {
             Backend::Cpu => Device::Cpu,
+            #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => Device::Gpu(ctx),
         }
     }
@@ -487,6 +492,7 @@ impl Smoother {
     }
 
     /// The GPU options of these settings.
+    #[cfg(feature = "gpu")]
     pub fn gpu_options(&self) -> GpuOptions {
         GpuOptions {
             adapter: self.adapter.clone(),
@@ -497,6 +503,7 @@ impl Smoother {
 
     /// Picks the backend for `methods` (see [`DeviceChoice`]); a note says
     /// why `auto` chose the CPU.
+    #[cfg_attr(not(feature = "gpu"), allow(unused_variables))]
     pub fn backend(&self, methods: &[Method]) -> Result<(Backend, Option<String>)> {
         match self.device {
             DeviceChoice::Cpu => {
@@ -508,12 +515,20 @@ impl Smoother {
                 }
                 Ok((Backend::Cpu, None))
             }
+            #[cfg(not(feature = "gpu"))]
+            DeviceChoice::Gpu => Err(Error::Unsupported(
+                "this build of meshsmooth has no GPU backend (it was built without the gpu feature)".into(),
+            )),
+            #[cfg(not(feature = "gpu"))]
+            DeviceChoice::Auto => Ok((Backend::Cpu, None)),
+            #[cfg(feature = "gpu")]
             DeviceChoice::Gpu => {
                 for &m in methods {
                     gpu_allowed(m)?;
                 }
                 Ok((Backend::Gpu(Box::new(GpuContext::new(&self.gpu_options())?)), None))
             }
+            #[cfg(feature = "gpu")]
             DeviceChoice::Auto => {
                 if let Some(m) = methods.iter().find(|&&m| gpu_allowed(m).is_err()) {
                     return Ok((
@@ -747,10 +762,7 @@ impl Smoother {
         #[cfg(feature = "mpi")]
         let device = match cluster {
             Some(c) => {
-                c.set_gpu(matches!(backend, Backend::Gpu(_)).then(|| solve::distributed::RankGpu {
-                    adapter: self.adapter.clone(),
-                    precision: self.precision,
-                }));
+                c.set_gpu(self.rank_gpu(&backend));
                 Device::Mpi(c)
             }
             None => backend.device(),
@@ -783,6 +795,21 @@ impl Smoother {
             start,
             info,
         })
+    }
+}
+
+impl Smoother {
+    /// Each MPI rank's GPU when this rank's backend is a GPU, else `None` (the CPU).
+    #[cfg(feature = "mpi")]
+    pub fn rank_gpu(&self, backend: &Backend) -> Option<solve::distributed::RankGpu> {
+        match backend {
+            Backend::Cpu => None,
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(_) => Some(solve::distributed::RankGpu {
+                adapter: self.adapter.clone(),
+                precision: self.precision,
+            }),
+        }
     }
 }
 

@@ -40,11 +40,14 @@
 pub mod cpu;
 #[cfg(feature = "mpi")]
 pub mod distributed;
+#[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod hessian_pattern;
+pub mod settings;
 
 use crate::error::Result;
 use crate::metric::mat3::Vec3;
-use crate::solve::pcg::Preconditioner;
+pub use settings::{LineSearch, Preconditioner};
 use std::time::Instant;
 
 /// Scalar slots per backend.
@@ -139,6 +142,16 @@ pub struct Visit<'a> {
     /// Where to write each visited vertex's displacement over its visit
     /// (for the movement-based reorderings); vertices not visited keep theirs.
     pub moves: Option<Vector>,
+}
+
+/// Per element: `value` (-1 when infeasible), 12 gradient and 144 Hessian
+/// entries; what `gpu::mean_ratio_eval` and its CPU twin
+/// `cpu::mean_ratio_eval` return.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ElementEval {
+    pub value: Vec<f64>,
+    pub grad: Vec<f64>,
+    pub hess: Vec<f64>,
 }
 
 /// True when a guard slot lets an update run: NaN-safe, so a NaN guard skips.
@@ -304,5 +317,118 @@ pub trait Backend {
     /// slots[out] = |a|^2
     fn norm_sq(&mut self, a: Vector, out: Slot) -> Result<()> {
         self.dot(a, a, out, None)
+    }
+}
+
+/// A boxed backend is a backend (`solve::Device::backend` hands them out):
+/// every method, the provided ones too, goes to the boxed one.
+impl<B: Backend + ?Sized> Backend for Box<B> {
+    fn describe(&self) -> String {
+        (**self).describe()
+    }
+    fn num_free(&self) -> usize {
+        (**self).num_free()
+    }
+    fn num_colors(&self) -> usize {
+        (**self).num_colors()
+    }
+    fn vector(&mut self) -> Result<Vector> {
+        (**self).vector()
+    }
+    fn read_vector(&mut self, v: Vector) -> Result<Vec<Vec3>> {
+        (**self).read_vector(v)
+    }
+    fn write_vector(&mut self, v: Vector, data: &[Vec3]) -> Result<()> {
+        (**self).write_vector(v, data)
+    }
+    fn download(&mut self) -> Result<Vec<Vec3>> {
+        (**self).download()
+    }
+    fn evaluate(&mut self, at: Points, out: EvalSlots, gradient: Option<Vector>) -> Result<()> {
+        (**self).evaluate(at, out, gradient)
+    }
+    fn trial(&mut self, alpha: Coef, d: Vector) -> Result<()> {
+        (**self).trial(alpha, d)
+    }
+    fn accept_trial(&mut self) -> Result<()> {
+        (**self).accept_trial()
+    }
+    fn inversion_fraction(&mut self, out: Slot) -> Result<()> {
+        (**self).inversion_fraction(out)
+    }
+    fn bcd_color(&mut self, color: usize) -> Result<()> {
+        (**self).bcd_color(color)
+    }
+    fn max_move(&mut self, out: Slot) -> Result<()> {
+        (**self).max_move(out)
+    }
+    fn has_sequential_sweep(&self) -> bool {
+        (**self).has_sequential_sweep()
+    }
+    fn bcd_sequential(&mut self, visit: &Visit, out: Slot, deadline: Option<Instant>) -> Result<bool> {
+        (**self).bcd_sequential(visit, out, deadline)
+    }
+    fn laplace(&mut self, out: Slot, deadline: Option<Instant>) -> Result<bool> {
+        (**self).laplace(out, deadline)
+    }
+    fn reference_positions(&mut self, iters: usize) -> Result<Vec<Vec3>> {
+        (**self).reference_positions(iters)
+    }
+    fn prepare_hessian(&mut self) -> Result<usize> {
+        (**self).prepare_hessian()
+    }
+    fn assemble(&mut self, g: Vector) -> Result<()> {
+        (**self).assemble(g)
+    }
+    fn hess_mul(&mut self, x: Vector, y: Vector) -> Result<()> {
+        (**self).hess_mul(x, y)
+    }
+    fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
+        (**self).set_preconditioner(kind)
+    }
+    fn factor_precond(&mut self) -> Result<()> {
+        (**self).factor_precond()
+    }
+    fn precond(&mut self, x: Vector, y: Vector) -> Result<()> {
+        (**self).precond(x, y)
+    }
+    fn dot(&mut self, a: Vector, b: Vector, sum: Slot, max: Option<Slot>) -> Result<()> {
+        (**self).dot(a, b, sum, max)
+    }
+    fn axpby(&mut self, a: Coef, x: Vector, b: Coef, y: Vector, guard: Option<Slot>) -> Result<()> {
+        (**self).axpby(a, x, b, y, guard)
+    }
+    fn set_slot(&mut self, dst: Slot, value: Coef, guard: Option<Slot>) -> Result<()> {
+        (**self).set_slot(dst, value, guard)
+    }
+    fn flush(&mut self) -> Result<[f64; N_SLOTS]> {
+        (**self).flush()
+    }
+    fn bytes(&self) -> usize {
+        (**self).bytes()
+    }
+    fn read_entries(&mut self, of: Entries, idx: &[u32], out: &mut Vec<f64>) -> Result<()> {
+        (**self).read_entries(of, idx, out)
+    }
+    fn write_entries(&mut self, of: Entries, idx: &[u32], data: &[f64]) -> Result<()> {
+        (**self).write_entries(of, idx, data)
+    }
+    fn restrict_sums(&mut self, free: &[u32], corners: &[u32]) -> Result<()> {
+        (**self).restrict_sums(free, corners)
+    }
+    fn past(&mut self, deadline: Instant) -> bool {
+        (**self).past(deadline)
+    }
+    fn copy(&mut self, x: Vector, y: Vector) -> Result<()> {
+        (**self).copy(x, y)
+    }
+    fn axpy(&mut self, a: Coef, x: Vector, y: Vector) -> Result<()> {
+        (**self).axpy(a, x, y)
+    }
+    fn scale(&mut self, a: Coef, y: Vector) -> Result<()> {
+        (**self).scale(a, y)
+    }
+    fn norm_sq(&mut self, a: Vector, out: Slot) -> Result<()> {
+        (**self).norm_sq(a, out)
     }
 }

@@ -508,7 +508,7 @@ fn smooth_pieces(a: &SmoothArgs, settings: &Smoother, pieces: Option<Option<usiz
         output: a.output.clone(),
         format,
         pieces: pieces.is_some(),
-        gpu: super::ranks::rank_gpu(&backend, settings),
+        gpu: settings.rank_gpu(&backend),
     };
     let mut progress = Progress::new(params.max_iter, !a.quiet);
     let result = cluster.smooth_pieces(&job, &mut |r| progress.update(r));

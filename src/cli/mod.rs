@@ -10,6 +10,7 @@ mod progress;
 #[cfg(feature = "mpi")]
 pub(crate) mod ranks;
 mod rezone;
+#[cfg(feature = "studies")]
 mod study;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -65,10 +66,12 @@ pub enum Command {
     /// shape measure (cn-paper).
     Rezone(RezoneArgs),
     /// Reproduce a paper's study on a generated mesh.
+    #[cfg(feature = "studies")]
     #[command(subcommand)]
     Study(StudyCommand),
 }
 
+#[cfg(feature = "studies")]
 #[derive(Subcommand, Debug)]
 pub enum StudyCommand {
     /// The vertex-reordering study: a baseline (N, static) for a fixed time sets the target
@@ -81,6 +84,7 @@ pub enum StudyCommand {
     NewtonBcd(NewtonStudyArgs),
 }
 
+#[cfg(feature = "studies")]
 #[derive(Args, Debug)]
 pub struct NewtonStudyArgs {
     /// Output folder (newton-study.md, newton-study.csv, ratios.csv, fig*.svg).
@@ -94,6 +98,7 @@ pub struct NewtonStudyArgs {
     pub seed: u64,
 }
 
+#[cfg(feature = "studies")]
 #[derive(Args, Debug)]
 pub struct OrderStudyArgs {
     /// Output folder (order-study.md, order-study.csv).
@@ -682,7 +687,9 @@ fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
         Some(Command::Compare(a)) => compare::compare(&a),
         Some(Command::Devices) => commands::devices(),
         Some(Command::Generate(g)) => generate::generate(&g),
+        #[cfg(feature = "studies")]
         Some(Command::Study(StudyCommand::Order(a))) => study::order(&a),
+        #[cfg(feature = "studies")]
         Some(Command::Study(StudyCommand::NewtonBcd(a))) => study::newton_bcd(&a),
     };
     match result {

@@ -2,11 +2,8 @@
 //! with every solve partitioned over the ranks (`Device::Mpi`); the other
 //! ranks only solve the parts rank 0 sends them.
 
-use meshsmooth::Smoother;
 use meshsmooth::partition::Partitioner;
-use meshsmooth::smoother::Backend;
-use meshsmooth::solve::Device;
-use meshsmooth::solve::distributed::{Cluster, RankGpu, Report, follow};
+use meshsmooth::solve::distributed::{Cluster, Report, follow};
 use std::cell::Cell;
 
 thread_local! {
@@ -57,11 +54,6 @@ fn share_cores() {
         .build_global();
 }
 
-/// The device of the solves on rank 0 of an MPI job, if this is one.
-pub fn device() -> Option<Device<'static>> {
-    CLUSTER.with(|c| c.get()).map(Device::Mpi)
-}
-
 /// This MPI job, on rank 0 while a command runs.
 pub fn cluster() -> Option<&'static Cluster> {
     CLUSTER.with(|c| c.get())
@@ -77,14 +69,6 @@ pub fn set_partitioner(partitioner: Partitioner) {
     if let Some(c) = CLUSTER.with(|c| c.get()) {
         c.set_partitioner(partitioner);
     }
-}
-
-/// Each rank's GPU options when rank 0's backend is a GPU, else `None` (the CPU).
-pub fn rank_gpu(backend: &Backend, settings: &Smoother) -> Option<RankGpu> {
-    matches!(backend, Backend::Gpu(_)).then(|| RankGpu {
-        adapter: settings.adapter.clone(),
-        precision: settings.precision,
-    })
 }
 
 /// The partition and communication report of the last solve, if it was partitioned.

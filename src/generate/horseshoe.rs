@@ -55,7 +55,7 @@ use std::str::FromStr;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Named, Result};
 use crate::mesh::{ElementKind, Mesh};
 
 /// Inner radius of the semi-annulus and of the horseshoe's bend.
@@ -78,22 +78,23 @@ const MIN_ALONG: usize = 8;
 const R_CENTRE: f64 = R_IN + 0.5 * WIDTH;
 
 /// The five mesh types of the paper's Table 1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum HorseshoeKind {
     /// Structured quads, 1:1 cells.
-    #[value(name = "sqi")]
+    #[cfg_attr(feature = "cli", value(name = "sqi"))]
     SqI,
     /// Structured quads, 1:5 cells.
-    #[value(name = "sqii")]
+    #[cfg_attr(feature = "cli", value(name = "sqii"))]
     SqII,
     /// Structured quads, 1:5 cells biased toward the inner wall.
-    #[value(name = "sqiv")]
+    #[cfg_attr(feature = "cli", value(name = "sqiv"))]
     SqIV,
     /// Unstructured triangles on a trapezoidal logical domain.
-    #[value(name = "uti")]
+    #[cfg_attr(feature = "cli", value(name = "uti"))]
     UtI,
     /// Unstructured triangles, biased toward the inner wall.
-    #[value(name = "utiv")]
+    #[cfg_attr(feature = "cli", value(name = "utiv"))]
     UtIV,
 }
 
@@ -121,6 +122,8 @@ impl HorseshoeKind {
     }
 }
 
+crate::error::by_name!(HorseshoeKind { SqI = "sqi", SqII = "sqii", SqIV = "sqiv", UtI = "uti", UtIV = "utiv" });
+
 impl fmt::Display for HorseshoeKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
@@ -132,7 +135,8 @@ impl FromStr for HorseshoeKind {
 
     /// Case-insensitive: "sqi", "sqii", "sqiv", "uti", "utiv".
     fn from_str(s: &str) -> Result<Self> {
-        <Self as clap::ValueEnum>::from_str(s.trim(), true).map_err(Error::InvalidArgument)
+        let s = s.trim();
+        <Self as Named>::by_name(s).ok_or_else(|| Error::InvalidArgument(format!("invalid variant: {s}")))
     }
 }
 

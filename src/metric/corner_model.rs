@@ -15,7 +15,8 @@ use super::shess::{SHess, TEMPLATE_SLOT};
 use super::smetric::{self, MetricKind};
 
 /// How corner values are combined into the objective.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Template {
     /// F = mean over elements of the mean corner metric (for the inverse mean
     /// ratio: the harmonic mean of the mean ratios, equation 2 of the Newton paper).
@@ -26,7 +27,7 @@ pub enum Template {
     Average,
 }
 
-crate::error::from_str_by_name!(Template: "template");
+crate::error::by_name!(Template: "template" { Harmonic = "harmonic", Average = "average" });
 
 impl std::fmt::Display for Template {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

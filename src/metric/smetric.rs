@@ -9,34 +9,35 @@ use super::mat3::{Mat3, cofactor, det};
 use super::shess::SHess;
 
 /// The element metrics meshsmooth optimises (all: lower is better).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum MetricKind {
     /// Inverse mean ratio |S|^2 / (n det(S)^(2/n)) >= 1, 1 only for S a scaled rotation.
     #[default]
-    #[value(name = "imr")]
+    #[cfg_attr(feature = "cli", value(name = "imr"))]
     InverseMeanRatio,
     /// Frobenius condition number |S| |S^-1| / n >= 1 (equal to the inverse mean ratio in 2D).
-    #[value(name = "cn")]
+    #[cfg_attr(feature = "cli", value(name = "cn"))]
     ConditionNumber,
     /// Target-matrix shape+size |S - I|^2 >= 0, 0 only when the corner equals its target.
-    #[value(name = "tmp")]
+    #[cfg_attr(feature = "cli", value(name = "tmp"))]
     TargetShapeSize,
     /// Shape and size against the targets: eta(S) + (tau - 1)^2 / tau with
     /// tau = det S, >= 1, 1 only when S is a rotation (the corner has its
     /// target's shape and size); a barrier at tau -> 0.
-    #[value(name = "shape-size")]
+    #[cfg_attr(feature = "cli", value(name = "shape-size"))]
     ShapeSize,
     /// The rezoning paper's shape measure: the Frobenius condition number
     /// |J| |J^-1| / 3 of the raw edge matrix J at every corner of every
     /// element (target: the octant corner, W = I), each corner weighted
     /// 1 / (corners in the mesh); an element's value is the mean over all its
     /// corners (its "SQM").
-    #[value(name = "cn-paper")]
+    #[cfg_attr(feature = "cli", value(name = "cn-paper"))]
     ConditionNumberPaper,
     /// The reference-Jacobian rezoning objective's corner term (equation 4 of
     /// the rezoning paper) over every corner; its per-corner references come
     /// from `rezone`, so it is not offered on the command line.
-    #[value(skip)]
+    #[cfg_attr(feature = "cli", value(skip))]
     ReferenceJacobian,
 }
 
@@ -60,7 +61,13 @@ impl MetricKind {
     }
 }
 
-crate::error::from_str_by_name!(MetricKind: "metric");
+crate::error::by_name!(MetricKind: "metric" {
+    InverseMeanRatio = "imr",
+    ConditionNumber = "cn",
+    TargetShapeSize = "tmp",
+    ShapeSize = "shape-size",
+    ConditionNumberPaper = "cn-paper",
+});
 
 impl std::fmt::Display for MetricKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -40,7 +40,8 @@ use crate::problem::Problem;
 use std::time::Duration;
 
 /// How the vertices are shared out among the parts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Partitioner {
     /// METIS 5's multilevel k-way partitioning of the vertex graph (fewest cut edges).
     Metis,
@@ -50,6 +51,8 @@ pub enum Partitioner {
     /// its own part from the pieces it reads; no rank holds the whole mesh.
     Pieces,
 }
+
+crate::error::by_name!(Partitioner: "partitioner" { Metis = "metis", Rcb = "rcb", Pieces = "pieces" });
 
 impl Default for Partitioner {
     fn default() -> Self {

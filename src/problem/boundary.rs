@@ -39,7 +39,8 @@ use crate::metric::mat3::{Mat3, Vec3, dot, sub};
 use std::collections::{HashMap, VecDeque};
 
 /// Whether boundary vertices stay where they are or slide on the boundary.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum BoundaryMode {
     /// Every skin vertex stays where it is.
     #[default]
@@ -49,7 +50,7 @@ pub enum BoundaryMode {
     Slide,
 }
 
-crate::error::from_str_by_name!(BoundaryMode: "boundary");
+crate::error::by_name!(BoundaryMode: "boundary" { Fixed = "fixed", Slide = "slide" });
 
 impl std::fmt::Display for BoundaryMode {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

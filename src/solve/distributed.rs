@@ -19,12 +19,12 @@
 //! ranks set up their own parts from a `.pvtu` input's pieces, and no rank
 //! holds the whole problem (`super::pieces`).
 
-use super::{Info, Method, Options, Params, Record, Scale, run_scaled};
+use super::{Device, Info, Method, Options, Params, Record, Scale, run_scaled};
 use crate::backend::Backend;
-use crate::backend::cpu::CpuBackend;
 use crate::backend::distributed::DistributedBackend;
 use crate::backend::distributed::comm::{self, Comm, CommStats};
-use crate::backend::gpu::{GpuBackend, GpuContext, GpuOptions, Precision};
+#[cfg(feature = "gpu")]
+use crate::backend::gpu::{GpuContext, GpuOptions, Precision};
 use crate::error::{Error, Result};
 use crate::io::{self, CellData, Format};
 use crate::mesh::Mesh;
@@ -55,10 +55,38 @@ pub struct Cluster {
 /// The GPU every rank smooths its part on (`--device gpu` under mpirun):
 /// each rank opens its own context with these options, so ranks on one
 /// machine may share one adapter.
+#[cfg(feature = "gpu")]
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RankGpu {
     pub adapter: Option<String>,
     pub precision: Precision,
+}
+
+/// Without feature `gpu` the ranks run on the CPU: there is no GPU to ask for.
+#[cfg(not(feature = "gpu"))]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum RankGpu {}
+
+/// Calls `f` with this rank's device: the CPU, or the GPU `gpu` asks for,
+/// on a context this rank opens (an error if it cannot).
+fn on_rank_device<T>(gpu: Option<&RankGpu>, f: impl FnOnce(Result<Device>) -> T) -> T {
+    match gpu {
+        None => f(Ok(Device::Cpu)),
+        #[cfg(feature = "gpu")]
+        Some(g) => {
+            let options = GpuOptions {
+                adapter: g.adapter.clone(),
+                precision: g.precision,
+                ..Default::default()
+            };
+            match GpuContext::new(&options) {
+                Ok(ctx) => f(Ok(Device::Gpu(&ctx))),
+                Err(e) => f(Err(e)),
+            }
+        }
+        #[cfg(not(feature = "gpu"))]
+        Some(g) => match *g {},
+    }
 }
 
 impl Cluster {
@@ -541,34 +569,10 @@ pub(super) fn run_part(
     let mut x = part.x.clone();
     let start = Instant::now();
     let ls = &params.bcd.line_search;
-    let (result, comm) = match gpu {
-        None => run_on(
-            world,
-            part,
-            CpuBackend::new(&part.problem, &part.x, ls),
-            &opts,
-            &mut x,
-            progress,
-        ),
-        Some(g) => {
-            let options = GpuOptions {
-                adapter: g.adapter.clone(),
-                precision: g.precision,
-                ..Default::default()
-            };
-            match GpuContext::new(&options) {
-                Ok(ctx) => run_on(
-                    world,
-                    part,
-                    GpuBackend::new(&ctx, &part.problem, &part.x, ls),
-                    &opts,
-                    &mut x,
-                    progress,
-                ),
-                Err(e) => run_on(world, part, Err::<CpuBackend, _>(e), &opts, &mut x, progress),
-            }
-        }
-    };
+    let (result, comm) = on_rank_device(gpu, |device| {
+        let inner = device.and_then(|d| d.backend(&part.problem, &part.x, ls));
+        run_on(world, part, inner, &opts, &mut x, progress)
+    });
     let owned: Vec<usize> = (0..x.len()).filter(|&l| part.owned[l]).collect();
     let outcome = Outcome {
         global: owned.iter().map(|&l| part.global[l]).collect(),

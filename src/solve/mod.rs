@@ -28,6 +28,7 @@ pub use untangle::{UntangleInfo, UntangleParams, untangle, untangle_mesh};
 use crate::Mesh;
 use crate::backend::Backend;
 use crate::backend::cpu::CpuBackend;
+#[cfg(feature = "gpu")]
 use crate::backend::gpu::{GpuBackend, GpuContext};
 use crate::error::{Error, Result};
 use crate::mesh::frame::Frame;
@@ -39,7 +40,8 @@ use nlcg::{Nlcg, NlcgParams};
 use std::time::{Duration, Instant};
 
 /// Which optimiser moves the vertices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Method {
     /// Block coordinate descent: per-vertex Newton with Armijo backtracking,
     /// one vertex at a time in locality order (on a GPU: colour by colour).
@@ -74,7 +76,13 @@ impl std::fmt::Display for Method {
     }
 }
 
-crate::error::from_str_by_name!(Method: "method");
+crate::error::by_name!(Method: "method" {
+    Bcd = "bcd",
+    BcdColored = "bcd-colored",
+    Newton = "newton",
+    Laplace = "laplace",
+    Nlcg = "nlcg",
+});
 
 /// Block coordinate descent's settings.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -154,11 +162,57 @@ pub enum Device<'a> {
     #[default]
     Cpu,
     /// A wgpu device (`GpuContext::new` picks the adapter and precision).
+    #[cfg(feature = "gpu")]
     Gpu(&'a GpuContext),
     /// The ranks of an MPI job, each on its part of the problem: on the CPU
     /// (f64), or each on a GPU (`distributed::Cluster::set_gpu`).
     #[cfg(feature = "mpi")]
     Mpi(&'a distributed::Cluster),
+    /// Never built: it keeps the lifetime in a build with neither `gpu` nor `mpi`.
+    #[doc(hidden)]
+    #[cfg(not(any(feature = "gpu", feature = "mpi")))]
+    _Never(std::convert::Infallible, std::marker::PhantomData<&'a ()>),
+}
+
+impl<'a> Device<'a> {
+    /// Whether `method` runs here: smart Laplace's sweep is sequential, and
+    /// only the CPU has it.
+    pub fn supports(self, method: Method) -> Result<()> {
+        let gpu = match self {
+            #[cfg(feature = "gpu")]
+            Device::Gpu(_) => true,
+            _ => false,
+        };
+        if gpu && method == Method::Laplace {
+            return Err(Error::InvalidArgument(
+                "method 'laplace' has no GPU version (use bcd, bcd-colored, newton or nlcg)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The backend of this device holding problem `p` and positions `x`
+    /// (problem numbering); `ls` drives the per-vertex line searches of BCD.
+    /// The ranks of an MPI job are no one backend: `solve` leads them
+    /// (`distributed::lead`), and `Device::Mpi` is refused here.
+    pub fn backend<'p>(self, p: &'p Problem, x: &[Vec3], ls: &LineSearch) -> Result<Box<dyn Backend + 'p>>
+    where
+        'a: 'p,
+    {
+        Ok(match self {
+            Device::Cpu => Box::new(CpuBackend::new(p, x, ls)?),
+            #[cfg(feature = "gpu")]
+            Device::Gpu(ctx) => Box::new(GpuBackend::new(ctx, p, x, ls)?),
+            #[cfg(feature = "mpi")]
+            Device::Mpi(_) => {
+                return Err(Error::InvalidArgument(
+                    "an MPI job's ranks are no single backend: solve on Device::Mpi leads them".into(),
+                ));
+            }
+            #[cfg(not(any(feature = "gpu", feature = "mpi")))]
+            Device::_Never(never, _) => match never {},
+        })
+    }
 }
 
 /// How a run is carried out: method, settings, device, and the guard against
@@ -250,17 +304,12 @@ pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnM
     // carries its global one in `NewtonParams`
     let ls = opts.params.bcd.line_search;
     match opts.device {
-        Device::Cpu => run(&mut CpuBackend::new(p, x, &ls)?, p, x, opts, progress),
-        Device::Gpu(ctx) => {
-            if opts.method == Method::Laplace {
-                return Err(Error::InvalidArgument(
-                    "method 'laplace' has no GPU version (use bcd, bcd-colored, newton or nlcg)".into(),
-                ));
-            }
-            run(&mut GpuBackend::new(ctx, p, x, &ls)?, p, x, opts, progress)
-        }
         #[cfg(feature = "mpi")]
         Device::Mpi(cluster) => distributed::lead(cluster, p, x, opts, progress),
+        device => {
+            device.supports(opts.method)?;
+            run(&mut device.backend(p, x, &ls)?, p, x, opts, progress)
+        }
     }
 }
 
@@ -406,9 +455,7 @@ pub(crate) fn run_scaled<B: Backend + ?Sized>(
     }
 }
 
-pub(crate) fn accepted_step_inverted() -> Error {
-    Error::InvalidMesh("an accepted step inverted an element (solver bug)".into())
-}
+pub(crate) use crate::error::accepted_step_inverted;
 
 /// Iterations without progress after which a run counts as stalled: the
 /// tolerance is below what the arithmetic can resolve (f32 on a GPU).

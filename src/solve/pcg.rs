@@ -4,6 +4,8 @@
 //! are slot expressions evaluated where the vectors live, so an iteration
 //! needs one flush (one read-back on a GPU).
 
+/// Newton's preconditioner is a backend setting (`backend::settings`).
+pub use crate::backend::settings::Preconditioner;
 use crate::backend::{Backend, Coef, Slot, Vector};
 use crate::error::Result;
 
@@ -28,7 +30,8 @@ impl Default for PcgParams {
 
 /// The answer on negative curvature met after the first iteration (at the
 /// first, both are the preconditioned right-hand side).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum NegativeCurvature {
     /// The direction p of negative curvature, oriented so that p^T b > 0
     /// (section 3.2 of the Newton paper).
@@ -39,42 +42,13 @@ pub enum NegativeCurvature {
     Iterate,
 }
 
-/// Newton's preconditioner for CG.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
-pub enum Preconditioner {
-    /// Symmetric block Gauss-Seidel where the CPU solves a planar problem,
-    /// block Jacobi everywhere else (other devices, 3D, partitioned runs).
-    /// On Mesquite's planar meshes SGS took shashkov from 99 Newton
-    /// iterations to 59 and halved its time; on tetrahedra it cost more than
-    /// it saved (README, "Against Mesquite"). The command line's default.
-    Auto,
-    /// Block Jacobi: an LDL^T of each 3x3 diagonal block (section 3.2 of the
-    /// Newton paper); every backend has it. The library's default
-    /// (`NewtonParams::default()`), so that every backend runs the same method.
-    #[default]
-    Jacobi,
-    /// Symmetric block Gauss-Seidel within fixed row ranges (CPU only):
-    /// about twice a product per application, fewer CG iterations.
-    Sgs,
-}
-
-crate::error::from_str_by_name!(Preconditioner: "preconditioner", NegativeCurvature: "negative_curvature");
+crate::error::by_name!(NegativeCurvature: "negative_curvature" { Direction = "direction", Iterate = "iterate" });
 
 impl std::fmt::Display for NegativeCurvature {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             NegativeCurvature::Direction => "direction",
             NegativeCurvature::Iterate => "iterate",
-        })
-    }
-}
-
-impl std::fmt::Display for Preconditioner {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Preconditioner::Auto => "auto",
-            Preconditioner::Jacobi => "jacobi",
-            Preconditioner::Sgs => "sgs",
         })
     }
 }

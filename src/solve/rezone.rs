@@ -22,9 +22,6 @@
 
 use super::{Device, Info, Method, Options, Params, Record, solve};
 use crate::Mesh;
-use crate::backend::Backend;
-use crate::backend::cpu::CpuBackend;
-use crate::backend::gpu::GpuBackend;
 use crate::error::{Error, Result};
 use crate::mesh::frame::Frame;
 use crate::metric::corner_model::{CornerShape, Template};
@@ -76,14 +73,14 @@ pub fn reference_positions(p: &Problem, x: &[Vec3], device: Device, iters: usize
     }
     p.check_feasible(x)?;
     let ls = Default::default();
-    match device {
-        Device::Cpu => CpuBackend::new(p, x, &ls)?.reference_positions(iters),
-        Device::Gpu(ctx) => GpuBackend::new(ctx, p, x, &ls)?.reference_positions(iters),
+    let device = match device {
         // rank 0 holds the whole problem, and step 1 moves no vertex: no
         // exchange would help it (step 2 runs on the ranks)
         #[cfg(feature = "mpi")]
-        Device::Mpi(_) => CpuBackend::new(p, x, &ls)?.reference_positions(iters),
-    }
+        Device::Mpi(_) => Device::Cpu,
+        device => device,
+    };
+    device.backend(p, x, &ls)?.reference_positions(iters)
 }
 
 /// The F_RJ problem of `mesh` (its positions are the Lagrangian ones) with

@@ -31,10 +31,8 @@
 //! targets. The template is always the harmonic one (the average template's
 //! 1 - 1/m is bounded and would let an inverted corner stay cheap).
 
-use super::{Device, Options, Record, StopReason, in_mesh_frame, run};
+use super::{Options, Record, StopReason, in_mesh_frame, run};
 use crate::Mesh;
-use crate::backend::cpu::CpuBackend;
-use crate::backend::gpu::GpuBackend;
 use crate::error::{Error, Result};
 use crate::metric::corner_model::{Model, Template};
 use crate::metric::mat3::Vec3;
@@ -256,17 +254,13 @@ pub fn untangle(
             inner.params.time_limit = Some(left);
         }
         q.model = untangling_model(p.model, eps);
-        let solved = match opts.device {
-            Device::Cpu => run(&mut CpuBackend::new(&q, x, &ls)?, &q, x, &inner, progress)?,
-            Device::Gpu(ctx) => run(&mut GpuBackend::new(ctx, &q, x, &ls)?, &q, x, &inner, progress)?,
-            #[cfg(feature = "mpi")]
-            Device::Mpi(_) => {
-                return Err(Error::InvalidArgument(
-                    "untangling runs on one process: untangle first (meshsmooth untangle), then smooth under mpirun"
-                        .into(),
-                ));
-            }
-        };
+        #[cfg(feature = "mpi")]
+        if let super::Device::Mpi(_) = opts.device {
+            return Err(Error::InvalidArgument(
+                "untangling runs on one process: untangle first (meshsmooth untangle), then smooth under mpirun".into(),
+            ));
+        }
+        let solved = run(&mut opts.device.backend(&q, x, &ls)?, &q, x, &inner, progress)?;
         info.rounds += 1;
         info.iterations += solved.iterations;
         info.device = solved.device;

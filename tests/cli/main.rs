@@ -8,4 +8,5 @@ mod common;
 
 mod cli;
 mod cli_rezone;
+mod front_ends;
 mod untangle_cli;

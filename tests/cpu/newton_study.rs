@@ -1,5 +1,6 @@
 //! `meshsmooth study newton-bcd` (the Newton vs coordinate descent paper's
 //! section 4) and the heterogeneous clipped cubes of its Table 3.
+#![cfg(feature = "studies")]
 
 use crate::common;
 

@@ -430,6 +430,7 @@ fn the_cli_takes_paper_names_in_any_case_and_refuses_unknown_ones() {
     );
 }
 
+#[cfg(feature = "studies")]
 #[test]
 fn the_order_study_writes_a_ranked_table_and_csv_for_every_scheme_and_strategy() {
     let dir = tempfile::tempdir().unwrap();

@@ -5,10 +5,10 @@
 //! locality order, which only the CPU can (the sequential BCD is CPU-only).
 
 use super::project_boundary::{constrain_block, project_vertex};
+use crate::backend::settings::LineSearch;
 use crate::metric::TetShape;
 use crate::metric::mat3::{Mat3, Vec3, dot, newton_direction};
 use crate::problem::Problem;
-use crate::solve::line_search::LineSearch;
 use rayon::prelude::*;
 use std::time::Instant;
 

@@ -3,25 +3,12 @@
 //! row-parallel product needs no write conflicts (on the GPU there are no
 //! float atomics either).
 
-use crate::metric::mat3::{Mat3, Vec3};
+use crate::metric::mat3::Vec3;
 use rayon::prelude::*;
 
-/// Symmetric block matrix: row `i` holds blocks `blocks[row_offsets[i]..row_offsets[i+1]]`
-/// at block columns `cols[..]` (sorted; the diagonal included).
-#[derive(Clone, Debug, Default)]
-pub struct BlockCsr {
-    pub row_offsets: Vec<u32>,
-    pub cols: Vec<u32>,
-    pub blocks: Vec<Mat3>,
-    /// Index of each row's diagonal block.
-    pub diag: Vec<u32>,
-}
+pub use crate::backend::hessian_pattern::BlockCsr;
 
 impl BlockCsr {
-    pub fn rows(&self) -> usize {
-        self.diag.len()
-    }
-
     /// y = A x
     pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
         y.par_iter_mut().with_min_len(512).enumerate().for_each(|(i, yi)| {
@@ -34,11 +21,5 @@ impl BlockCsr {
             }
             *yi = acc;
         });
-    }
-
-    /// Bytes held (structure and values).
-    pub fn bytes(&self) -> usize {
-        4 * (self.row_offsets.len() + self.cols.len() + self.diag.len())
-            + std::mem::size_of::<Mat3>() * self.blocks.len()
     }
 }

@@ -2,7 +2,7 @@
 //! mean ratio, its 12 gradient and 144 Hessian entries (`TetShape::hessian`),
 //! an infeasible element getting value -1 and zero derivatives.
 
-use crate::backend::gpu::ElementEval;
+use crate::backend::ElementEval;
 use crate::metric::TetShape;
 use crate::metric::mat3::Vec3;
 

@@ -28,11 +28,10 @@ pub mod set_slot;
 pub mod sym_hessian;
 
 use super::{Backend, Coef, Entries, EvalSlots, N_SLOTS, Points, Slot, Vector, Visit, guard_passes};
+use crate::backend::settings::{LineSearch, Preconditioner};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
-use crate::solve::line_search::LineSearch;
-use crate::solve::pcg::Preconditioner;
 use block_jacobi::BlockJacobi;
 use bsr_spmv::BlockCsr;
 use rayon::prelude::*;
@@ -326,7 +325,7 @@ impl Backend for CpuBackend<'_> {
             .ok_or_else(|| Error::InvalidArgument("assemble before prepare_hessian".into()))?;
         let grad = &mut self.vectors[g.0 as usize];
         if !h.assemble(p, &self.x, grad) {
-            return Err(crate::solve::accepted_step_inverted());
+            return Err(crate::error::accepted_step_inverted());
         }
         if let Some(s) = &p.sliding {
             constrain::constrain(&s.projector, &p.free_vertices, grad);

@@ -9,17 +9,11 @@
 //! vertices run in parallel. Fixed vertices are their own reference.
 
 use super::bcd::{Patch, patch_step};
+use crate::backend::settings::LineSearch;
+pub use crate::backend::settings::STEP_TOL;
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
-use crate::solve::line_search::LineSearch;
 use rayon::prelude::*;
-
-/// Newton stops once its direction is shorter than this fraction of the
-/// vertex's local size: Newton converges quadratically, so the position is
-/// then known far beyond any use, and the next steps would be decided by
-/// rounding (the line search cannot tell f apart there), which would make
-/// the answer depend on the device.
-pub const STEP_TOL: f64 = 1e-6;
 
 /// The squared local size of vertex `v`: the largest squared distance from
 /// it to a vertex of its corners (the kernel's sum order).

@@ -386,7 +386,7 @@ pub struct SymHessian {
 
 impl SymHessian {
     pub fn new(p: &Problem) -> SymHessian {
-        use super::hessian_assemble::{free_index, pattern_rows, range_corners};
+        use crate::backend::hessian_pattern::{free_index, pattern_rows, range_corners};
         let free_index = free_index(p);
         // the rows' columns after the diagonal, as the full pattern has them
         let pattern = pattern_rows(p, &free_index, true);

@@ -10,12 +10,12 @@ use super::context::{DeviceLayout, GpuContext};
 use super::layout::{CORNER_STRIDE, ELEM_STRIDE, ModelUniform, Op, corner_tables};
 use super::shader::{Access, Elem, Form, Kernel, MAX_SPLIT, Variant};
 use super::sweep_layout::SweepLayout;
-use crate::backend::cpu::hessian_assemble::HessianPattern;
+use crate::backend::hessian_pattern::HessianPattern;
+use crate::backend::settings::{LineSearch, STEP_TOL};
 use crate::backend::{Backend, Coef, Entries, EvalSlots, N_SLOTS, Points, Slot, Vector};
 use crate::error::{Error, Result};
 use crate::metric::mat3::Vec3;
 use crate::problem::Problem;
-use crate::solve::line_search::LineSearch;
 use std::collections::HashMap;
 use std::ops::Range;
 
@@ -937,7 +937,7 @@ impl Backend for GpuBackend<'_> {
         // fixed vertices are their own reference
         self.copy(Buf::X, Buf::Reference);
         if self.n_free > 0 {
-            let tol = crate::backend::cpu::reference_position::STEP_TOL;
+            let tol = STEP_TOL;
             let op = Op {
                 aux: self.max_backtracks,
                 aux2: iters as u32,

@@ -7,27 +7,7 @@ use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-/// Device arithmetic wanted by the caller.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
-pub enum Precision {
-    F32,
-    F64,
-    /// f64 where the adapter has `SHADER_F64`, else f32.
-    #[default]
-    Auto,
-}
-
-crate::error::from_str_by_name!(Precision: "precision");
-
-impl std::fmt::Display for Precision {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Precision::F32 => "f32",
-            Precision::F64 => "f64",
-            Precision::Auto => "auto",
-        })
-    }
-}
+pub use crate::backend::settings::Precision;
 
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
@@ -53,7 +33,8 @@ pub struct GpuOptions {
 /// gets where a closed form applies. The answer is the same either way
 /// (within rounding: `tests/kernels.rs`); only the speed differs, and it
 /// differs by adapter.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum KernelForms {
     /// Closed forms where they were measured to pay on this kind of adapter:
     /// every one on a software adapter (lavapipe), every one but the
@@ -70,7 +51,8 @@ pub enum KernelForms {
 
 /// The device numbering of vertices and corners (`sweep_layout.rs`); what
 /// the backend hands back is in the problem's numbering whichever is chosen.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum DeviceLayout {
     /// Each colour's vertices together in sweep order, each colour sorted by
     /// the vertices' number of corners; corners by the same order.
@@ -81,6 +63,9 @@ pub enum DeviceLayout {
     /// The problem's numbering (the layout before issue #14): for comparisons.
     Problem,
 }
+
+crate::error::by_name!(KernelForms: "forms" { Auto = "auto", Closed = "closed", General = "general" });
+crate::error::by_name!(DeviceLayout: "layout" { ByValence = "by-valence", ByColour = "by-colour", Problem = "problem" });
 
 /// One adapter as `meshsmooth devices` lists it.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -9,12 +9,7 @@ use crate::error::Result;
 use crate::metric::TetShape;
 use crate::metric::mat3::Vec3;
 
-/// Per element: `value` (-1 when infeasible), 12 gradient and 144 Hessian entries.
-pub struct ElementEval {
-    pub value: Vec<f64>,
-    pub grad: Vec<f64>,
-    pub hess: Vec<f64>,
-}
+pub use crate::backend::ElementEval;
 
 pub fn mean_ratio_eval(ctx: &GpuContext, shape: &TetShape, tets: &[[u32; 4]], x: &[Vec3]) -> Result<ElementEval> {
     let n = tets.len();
