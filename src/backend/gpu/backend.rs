@@ -66,6 +66,35 @@ enum Buf {
     HaloData(u32),
 }
 
+/// What a dispatch binds: each binding of the kernel by its name in the
+/// kernel table (the WGSL variable's), in any order (`binds!`).
+type Binds<'a> = &'a [(&'static str, Buf)];
+
+/// A [`Binds`] list: `binds![op: Buf::Ops, y: Buf::Vector(v.0)]`; a bare
+/// name binds the variable of that name (`binds![x, corners]`).
+macro_rules! binds {
+    (@one $name:ident) => {
+        (stringify!($name), $name)
+    };
+    (@one $name:ident: $buf:expr) => {
+        (stringify!($name), $buf)
+    };
+    ($($name:ident $(: $buf:expr)?),* $(,)?) => {
+        &[$(binds!(@one $name $(: $buf)?)),*]
+    };
+}
+
+/// The arrays of `binds` in the kernel table's order (checked by name:
+/// `KernelDef::in_binding_order`); the backend runs no test-only kernel.
+fn in_table_order(v: Variant, binds: Binds) -> Vec<Buf> {
+    assert!(
+        !v.kernel.is_test_only(),
+        "{}: a test-only kernel in the backend",
+        v.label()
+    );
+    v.kernel.def().in_binding_order(binds)
+}
+
 /// What a part's sums cover (`Backend::restrict_sums`): the owned corners
 /// (their records in `Buf::OwnedCorners`); the owned free entries, by
 /// zeroing the ghost entries (halo list `ghosts`) of copies in `temps`.
@@ -296,17 +325,18 @@ impl<'c> GpuBackend<'c> {
         Ok(v)
     }
 
-    /// Records one dispatch of `v` over `threads` with `bufs` bound in table
-    /// order and `op` as its `Op` record.
-    fn record(&mut self, v: Variant, bufs: &[Buf], op: Op, threads: usize) -> Result<()> {
-        let v = self.split_variant(v, bufs)?;
-        self.record_parts(v, bufs, [0; MAX_SPLIT], op, threads)
+    /// Records one dispatch of `v` over `threads` with the arrays `binds`
+    /// bound by name and `op` as its `Op` record.
+    fn record(&mut self, v: Variant, binds: Binds, op: Op, threads: usize) -> Result<()> {
+        let bufs = in_table_order(v, binds);
+        let v = self.split_variant(v, &bufs)?;
+        self.record_parts(v, &bufs, [0; MAX_SPLIT], op, threads)
     }
 
-    /// Records `v` over `units` (corners), whose data sit in `windowed`
-    /// (array, elements per unit, in ascending unit order): one dispatch
-    /// binding every part of every array where the device has the storage
-    /// bindings for it, else one dispatch per window of units, each binding
+    /// Records `v` with `binds` over `units` (corners), whose data sit in
+    /// the bindings `windowed` (name, elements per unit, in ascending unit
+    /// order): one dispatch binding every part of every array where the
+    /// device has the storage bindings for it, else one dispatch per window of units, each binding
     /// only the parts of `windowed` that its units touch (and all parts of
     /// the other arrays). `place` gives a window's `Op` and thread count: the
     /// thread-indexed kernels run the window's units, the gathers run all
@@ -318,13 +348,14 @@ impl<'c> GpuBackend<'c> {
     fn record_windowed(
         &mut self,
         v: Variant,
-        bufs: &[Buf],
+        binds: Binds,
         op: Op,
         units: usize,
-        windowed: &[(Buf, usize)],
+        windowed: &[(&str, usize)],
         align: usize,
         place: impl Fn(Op, Range<usize>) -> (Op, usize),
     ) -> Result<()> {
+        let bufs = &in_table_order(v, binds)[..];
         if let Ok(full) = self.split_variant(v, bufs) {
             let (op, threads) = place(op, 0..units);
             return self.record_parts(full, bufs, [0; MAX_SPLIT], op, threads);
@@ -333,8 +364,12 @@ impl<'c> GpuBackend<'c> {
         // (binding index, elements per part, elements per unit) of each windowed array
         let arrays: Vec<(usize, u64, u64)> = windowed
             .iter()
-            .map(|&(buf, per_unit)| {
-                let i = bufs.iter().position(|b| *b == buf).expect("a windowed array is bound");
+            .map(|&(name, per_unit)| {
+                let i = def
+                    .bindings
+                    .iter()
+                    .position(|b| b.name == name)
+                    .unwrap_or_else(|| panic!("{}: no binding '{name}' to window", def.stem));
                 let size = match def.bindings[i].elem {
                     Elem::Real => self.ctx.real_size(),
                     _ => 4,
@@ -503,7 +538,12 @@ impl<'c> GpuBackend<'c> {
             aux3: Op::slot(count),
             ..Op::n(n_partials)
         };
-        self.record(Kernel::Reduce.plain(), &[Buf::Ops, Buf::Partials, Buf::Scalars], op, 1)
+        self.record(
+            Kernel::Reduce.plain(),
+            binds![op: Buf::Ops, partials: Buf::Partials, scalars: Buf::Scalars],
+            op,
+            1,
+        )
     }
 
     fn read_vec3(&mut self, b: Buf, n: usize) -> Result<Vec<Vec3>> {
@@ -519,7 +559,13 @@ impl<'c> GpuBackend<'c> {
         }
         self.record(
             Kernel::Constrain.plain(),
-            &[Buf::Ops, Buf::SlideReal, Buf::SlideIdx, Buf::Free, Buf::Vector(g.0)],
+            binds![
+                op: Buf::Ops,
+                slide_real: Buf::SlideReal,
+                slide_idx: Buf::SlideIdx,
+                free_vertices: Buf::Free,
+                y: Buf::Vector(g.0),
+            ],
             Op::n(self.n_free),
             self.n_free,
         )
@@ -564,7 +610,7 @@ impl<'c> GpuBackend<'c> {
         match ghosts {
             Some((k, n)) => self.record(
                 Kernel::HaloScatter.plain(),
-                &[Buf::Ops, Buf::HaloIdx(k), Buf::GhostZeros, Buf::Vector(t.0)],
+                binds![op: Buf::Ops, idx: Buf::HaloIdx(k), data: Buf::GhostZeros, dst: Buf::Vector(t.0)],
                 Op::n(n),
                 n,
             ),
@@ -576,18 +622,18 @@ impl<'c> GpuBackend<'c> {
     fn objective(&mut self, x: Buf, corners: Buf, n: usize) -> Result<()> {
         self.record_windowed(
             Kernel::Objective.with(self.form),
-            &[
-                Buf::Model,
-                Buf::Ops,
+            binds![
+                model: Buf::Model,
+                op: Buf::Ops,
                 x,
                 corners,
-                Buf::Shapes,
-                Buf::CornerGrad,
-                Buf::Partials,
+                shapes: Buf::Shapes,
+                grad: Buf::CornerGrad,
+                partials: Buf::Partials,
             ],
             Op::n(n),
             n,
-            &[(corners, CORNER_STRIDE as usize), (Buf::CornerGrad, 12)],
+            &[("corners", CORNER_STRIDE as usize), ("grad", 12)],
             64,
             corner_window,
         )
@@ -638,17 +684,17 @@ impl<'c> GpuBackend<'c> {
         };
         self.record_windowed(
             Kernel::GradientGather.plain(),
-            &[
-                Buf::Ops,
-                Buf::Free,
-                Buf::IncOffsets,
-                Buf::GatherInc,
-                corner_data,
-                Buf::Vector(g.0),
+            binds![
+                op: Buf::Ops,
+                free_vertices: Buf::Free,
+                inc_offsets: Buf::IncOffsets,
+                inc_items: Buf::GatherInc,
+                elem: corner_data,
+                grad: Buf::Vector(g.0),
             ],
             op,
             nc,
-            &[(corner_data, stride as usize)],
+            &[("elem", stride as usize)],
             1,
             |op, corners| (passes(op, corners), nf),
         )
@@ -843,14 +889,27 @@ impl Backend for GpuBackend<'_> {
         };
         self.record(
             Kernel::LineSearch.plain(),
-            &[Buf::Ops, Buf::Scalars, Buf::Free, Buf::X, Buf::Vector(d.0), Buf::Trial],
+            binds![
+                op: Buf::Ops,
+                scalars: Buf::Scalars,
+                free_vertices: Buf::Free,
+                x: Buf::X,
+                d: Buf::Vector(d.0),
+                trial: Buf::Trial,
+            ],
             op,
             self.n_free,
         )?;
         if self.problem.sliding.is_some() {
             self.record(
                 Kernel::ProjectBoundary.plain(),
-                &[Buf::Ops, Buf::SlideReal, Buf::SlideIdx, Buf::Free, Buf::Trial],
+                binds![
+                    op: Buf::Ops,
+                    slide_real: Buf::SlideReal,
+                    slide_idx: Buf::SlideIdx,
+                    free_vertices: Buf::Free,
+                    x: Buf::Trial,
+                ],
                 Op::n(self.n_free),
                 self.n_free,
             )?;
@@ -867,14 +926,14 @@ impl Backend for GpuBackend<'_> {
         let nc = self.n_corners;
         self.record(
             Kernel::Inversion.plain(),
-            &[
-                Buf::Model,
-                Buf::Ops,
-                Buf::X,
-                Buf::Corners,
-                Buf::Shapes,
-                Buf::Trial,
-                Buf::Partials,
+            binds![
+                model: Buf::Model,
+                op: Buf::Ops,
+                x: Buf::X,
+                corners: Buf::Corners,
+                shapes: Buf::Shapes,
+                trial: Buf::Trial,
+                partials: Buf::Partials,
             ],
             Op::n(nc),
             nc,
@@ -894,19 +953,19 @@ impl Backend for GpuBackend<'_> {
         };
         self.record(
             Kernel::Bcd.with(self.form),
-            &[
-                Buf::Model,
-                Buf::LineSearch,
-                Buf::Ops,
-                Buf::X,
-                Buf::Corners,
-                Buf::Shapes,
-                Buf::IncOffsets,
-                Buf::Inc,
-                Buf::Colors,
-                Buf::Moves,
-                Buf::SlideReal,
-                Buf::SlideIdx,
+            binds![
+                model: Buf::Model,
+                ls: Buf::LineSearch,
+                op: Buf::Ops,
+                x: Buf::X,
+                corners: Buf::Corners,
+                shapes: Buf::Shapes,
+                inc_offsets: Buf::IncOffsets,
+                inc_items: Buf::Inc,
+                colors: Buf::Colors,
+                moves: Buf::Moves,
+                slide_real: Buf::SlideReal,
+                slide_idx: Buf::SlideIdx,
             ],
             op,
             count as usize,
@@ -917,7 +976,7 @@ impl Backend for GpuBackend<'_> {
         let nv = self.n_vertices;
         self.record(
             Kernel::Dot.plain(),
-            &[Buf::Ops, Buf::Moves, Buf::Moves, Buf::Partials],
+            binds![op: Buf::Ops, a: Buf::Moves, b: Buf::Moves, partials: Buf::Partials],
             Op::n(nv),
             nv,
         )?;
@@ -946,17 +1005,17 @@ impl Backend for GpuBackend<'_> {
             };
             self.record(
                 Kernel::ReferencePosition.with(self.form),
-                &[
-                    Buf::Model,
-                    Buf::LineSearch,
-                    Buf::Ops,
-                    Buf::X,
-                    Buf::Corners,
-                    Buf::Shapes,
-                    Buf::IncOffsets,
-                    Buf::Inc,
-                    Buf::Free,
-                    Buf::Reference,
+                binds![
+                    model: Buf::Model,
+                    ls: Buf::LineSearch,
+                    op: Buf::Ops,
+                    x: Buf::X,
+                    corners: Buf::Corners,
+                    shapes: Buf::Shapes,
+                    inc_offsets: Buf::IncOffsets,
+                    inc_items: Buf::Inc,
+                    free_vertices: Buf::Free,
+                    xr: Buf::Reference,
                 ],
                 op,
                 self.n_free,
@@ -1008,19 +1067,32 @@ impl Backend for GpuBackend<'_> {
         let elem = ELEM_STRIDE as usize;
         self.record_windowed(
             Kernel::HessianAssemble.with(self.form),
-            &[Buf::Model, Buf::Ops, Buf::X, Buf::Corners, Buf::Shapes, Buf::Elem],
+            binds![
+                model: Buf::Model,
+                op: Buf::Ops,
+                x: Buf::X,
+                corners: Buf::Corners,
+                shapes: Buf::Shapes,
+                elem: Buf::Elem,
+            ],
             Op::n(nc),
             nc,
-            &[(Buf::Corners, CORNER_STRIDE as usize), (Buf::Elem, elem)],
+            &[("corners", CORNER_STRIDE as usize), ("elem", elem)],
             1,
             corner_window,
         )?;
         self.record_windowed(
             Kernel::HessianGather.plain(),
-            &[Buf::Ops, Buf::ContribOffsets, Buf::ContribItems, Buf::Elem, Buf::Blocks],
+            binds![
+                op: Buf::Ops,
+                contrib_offsets: Buf::ContribOffsets,
+                contrib_items: Buf::ContribItems,
+                elem: Buf::Elem,
+                blocks: Buf::Blocks,
+            ],
             Op::n(nb),
             nc,
-            &[(Buf::Elem, elem)],
+            &[("elem", elem)],
             1,
             |op, corners| (passes(op, corners), nb),
         )?;
@@ -1029,15 +1101,15 @@ impl Backend for GpuBackend<'_> {
             self.constrain(g)?;
             self.record(
                 Kernel::ConstrainBlocks.plain(),
-                &[
-                    Buf::Ops,
-                    Buf::SlideReal,
-                    Buf::SlideIdx,
-                    Buf::Free,
-                    Buf::RowOffsets,
-                    Buf::Cols,
-                    Buf::Diag,
-                    Buf::Blocks,
+                binds![
+                    op: Buf::Ops,
+                    slide_real: Buf::SlideReal,
+                    slide_idx: Buf::SlideIdx,
+                    free_vertices: Buf::Free,
+                    row_offsets: Buf::RowOffsets,
+                    cols: Buf::Cols,
+                    diag: Buf::Diag,
+                    blocks: Buf::Blocks,
                 ],
                 Op::n(nf),
                 nf,
@@ -1050,13 +1122,13 @@ impl Backend for GpuBackend<'_> {
         let nf = self.n_free;
         self.record(
             Kernel::BsrSpmv.plain(),
-            &[
-                Buf::Ops,
-                Buf::RowOffsets,
-                Buf::Cols,
-                Buf::Blocks,
-                Buf::Vector(x.0),
-                Buf::Vector(y.0),
+            binds![
+                op: Buf::Ops,
+                row_offsets: Buf::RowOffsets,
+                cols: Buf::Cols,
+                blocks: Buf::Blocks,
+                x: Buf::Vector(x.0),
+                y: Buf::Vector(y.0),
             ],
             Op::n(nf),
             nf,
@@ -1067,7 +1139,7 @@ impl Backend for GpuBackend<'_> {
         let nf = self.n_free;
         self.record(
             Kernel::BlockJacobiFactor.plain(),
-            &[Buf::Ops, Buf::Blocks, Buf::Diag, Buf::Factors],
+            binds![op: Buf::Ops, blocks: Buf::Blocks, diag: Buf::Diag, factors: Buf::Factors],
             Op::n(nf),
             nf,
         )
@@ -1077,7 +1149,7 @@ impl Backend for GpuBackend<'_> {
         let nf = self.n_free;
         self.record(
             Kernel::BlockJacobi.plain(),
-            &[Buf::Ops, Buf::Factors, Buf::Vector(x.0), Buf::Vector(y.0)],
+            binds![op: Buf::Ops, factors: Buf::Factors, x: Buf::Vector(x.0), y: Buf::Vector(y.0)],
             Op::n(nf),
             nf,
         )
@@ -1100,7 +1172,7 @@ impl Backend for GpuBackend<'_> {
         };
         self.record(
             Kernel::Dot.plain(),
-            &[Buf::Ops, Buf::Vector(a.0), Buf::Vector(b.0), Buf::Partials],
+            binds![op: Buf::Ops, a: Buf::Vector(a.0), b: Buf::Vector(b.0), partials: Buf::Partials],
             Op::n(nf),
             nf,
         )?;
@@ -1118,7 +1190,7 @@ impl Backend for GpuBackend<'_> {
         };
         self.record(
             Kernel::Axpby.plain(),
-            &[Buf::Ops, Buf::Scalars, xb, Buf::Vector(y.0)],
+            binds![op: Buf::Ops, scalars: Buf::Scalars, x: xb, y: Buf::Vector(y.0)],
             op,
             self.n_free,
         )
@@ -1131,7 +1203,12 @@ impl Backend for GpuBackend<'_> {
             a: value,
             ..Op::n(1)
         };
-        self.record(Kernel::SetSlot.plain(), &[Buf::Ops, Buf::Scalars], op, 1)
+        self.record(
+            Kernel::SetSlot.plain(),
+            binds![op: Buf::Ops, scalars: Buf::Scalars],
+            op,
+            1,
+        )
     }
 
     fn flush(&mut self) -> Result<[f64; N_SLOTS]> {
@@ -1155,7 +1232,7 @@ impl Backend for GpuBackend<'_> {
         let n = idx.len();
         self.record(
             Kernel::HaloGather.plain(),
-            &[Buf::Ops, Buf::HaloIdx(k), src, Buf::HaloData(k)],
+            binds![op: Buf::Ops, idx: Buf::HaloIdx(k), src, dst: Buf::HaloData(k)],
             Op::n(n),
             n,
         )?;
@@ -1183,7 +1260,7 @@ impl Backend for GpuBackend<'_> {
         let n = idx.len();
         self.record(
             Kernel::HaloScatter.plain(),
-            &[Buf::Ops, Buf::HaloIdx(k), Buf::HaloData(k), dst],
+            binds![op: Buf::Ops, idx: Buf::HaloIdx(k), data: Buf::HaloData(k), dst],
             Op::n(n),
             n,
         )

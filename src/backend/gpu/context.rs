@@ -368,9 +368,16 @@ impl GpuContext {
         (Op::size(self.real) as u64).div_ceil(align) * align
     }
 
-    /// `bind` with one buffer per binding.
-    pub(crate) fn bind_each(&self, v: Variant, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let parts: Vec<&[wgpu::Buffer]> = buffers.iter().map(|b| std::slice::from_ref(*b)).collect();
+    /// `bind` with one buffer per binding, each given with its name in the
+    /// kernel table (`KernelDef::in_binding_order`).
+    pub(crate) fn bind_each(&self, v: Variant, buffers: &[(&str, &wgpu::Buffer)]) -> wgpu::BindGroup {
+        let parts: Vec<&[wgpu::Buffer]> = v
+            .kernel
+            .def()
+            .in_binding_order(buffers)
+            .into_iter()
+            .map(std::slice::from_ref)
+            .collect();
         self.bind(v, &parts)
     }
 

@@ -7,11 +7,11 @@ pub mod backend;
 pub mod buffers;
 pub mod context;
 pub(crate) mod layout;
-pub mod mean_ratio_eval;
+pub mod probes;
 pub mod shader;
 pub(crate) mod sweep_layout;
 
 pub use backend::GpuBackend;
 pub use buffers::{BindingLimits, check_bindings};
 pub use context::{AdapterSummary, DeviceLayout, GpuContext, GpuOptions, KernelForms, Precision, list_adapters};
-pub use mean_ratio_eval::{ElementEval, cbrt_eval, mean_ratio_eval};
+pub use probes::{ElementEval, cbrt_eval, mean_ratio_eval};

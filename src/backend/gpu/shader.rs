@@ -3,8 +3,10 @@
 //! preprocessor (vello-style) pulls in the shared files, and a prelude
 //! generated from Rust instantiates the precision and every constant the two
 //! sides share (`layout::PRELUDE_CONSTANTS`). `KERNELS` declares each kernel
-//! once, with its bindings and variants: pipelines and bind-group layouts are
-//! built from it, and a test checks it against naga's reflection of the WGSL.
+//! the backend runs once, with its bindings and variants (`TEST_KERNELS` the
+//! test-only probes): pipelines and bind-group layouts are built from it, the
+//! backend binds arrays by the names it gives (`KernelDef::in_binding_order`),
+//! and a test checks it against naga's reflection of the WGSL.
 
 use super::context::{GpuContext, KernelForms};
 use super::layout::{CLOSED_PLANAR, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_SS, METRIC_TMP, ModelUniform};
@@ -139,13 +141,49 @@ pub struct KernelDef {
     pub variants: bool,
 }
 
+impl KernelDef {
+    /// The values of `named` (binding name, value) in this kernel's binding
+    /// order, matched by name: every binding of the table exactly once and
+    /// nothing else (so the list may be in any order), or a panic naming the
+    /// kernel and the binding, a bug where the list is written.
+    pub fn in_binding_order<T: Copy>(&self, named: &[(&str, T)]) -> Vec<T> {
+        let names = || named.iter().map(|(n, _)| *n).collect::<Vec<_>>();
+        let table = || self.bindings.iter().map(|b| b.name).collect::<Vec<_>>();
+        assert_eq!(
+            named.len(),
+            self.bindings.len(),
+            "{}: binds {:?}, the table has {:?}",
+            self.stem,
+            names(),
+            table()
+        );
+        self.bindings
+            .iter()
+            .map(|b| match named.iter().find(|(n, _)| *n == b.name) {
+                Some(&(_, value)) => value,
+                None => panic!(
+                    "{}: nothing bound to '{}' (binds {:?}, the table has {:?})",
+                    self.stem,
+                    b.name,
+                    names(),
+                    table()
+                ),
+            })
+            .collect()
+    }
+}
+
 macro_rules! kernels {
-    ($($kernel:ident = $stem:literal, variants: $v:expr, [$($bind:expr),* $(,)?];)*) => {
+    (
+        production: { $($kernel:ident = $stem:literal, variants: $v:expr, [$($bind:expr),* $(,)?];)* }
+        tests: { $($tkernel:ident = $tstem:literal, [$($tbind:expr),* $(,)?];)* }
+    ) => {
         /// The compute kernels, one per file, entry point `main`.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-        pub enum Kernel { $($kernel),* }
+        pub enum Kernel { $($kernel,)* $($tkernel,)* }
 
-        /// The kernel table: the one place a binding list is written.
+        /// The kernel table, what `GpuBackend` runs: the one place a
+        /// binding list is written (the backend binds by these names).
         pub static KERNELS: &[(Kernel, KernelDef)] = &[$(
             (Kernel::$kernel, KernelDef {
                 stem: $stem,
@@ -154,15 +192,22 @@ macro_rules! kernels {
                 variants: $v,
             }),
         )*];
+
+        /// Kernels only tests run (`gpu::probes`): device twins of CPU
+        /// functions, no part of a solve. Compiled and checked like the others.
+        pub static TEST_KERNELS: &[(Kernel, KernelDef)] = &[$(
+            (Kernel::$tkernel, KernelDef {
+                stem: $tstem,
+                source: include_str!(concat!("../../../shaders/", $tstem, ".wgsl")),
+                bindings: &[$($tbind),*],
+                variants: false,
+            }),
+        )*];
     };
 }
 
 kernels! {
-    MeanRatioEval = "mean_ratio_eval", variants: false, [
-        b("shape", U, St("Shape")), b("sizes", U, St("Sizes")), b("x", R, Re), b("tets", R, Ui),
-        b("value", RW, Re), b("grad", RW, Re), b("hess", RW, Re),
-    ];
-    CbrtEval = "cbrt_eval", variants: false, [b("sizes", U, St("Sizes")), b("values", RW, Re)];
+production: {
     Objective = "objective", variants: true, [
         MODEL, OP, s("x", R, Re), s("corners", R, Ui), b("shapes", R, V4), s("grad", RW, Re),
         b("partials", RW, V4),
@@ -214,6 +259,14 @@ kernels! {
         OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("row_offsets", R, Ui), s("cols", R, Ui),
         b("diag", R, Ui), s("blocks", RW, Re),
     ];
+}
+tests: {
+    MeanRatioEval = "mean_ratio_eval", [
+        b("shape", U, St("Shape")), b("sizes", U, St("Sizes")), b("x", R, Re), b("tets", R, Ui),
+        b("value", RW, Re), b("grad", RW, Re), b("hess", RW, Re),
+    ];
+    CbrtEval = "cbrt_eval", [b("sizes", U, St("Sizes")), b("values", RW, Re)];
+}
 }
 
 /// Which instance of a kernel with variants is compiled: a closed form
@@ -317,8 +370,9 @@ impl Kernel {
     pub fn def(self) -> &'static KernelDef {
         &KERNELS
             .iter()
+            .chain(TEST_KERNELS)
             .find(|(k, _)| *k == self)
-            .expect("every kernel is in the table")
+            .expect("every kernel is in a table")
             .1
     }
 
@@ -326,9 +380,14 @@ impl Kernel {
         self.def().stem
     }
 
-    /// Every kernel.
+    /// Whether the kernel is one of the [`TEST_KERNELS`].
+    pub fn is_test_only(self) -> bool {
+        TEST_KERNELS.iter().any(|(k, _)| *k == self)
+    }
+
+    /// Every kernel, the test-only ones last.
     pub fn all() -> impl Iterator<Item = Kernel> {
-        KERNELS.iter().map(|(k, _)| *k)
+        KERNELS.iter().chain(TEST_KERNELS).map(|(k, _)| *k)
     }
 
     /// The instance for `form`: kernels without variants have only the fast one.
@@ -745,6 +804,29 @@ mod tests {
     }
 
     #[test]
+    fn bindings_are_matched_by_name_in_any_order() {
+        let def = Kernel::Axpby.def();
+        let named = [("y", 3), ("op", 0), ("x", 2), ("scalars", 1)];
+        assert_eq!(def.in_binding_order(&named), vec![0, 1, 2, 3]);
+        let wrong = |named: &[(&str, i32)]| {
+            let named = named.to_vec();
+            std::panic::catch_unwind(move || def.in_binding_order(&named))
+                .unwrap_err()
+                .downcast::<String>()
+                .map(|s| *s)
+                .unwrap_or_default()
+        };
+        // a misspelt name, a binding given twice (so another is missing), one missing
+        assert!(wrong(&[("y", 3), ("op", 0), ("z", 2), ("scalars", 1)]).contains("nothing bound to 'x'"));
+        assert!(wrong(&[("y", 3), ("op", 0), ("y", 2), ("scalars", 1)]).contains("nothing bound to 'x'"));
+        assert!(wrong(&[("y", 3), ("op", 0), ("x", 2)]).contains("axpby: binds"));
+        // the test-only kernels are no part of the backend's table
+        assert!(Kernel::CbrtEval.is_test_only() && Kernel::MeanRatioEval.is_test_only());
+        assert!(KERNELS.iter().all(|(k, _)| !k.is_test_only()));
+        assert_eq!(Kernel::all().count(), KERNELS.len() + TEST_KERNELS.len());
+    }
+
+    #[test]
     fn a_deliberate_constant_mismatch_is_caught() {
         let m = parse(Kernel::Objective.with(Form::Cn), Real::F64);
         assert!(check_constants(&m, &[("ELEM_STRIDE", 102)]).is_ok());
@@ -759,7 +841,7 @@ mod tests {
     fn shared_constants_are_defined_only_in_rust() {
         // a WGSL file redefining one would clash with Rust's value; the
         // prelude is the only definition
-        for (_, def) in KERNELS {
+        for (_, def) in KERNELS.iter().chain(TEST_KERNELS) {
             for (name, _) in PRELUDE_CONSTANTS {
                 assert!(
                     !def.source.contains(&format!("const {name}:")),
@@ -849,7 +931,7 @@ mod tests {
     #[test]
     fn one_workgroup_reduction() {
         // the tree reduction lives in common/tree.wgsl alone
-        for (_, def) in KERNELS {
+        for (_, def) in KERNELS.iter().chain(TEST_KERNELS) {
             assert!(!def.source.contains("stride >>= 1u"), "{} has its own tree", def.stem);
         }
     }
@@ -861,7 +943,7 @@ mod tests {
             .iter()
             .map(|f| std::fs::read_to_string(root.join(f)).unwrap())
             .collect();
-        for (_, def) in KERNELS {
+        for (_, def) in KERNELS.iter().chain(TEST_KERNELS) {
             let twin = root.join(format!("src/backend/cpu/{}.rs", def.stem));
             assert!(twin.exists(), "{} has no CPU twin at {}", def.stem, twin.display());
             for p in ["f32", "f64"] {

@@ -1,5 +1,9 @@
-//! Per-element value, gradient and Hessian on the device (`shaders/mean_ratio_eval.wgsl`),
-//! for comparison with `TetShape::hessian`.
+//! Device probes for tests: the test-only kernels (`shader::TEST_KERNELS`),
+//! each the device twin of a CPU function, run on their own (no backend).
+//! The per-element value, gradient and Hessian of the inverse mean ratio
+//! (`shaders/mean_ratio_eval.wgsl`, twin of `TetShape::hessian` through
+//! `cpu::mean_ratio_eval`) and the device cube root (`shaders/cbrt_eval.wgsl`,
+//! twin of `f64::cbrt`).
 
 use super::buffers::{BindingLimits, check_bindings, grid};
 use super::context::GpuContext;
@@ -38,7 +42,18 @@ pub fn mean_ratio_eval(ctx: &GpuContext, shape: &TetShape, tets: &[[u32; 4]], x:
     let grad = ctx.zeros_real("grad", 12 * n);
     let hess = ctx.zeros_real("hess", 144 * n);
     let k = Kernel::MeanRatioEval.plain();
-    let group = ctx.bind_each(k, &[&shape_buf, &sizes, &xb, &tb, &value, &grad, &hess]);
+    let group = ctx.bind_each(
+        k,
+        &[
+            ("shape", &shape_buf),
+            ("sizes", &sizes),
+            ("x", &xb),
+            ("tets", &tb),
+            ("value", &value),
+            ("grad", &grad),
+            ("hess", &hess),
+        ],
+    );
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
@@ -67,7 +82,7 @@ pub fn cbrt_eval(ctx: &GpuContext, values: &[f64]) -> Result<Vec<f64>> {
     );
     let buf = ctx.storage_real("values", values);
     let k = Kernel::CbrtEval.plain();
-    let group = ctx.bind_each(k, &[&sizes, &buf]);
+    let group = ctx.bind_each(k, &[("sizes", &sizes), ("values", &buf)]);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
