@@ -60,7 +60,7 @@ pub enum DeviceLayout {
     ByValence,
     /// Each colour's vertices together in sweep order; corners by the same order.
     ByColour,
-    /// The problem's numbering (the layout before issue #14): for comparisons.
+    /// The problem's numbering: for comparisons.
     Problem,
 }
 
