@@ -38,7 +38,7 @@ pub fn context_with(opts: GpuOptions) -> Option<GpuContext> {
         }
         Err(e) if std::env::var_os("CI").is_some() => panic!("no GPU for the GPU tests in CI: {e}"),
         Err(e) => {
-            skipped(&format!("no GPU adapter (set CI to make this fail): {e}"));
+            skipped(&format!("no suitable GPU adapter (set CI to make this fail): {e}"));
             None
         }
     }

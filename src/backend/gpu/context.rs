@@ -31,7 +31,7 @@ pub struct GpuOptions {
 
 /// Which compiled instance of the corner kernels (`shader::Form`) a model
 /// gets where a closed form applies. The answer is the same either way
-/// (within rounding: `tests/kernels.rs`); only the speed differs, and it
+/// (within rounding: `tests/gpu/kernels.rs`); only the speed differs, and it
 /// differs by adapter.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]

@@ -939,7 +939,7 @@ mod tests {
     #[test]
     fn every_kernel_has_a_same_stem_cpu_twin_and_tests() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let tests: String = ["tests/kernels.rs", "tests/gpu_matches_cpu.rs"]
+        let tests: String = ["tests/gpu/kernels.rs", "tests/gpu/gpu_matches_cpu.rs"]
             .iter()
             .map(|f| std::fs::read_to_string(root.join(f)).unwrap())
             .collect();
