@@ -10,6 +10,8 @@
 //! without `gpu`) and `metis`. Without default features the crate is the
 //! CPU library alone.
 
+#![warn(missing_docs)]
+
 pub mod backend;
 pub mod compare;
 pub mod error;
