@@ -15,6 +15,8 @@
 pub mod backend;
 pub mod compare;
 pub mod error;
+// The papers' studies (feature `studies`): for the tool and the benches, not a library API.
+#[doc(hidden)]
 #[cfg(feature = "studies")]
 pub mod finding;
 pub mod generate;
@@ -22,8 +24,12 @@ pub mod io;
 pub mod mesh;
 pub mod metric;
 pub mod metric_report;
+// The papers' studies (feature `studies`): for the tool and the benches, not a library API.
+#[doc(hidden)]
 #[cfg(feature = "studies")]
 pub mod newton_study;
+// The papers' studies (feature `studies`): for the tool and the benches, not a library API.
+#[doc(hidden)]
 #[cfg(feature = "studies")]
 pub mod order_study;
 pub mod partition;

@@ -42,6 +42,8 @@ pub mod cpu;
 pub mod distributed;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+// Public only for the integration tests and benches: an internal of the Newton backends.
+#[doc(hidden)]
 pub mod hessian_pattern;
 pub mod settings;
 

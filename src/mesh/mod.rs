@@ -9,6 +9,8 @@ pub mod order;
 pub mod plane;
 pub mod polyhedron;
 pub mod sweep_order;
+// Public only for the integration tests and benches: mesh topology internals.
+#[doc(hidden)]
 pub mod topology;
 
 pub use data::{DataArray, MeshData, PhysicalName, ValueType, Values};
