@@ -884,6 +884,7 @@ mod by_name_opt {
 }
 
 #[cfg(test)]
+#[allow(clippy::field_reassign_with_default)] // the tests set a few settings on the defaults, as a user would
 mod tests {
     use super::*;
 

@@ -131,7 +131,7 @@ fn mesquites_planar_meshes_smooth_in_their_planes() {
         return;
     }
     for name in ["tri_5_xz.vtk", "tri_5_not_xy.vtk", "quad_2_not_xy.vtk"] {
-        let start = io::read(&dir.join(name)).unwrap();
+        let start = io::read(dir.join(name)).unwrap();
         assert_eq!(quality_report(&start, &start.points).inverted, 0, "{name}");
         let mut m = start.clone();
         let info = smooth(&mut m, Method::Newton);

@@ -577,7 +577,7 @@ fn vtk_and_meshio_polyhedron_files_read_as_the_mesh_they_were_made_from() {
         "meshio_poly.vtu",
         "meshio_poly_zlib.vtu",
     ] {
-        let m = io::read(&dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let m = io::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(m.num_points(), ours.num_points(), "{name}");
         // ASCII files carry 11 significant digits
         for (p, q) in m.points.iter().zip(&ours.points) {
