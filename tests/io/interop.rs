@@ -478,7 +478,7 @@ fn smoothing_keeps_every_array_unless_told_not_to() {
 
 #[test]
 fn data_arrays_follow_a_reordering() {
-    let mut m = io::read(&local_dir().join("vtk_tri_x_leg42b.vtk")).unwrap();
+    let mut m = io::read(local_dir().join("vtk_tri_x_leg42b.vtk")).unwrap();
     let n = m.num_points();
     let order: Vec<usize> = (0..n).rev().collect();
     let before = m.data.point.clone();
