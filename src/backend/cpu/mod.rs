@@ -84,7 +84,7 @@ use rayon::prelude::*;
 use std::time::Instant;
 use sym_hessian::{SymBlockCsr, SymHessian};
 
-/// The CPU [`Backend`](crate::backend::Backend): f64, multithreaded with rayon, each operation run when called.
+/// The CPU [`Backend`]: f64, multithreaded with rayon, each operation run when called.
 pub struct CpuBackend<'p> {
     /// `None` for a bare linear system (`CpuBackend::linear`).
     p: Option<&'p Problem>,
