@@ -13,31 +13,44 @@ use crate::problem::{Problem, ProblemOptions};
 use crate::solve::{self, History, Info, Method, Options, Record};
 use serde::Serialize;
 
+/// One method's run in a comparison, as `meshsmooth compare` reports it.
 #[derive(Clone, Debug, Serialize)]
 pub struct RunSummary {
+    /// The method's name.
     pub method: String,
+    /// Iterations run.
     pub iterations: usize,
+    /// Why it stopped.
     pub stop: String,
+    /// The final objective F.
     pub objective: f64,
+    /// The final |grad F|.
     pub grad_norm: f64,
     /// Seconds of the solve alone (setup left out) to 50% and 90% of the
     /// decrease to the best objective.
     pub t50: Option<f64>,
+    /// Seconds of the solve alone to 90% of the decrease to the best objective.
     pub t90: Option<f64>,
     /// Time at which |grad F| first fell below the tolerance.
     pub t100: Option<f64>,
     /// The same with this method's setup counted: the paper's measure, and
     /// the headline of `meshsmooth compare`.
     pub t50_with_setup: Option<f64>,
+    /// Seconds to 90% of the decrease with setup counted.
     pub t90_with_setup: Option<f64>,
+    /// Seconds until |grad F| fell below the tolerance, setup counted.
     pub t100_with_setup: Option<f64>,
+    /// Wall-clock seconds of the whole run.
     pub seconds: f64,
     /// The reordering paper's COT and RT (see `solve::Info`); `seconds` is its TT.
     pub optimise_seconds: f64,
+    /// Seconds spent ordering the sweep list (RT).
     pub reorder_seconds: f64,
     /// Times the sweep list was ordered (a paper scheme with `bcd` on the CPU).
     pub reorderings: usize,
+    /// Seconds of the method's setup (Hessian pattern, colouring, ...).
     pub setup_seconds: f64,
+    /// Bytes the backend held.
     pub memory_bytes: usize,
     /// The paper's estimate in 4-byte integers (BCD 23|V| + 12|E|, Newton 64|V| + 37|E|), as bytes.
     pub paper_memory_bytes: Option<usize>,
@@ -46,20 +59,28 @@ pub struct RunSummary {
 /// Where `second`'s objective curve passes below `first`'s for good.
 #[derive(Clone, Debug, Serialize)]
 pub struct Crossover {
+    /// The method that was ahead.
     pub first: String,
+    /// The method that overtakes it.
     pub second: String,
+    /// Seconds at which `second` passes below `first` for good.
     pub seconds: f64,
     /// How far `second` had come by then: 100 (F0 - F(t)) / (F0 - F_best).
     pub optimality_percent: f64,
 }
 
+/// Several methods run from the same start on one mesh.
 #[derive(Clone, Debug, Serialize)]
 pub struct Comparison {
+    /// Vertices of the mesh.
     pub vertices: usize,
+    /// Elements of the mesh.
     pub elements: usize,
+    /// The objective F at the start.
     pub initial_objective: f64,
     /// The lowest final objective among the methods: the reference for T50/T90.
     pub best_objective: f64,
+    /// One summary per method, in the order run.
     pub runs: Vec<RunSummary>,
     /// Crossovers with each method's setup counted (its curve stays at F0
     /// until its setup is done).

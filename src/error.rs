@@ -3,19 +3,29 @@
 use std::fmt;
 use std::path::PathBuf;
 
+/// The crate's result type: `Error` unless said otherwise.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// Everything that can go wrong in meshsmooth.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The operating system refused a read or write.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
 
     /// A file's content is malformed; `at` names the line (text) or byte offset (binary).
     #[error("{}{}: {msg}", path.display(), at.as_ref().map(|a| format!(": {a}")).unwrap_or_default())]
     Parse {
+        /// The file.
         path: PathBuf,
+        /// The line or byte offset, when known.
         at: Option<Location>,
+        /// What is wrong.
         msg: String,
     },
 
@@ -28,7 +38,12 @@ pub enum Error {
         "mesh has {count} inverted or degenerate element(s) (first ids: {}); it must be untangled first",
         fmt_ids(first)
     )]
-    Inverted { count: usize, first: Vec<usize> },
+    Inverted {
+        /// How many elements are inverted or degenerate.
+        count: usize,
+        /// The first (up to five) of their ids.
+        first: Vec<usize>,
+    },
 
     /// Untangling left elements inverted; `reason` says why.
     #[error(
@@ -36,8 +51,11 @@ pub enum Error {
         fmt_ids(first)
     )]
     Untangle {
+        /// How many elements remain inverted.
         count: usize,
+        /// The first (up to five) of their ids.
         first: Vec<usize>,
+        /// Why untangling stopped.
         reason: String,
     },
 
@@ -57,13 +75,20 @@ pub enum Error {
     /// name (a settings key, a Python keyword), `message` what is wrong and
     /// what it takes.
     #[error("invalid option {option}: {message}")]
-    InvalidOption { option: &'static str, message: String },
+    InvalidOption {
+        /// The setting's name.
+        option: &'static str,
+        /// What is wrong and what it takes.
+        message: String,
+    },
 }
 
 /// Where in a file a parse error happened.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Location {
+    /// A 1-based line of a text file.
     Line(usize),
+    /// A byte offset into a binary file.
     Byte(u64),
 }
 
@@ -81,6 +106,7 @@ fn fmt_ids(ids: &[usize]) -> String {
 }
 
 impl Error {
+    /// `Io` for this path and OS error.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
@@ -96,6 +122,7 @@ impl Error {
         }
     }
 
+    /// `Parse` for this path, location and message.
     pub fn parse(path: impl Into<PathBuf>, at: Option<Location>, msg: impl Into<String>) -> Self {
         Error::Parse {
             path: path.into(),

@@ -10,9 +10,13 @@
 //! without `gpu`) and `metis`. Without default features the crate is the
 //! CPU library alone.
 
+#![warn(missing_docs)]
+
 pub mod backend;
 pub mod compare;
 pub mod error;
+// The papers' studies (feature `studies`): for the tool and the benches, not a library API.
+#[doc(hidden)]
 #[cfg(feature = "studies")]
 pub mod finding;
 pub mod generate;
@@ -20,8 +24,12 @@ pub mod io;
 pub mod mesh;
 pub mod metric;
 pub mod metric_report;
+// The papers' studies (feature `studies`): for the tool and the benches, not a library API.
+#[doc(hidden)]
 #[cfg(feature = "studies")]
 pub mod newton_study;
+// The papers' studies (feature `studies`): for the tool and the benches, not a library API.
+#[doc(hidden)]
 #[cfg(feature = "studies")]
 pub mod order_study;
 pub mod partition;

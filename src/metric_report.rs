@@ -17,17 +17,23 @@ use std::fmt;
 /// Quality bands of the paper's tables (lower edges; the last is open).
 pub const PAPER_BANDS: [f64; 8] = [1.0, 1.25, 1.5, 2.0, 3.0, 5.0, 9.0, 17.0];
 
+/// Quality of a mesh under one metric, banded as in the paper's tables.
 #[derive(Clone, Debug, Serialize)]
 pub struct MetricSummary {
+    /// The metric's name.
     pub metric: String,
+    /// Smallest element value (inverted elements left out).
     pub min: f64,
+    /// Mean element value (inverted elements left out).
     pub avg: f64,
+    /// Largest element value (inverted elements left out).
     pub max: f64,
     /// (lower edge, upper edge or None, percent of elements); inverted elements are left out.
     pub bands: Vec<(f64, Option<f64>, f64)>,
     /// Percent of elements below the first band (values under 1, which some
     /// metrics reach: tmp's ideal is 0); not counted in any band.
     pub below: f64,
+    /// Number of inverted elements.
     pub inverted: usize,
 }
 
@@ -58,6 +64,7 @@ pub fn element_values(
     Ok(corners.element_values(&model, &points, mesh.num_elements()))
 }
 
+/// The banded summary of `metric` over the elements at `points`.
 pub fn metric_summary(
     mesh: &Mesh,
     points: &[Vec3],
@@ -93,11 +100,15 @@ pub fn metric_summary(
 /// vertices that may move.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct SpacingDisplacement {
+    /// Smallest, in percent.
     pub min: f64,
+    /// Mean, in percent.
     pub avg: f64,
+    /// Largest, in percent.
     pub max: f64,
 }
 
+/// How far the movable vertices went from `before` to `after`, in percent of their local spacing.
 pub fn displacement_percent(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> SpacingDisplacement {
     let nb = topology::vertex_neighbours(mesh);
     let fixed = topology::fixed_vertices(mesh);
@@ -131,8 +142,11 @@ pub fn displacement_percent(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Spa
 
 /// Before/after columns side by side, as the paper prints them.
 pub struct Comparison<'a> {
+    /// The original mesh's quality.
     pub before: &'a MetricSummary,
+    /// The optimised mesh's quality.
     pub after: &'a MetricSummary,
+    /// The vertex displacement, if measured.
     pub displacement: Option<SpacingDisplacement>,
 }
 
@@ -150,7 +164,9 @@ impl fmt::Display for Comparison<'_> {
 /// prints Original / RJ-optimised / CN-optimised: element quality (min, avg,
 /// max, bands) per column, then node displacement per column.
 pub struct SideBySide<'a> {
+    /// (column name, quality) per column.
     pub quality: Vec<(&'a str, &'a MetricSummary)>,
+    /// (column name, displacement) per column.
     pub displacement: Vec<(&'a str, SpacingDisplacement)>,
 }
 

@@ -14,17 +14,24 @@ use crate::metric::{element_eta, element_min_det};
 /// divided by the mean, as in the papers' tables. Empty sets give NaN (null in JSON).
 #[derive(serde::Serialize, Clone, Copy, Debug, PartialEq)]
 pub struct Stats {
+    /// Number of values.
     pub count: usize,
+    /// Mean.
     pub avg: f64,
+    /// Median.
     pub median: f64,
+    /// Population standard deviation divided by the mean.
     pub sigma_n: f64,
+    /// Smallest value.
     pub min: f64,
+    /// Largest value.
     pub max: f64,
     /// max / min; infinite when min <= 0 (useful for volumes only).
     pub max_min_ratio: f64,
 }
 
 impl Stats {
+    /// The statistics of `values`.
     pub fn of(values: &[f64]) -> Stats {
         let n = values.len();
         if n == 0 {
@@ -65,42 +72,56 @@ impl Stats {
 /// first bin also holds values just below 1 from rounding.
 #[derive(serde::Serialize, Clone, Debug, PartialEq)]
 pub struct Bin {
+    /// Lower edge (inclusive).
     pub lo: f64,
+    /// Upper edge (exclusive); `None` for the open last bin.
     pub hi: Option<f64>,
+    /// Elements in the bin.
     pub count: usize,
 }
 
 /// Bin edges of the eta histogram: fine near the optimum 1, coarse in the tail.
 pub const ETA_BIN_EDGES: [f64; 9] = [1.0, 1.05, 1.1, 1.2, 1.5, 2.0, 3.0, 5.0, 10.0];
 
+/// One of the worst elements of a report.
 #[derive(serde::Serialize, Clone, Debug, PartialEq)]
 pub struct Worst {
+    /// Element id.
     pub id: usize,
+    /// Element kind name.
     pub kind: String,
     /// `None` for an inverted element.
     pub eta: Option<f64>,
+    /// Centroid of the element's vertices.
     pub centroid: [f64; 3],
 }
 
+/// Mesh quality summary: sizes, eta and volume statistics, inversions, histogram and worst elements.
 #[derive(serde::Serialize, Clone, Debug)]
 pub struct QualityReport {
+    /// Number of vertices.
     pub vertices: usize,
+    /// Number of elements.
     pub elements: usize,
+    /// Vertices that may move.
     pub free_vertices: usize,
     /// Skin plus user-fixed vertices.
     pub fixed_vertices: usize,
     /// (kind name, count) for each kind present.
     pub kinds: Vec<(String, usize)>,
+    /// Dimension of the mesh: 2 or 3.
     pub dim: usize,
     /// Inverse mean ratio over the non-inverted elements.
     pub eta: Stats,
     /// Element volume (area in 2D) over all elements; see [`element_volume`].
     pub volume: Stats,
+    /// Number of inverted (or degenerate) elements.
     pub inverted: usize,
     /// The first 10 inverted element ids.
     pub inverted_ids: Vec<usize>,
     /// The objective F = mean eta over all elements; `None` if any is inverted.
     pub objective: Option<f64>,
+    /// Histogram of eta over `ETA_BIN_EDGES`.
     pub histogram: Vec<Bin>,
     /// The 5 worst elements, inverted ones first, then by decreasing eta.
     pub worst: Vec<Worst>,
@@ -309,7 +330,9 @@ fn prism_volume(x: &[[f64; 3]]) -> f64 {
 /// How far vertices moved between two position sets.
 #[derive(serde::Serialize, Clone, Copy, Debug, PartialEq)]
 pub struct DisplacementStats {
+    /// Largest displacement (length units of the mesh).
     pub max: f64,
+    /// Mean displacement over all vertices.
     pub mean: f64,
     /// The vertex that moved furthest (`None` when there are no vertices).
     pub max_vertex: Option<usize>,

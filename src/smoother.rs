@@ -81,6 +81,7 @@ pub struct Smoother {
     /// The optimiser.
     #[serde(with = "by_name")]
     pub method: Method,
+    /// Where it runs: `auto`, `cpu` or `gpu`.
     #[serde(with = "by_name")]
     pub device: DeviceChoice,
     /// GPU arithmetic (f64 needs the adapter's `SHADER_F64`).
@@ -102,6 +103,7 @@ pub struct Smoother {
     /// or shape+size with constructed targets).
     #[serde(with = "by_name_opt")]
     pub metric: Option<MetricKind>,
+    /// How corner values are combined into the objective (harmonic or average).
     #[serde(with = "by_name")]
     pub template: Template,
     /// The targets W: `auto`, `ideal`, `input`, `size:FIELD`, `metric:FIELD`
@@ -119,6 +121,7 @@ pub struct Smoother {
     pub reorder_every: Option<usize>,
     /// Newton steps per vertex visit of the sequential sweep.
     pub inner_iterations: usize,
+    /// What skin vertices may do: stay fixed, or slide on the boundary.
     #[serde(with = "by_name")]
     pub boundary: BoundaryMode,
     /// Degrees: with a sliding boundary, faces meeting at more than this
@@ -881,6 +884,7 @@ mod by_name_opt {
 }
 
 #[cfg(test)]
+#[allow(clippy::field_reassign_with_default)] // the tests set a few settings on the defaults, as a user would
 mod tests {
     use super::*;
 

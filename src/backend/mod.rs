@@ -42,6 +42,8 @@ pub mod cpu;
 pub mod distributed;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+// Public only for the integration tests and benches: an internal of the Newton backends.
+#[doc(hidden)]
 pub mod hessian_pattern;
 pub mod settings;
 
@@ -74,12 +76,16 @@ pub enum Points {
 /// a missing slot counting as 1.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Coef {
+    /// The constant factor.
     pub scale: f64,
+    /// The slot in the numerator; `None` counts as 1.
     pub num: Option<Slot>,
+    /// The slot in the denominator; `None` counts as 1.
     pub den: Option<Slot>,
 }
 
 impl Coef {
+    /// The constant `v`.
     pub const fn value(v: f64) -> Coef {
         Coef {
             scale: v,
@@ -88,6 +94,7 @@ impl Coef {
         }
     }
 
+    /// The value of slot `s`.
     pub const fn slot(s: Slot) -> Coef {
         Coef {
             scale: 1.0,
@@ -118,8 +125,11 @@ impl Coef {
 /// smallest corner determinant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EvalSlots {
+    /// Where F goes.
     pub value: Slot,
+    /// Where the number of infeasible corners goes.
     pub infeasible: Slot,
+    /// Where the smallest corner determinant goes, if wanted.
     pub min_det: Option<Slot>,
 }
 
@@ -127,7 +137,9 @@ pub struct EvalSlots {
 /// at free-vector indices (only free vertices ever change).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Entries {
+    /// A position set.
     Points(Points),
+    /// A vector over the free vertices.
     Vector(Vector),
 }
 
@@ -149,8 +161,11 @@ pub struct Visit<'a> {
 /// `cpu::mean_ratio_eval` return.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ElementEval {
+    /// Per element: the inverse mean ratio, -1 when infeasible.
     pub value: Vec<f64>,
+    /// Per element: 12 gradient entries.
     pub grad: Vec<f64>,
+    /// Per element: 144 Hessian entries.
     pub hess: Vec<f64>,
 }
 

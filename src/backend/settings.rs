@@ -72,7 +72,9 @@ pub const STEP_TOL: f64 = 1e-6;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Precision {
+    /// Single precision.
     F32,
+    /// Double precision (needs the adapter's `SHADER_F64`).
     F64,
     /// f64 where the adapter has `SHADER_F64`, else f32.
     #[default]

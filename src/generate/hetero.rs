@@ -36,6 +36,7 @@ pub struct HeteroOptions {
     /// for this worst inverse mean ratio (the tail is seed-dependent, so a
     /// fixed jitter would land anywhere in a factor of ten around it).
     pub worst: Option<f64>,
+    /// Seed of the random draws.
     pub seed: u64,
 }
 

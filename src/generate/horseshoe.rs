@@ -99,6 +99,7 @@ pub enum HorseshoeKind {
 }
 
 impl HorseshoeKind {
+    /// Every kind.
     pub const ALL: [HorseshoeKind; 5] = [
         HorseshoeKind::SqI,
         HorseshoeKind::SqII,
@@ -107,6 +108,7 @@ impl HorseshoeKind {
         HorseshoeKind::UtIV,
     ];
 
+    /// The kind's command-line name (`sqi`, `utiv`, ...).
     pub fn name(self) -> &'static str {
         match self {
             HorseshoeKind::SqI => "sqi",

@@ -18,22 +18,40 @@ use crate::metric::{element_min_det, inverted_elements};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Perturbation {
     /// `x + alpha h r`, each coordinate of `r` uniform in [-1, 1].
-    Random { alpha: f64 },
+    Random {
+        /// Amplitude, in local edge lengths `h`.
+        alpha: f64,
+    },
     /// The same with `h` the vertex's shortest edge: the scale of a
     /// boundary layer's thin cells, which the mean edge overshoots.
-    RandomShortest { alpha: f64 },
+    RandomShortest {
+        /// Amplitude, in local edge lengths `h`.
+        alpha: f64,
+    },
     /// `x + alpha h [1, 0, 0]` (the paper's "R" shift).
-    ShiftR { alpha: f64 },
+    ShiftR {
+        /// Amplitude, in local edge lengths `h`.
+        alpha: f64,
+    },
     /// `x + alpha h [1, 1, 0] / sqrt(2)` (the paper's "NE" shift, normalised
     /// so that it moves as far as `ShiftR` for the same alpha).
-    ShiftNe { alpha: f64 },
+    ShiftNe {
+        /// Amplitude, in local edge lengths `h`.
+        alpha: f64,
+    },
     /// `x_i + alpha h sin(omega u_i)` per coordinate, where `u_i` is `x_i`
     /// rescaled to [0, 1] over the mesh bounding box: `omega = 2 pi` is one
     /// wave across the mesh.
-    Oscillatory { alpha: f64, omega: f64 },
+    Oscillatory {
+        /// Amplitude, in local edge lengths `h`.
+        alpha: f64,
+        /// Angular wave number over the rescaled coordinate (2 pi: one wave across the mesh).
+        omega: f64,
+    },
 }
 
 impl Perturbation {
+    /// The perturbation's amplitude alpha (in local edge lengths).
     pub fn alpha(&self) -> f64 {
         match *self {
             Perturbation::Random { alpha }
@@ -114,12 +132,15 @@ impl FromStr for Perturbation {
     }
 }
 
+/// How to perturb a mesh.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PerturbOptions {
+    /// How each moved vertex moves.
     pub perturbation: Perturbation,
     /// Share of the free vertices to move: 1.0 = all, else a random subset of
     /// `round(fraction * free)` vertices.
     pub fraction: f64,
+    /// Seed of the random moves and of the subset.
     pub seed: u64,
 }
 

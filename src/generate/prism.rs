@@ -72,6 +72,7 @@ pub struct Distortion {
     pub noise: f64,
     /// Fraction of the interior vertices the noise moves.
     pub fraction: f64,
+    /// Seed of the noise.
     pub seed: u64,
 }
 

@@ -85,6 +85,7 @@ pub struct VoronoiOptions {
     pub wave: f64,
     /// The noise's amplitude, relative to each node's mean edge length.
     pub noise: f64,
+    /// Seed of the random sites and the noise.
     pub seed: u64,
 }
 

@@ -49,23 +49,32 @@ use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueTy
 /// File formats meshsmooth reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Format {
+    /// Legacy VTK, ASCII.
     VtkAscii,
+    /// Legacy VTK, binary.
     VtkBinary,
+    /// VTK XML unstructured grid, ASCII.
     VtuAscii,
     /// Inline base64, uncompressed.
     VtuBinary,
     /// Inline base64, zlib-compressed in VTK's block format (`vtkZLibDataCompressor`).
     VtuZlib,
+    /// Gmsh 2.2, ASCII.
     Msh22Ascii,
+    /// Gmsh 2.2, binary.
     Msh22Binary,
+    /// Gmsh 4.1, ASCII.
     Msh41Ascii,
+    /// Gmsh 4.1, binary.
     Msh41Binary,
+    /// Medit (`.mesh`), ASCII.
     Medit,
 }
 
 const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
 
 impl Format {
+    /// Every format.
     pub const ALL: [Format; 10] = [
         Format::VtkAscii,
         Format::VtkBinary,
@@ -103,6 +112,7 @@ impl Format {
         Format::ALL.into_iter().find(|f| f.name() == name)
     }
 
+    /// The format's command-line name (`vtk`, `vtu-zlib`, `msh4`, `medit`, ...); see [`Format::from_name`].
     pub fn name(self) -> &'static str {
         match self {
             Format::VtkAscii => "vtk",
@@ -142,7 +152,9 @@ impl fmt::Display for Format {
 /// One value per element, written as cell data where the format supports it.
 #[derive(Clone, Copy, Debug)]
 pub struct CellData<'a> {
+    /// The array's name.
     pub name: &'a str,
+    /// One value per element.
     pub values: &'a [f64],
 }
 
@@ -365,7 +377,9 @@ fn check_structure(mesh: &Mesh) -> Result<()> {
 /// Errors inside a writer: OS errors get the path attached by [`write_atomic`].
 #[derive(Debug)]
 pub enum WriteError {
+    /// An operating-system error (its path is attached later).
     Io(std::io::Error),
+    /// Any other error.
     Other(Error),
 }
 
@@ -381,6 +395,7 @@ impl From<Error> for WriteError {
     }
 }
 
+/// What a writer returns.
 pub type WriteResult = std::result::Result<(), WriteError>;
 
 /// The cell arrays a VTK/VTU writer writes: the input's, except those a

@@ -29,7 +29,9 @@ use super::{CellData, Format, vtu, write, write_atomic};
 use crate::error::{Error, Result};
 use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
 
+/// The point array holding each piece vertex's global id.
 pub const GLOBAL_POINT_IDS: &str = "GlobalPointIds";
+/// The cell array holding each piece element's global id.
 pub const GLOBAL_CELL_IDS: &str = "GlobalCellIds";
 /// Point id arrays read, in order of preference (VTK's, then ParaView's D3 filter's).
 const POINT_ID_NAMES: [&str; 2] = [GLOBAL_POINT_IDS, "GlobalNodeIds"];

@@ -8,20 +8,32 @@ use crate::error::{Error, Result};
 /// the output format has that type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum ValueType {
+    /// Signed 8-bit integer.
     I8,
+    /// Unsigned 8-bit integer.
     U8,
+    /// Signed 16-bit integer.
     I16,
+    /// Unsigned 16-bit integer.
     U16,
+    /// Signed 32-bit integer.
     I32,
+    /// Unsigned 32-bit integer.
     U32,
+    /// Signed 64-bit integer.
     I64,
+    /// Unsigned 64-bit integer.
     U64,
+    /// 32-bit float.
     F32,
+    /// 64-bit float.
     F64,
+    /// String.
     Str,
 }
 
 impl ValueType {
+    /// True for `F32` and `F64`.
     pub fn is_float(self) -> bool {
         matches!(self, ValueType::F32 | ValueType::F64)
     }
@@ -43,12 +55,16 @@ impl ValueType {
 /// `f64` (exact for `f32`).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Values {
+    /// Integer values (any integer `ValueType`).
     Int(Vec<i64>),
+    /// Floating-point values (`F32` or `F64`).
     Float(Vec<f64>),
+    /// String values.
     Str(Vec<String>),
 }
 
 impl Values {
+    /// Number of values (not tuples).
     pub fn len(&self) -> usize {
         match self {
             Values::Int(v) => v.len(),
@@ -57,6 +73,7 @@ impl Values {
         }
     }
 
+    /// True when there are no values.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -79,13 +96,18 @@ impl Values {
 /// One named array: `values.len() == tuples * components`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DataArray {
+    /// The array's name in the file.
     pub name: String,
+    /// The value type it had in the file.
     pub ty: ValueType,
+    /// Values per tuple (at least 1).
     pub components: usize,
+    /// The values, tuple after tuple.
     pub values: Values,
 }
 
 impl DataArray {
+    /// An array; `components` below 1 counts as 1.
     pub fn new(name: impl Into<String>, ty: ValueType, components: usize, values: Values) -> Self {
         DataArray {
             name: name.into(),
@@ -95,6 +117,7 @@ impl DataArray {
         }
     }
 
+    /// Number of tuples: values / components.
     pub fn tuples(&self) -> usize {
         self.values.len() / self.components.max(1)
     }
@@ -132,14 +155,18 @@ impl DataArray {
 /// A Gmsh physical group name.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PhysicalName {
+    /// Dimension of the group's entities.
     pub dim: i32,
+    /// The group's physical tag.
     pub tag: i32,
+    /// The group's name.
     pub name: String,
 }
 
 /// Names of the cell arrays that hold Gmsh's tags (meshio's names, so a
 /// meshio-written VTU keeps its groups through a `.msh` output).
 pub const GMSH_PHYSICAL: &str = "gmsh:physical";
+/// The cell array of Gmsh's elementary (geometrical entity) tags.
 pub const GMSH_ELEMENTARY: &str = "gmsh:geometrical";
 
 /// Everything of a file beyond the geometry and the topology.
@@ -159,6 +186,7 @@ pub struct MeshData {
 }
 
 impl MeshData {
+    /// True when there are no arrays and no physical names.
     pub fn is_empty(&self) -> bool {
         self.point.is_empty()
             && self.cell.is_empty()

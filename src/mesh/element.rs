@@ -15,10 +15,15 @@ use std::fmt;
 /// so the static tables below are empty for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub enum ElementKind {
+    /// 3-node triangle (2D).
     Triangle,
+    /// 4-node quadrilateral (2D).
     Quadrilateral,
+    /// 4-node tetrahedron.
     Tetrahedron,
+    /// 8-node hexahedron.
     Hexahedron,
+    /// 6-node triangular prism (wedge).
     Prism,
     /// VTK_POLYHEDRON: any closed cell whose every vertex has exactly three
     /// cell edges (see [`super::polyhedron`]).
@@ -26,6 +31,7 @@ pub enum ElementKind {
 }
 
 impl ElementKind {
+    /// Every kind.
     pub const ALL: [ElementKind; 6] = [
         ElementKind::Triangle,
         ElementKind::Quadrilateral,
@@ -157,6 +163,7 @@ impl ElementKind {
         }
     }
 
+    /// The kind with this VTK cell type number, if meshsmooth handles it.
     pub fn from_vtk_id(id: u8) -> Option<Self> {
         ElementKind::ALL.into_iter().find(|k| k.vtk_id() == id)
     }
@@ -173,10 +180,12 @@ impl ElementKind {
         }
     }
 
+    /// The kind with this Gmsh element type number, if meshsmooth handles it.
     pub fn from_gmsh_id(id: u32) -> Option<Self> {
         ElementKind::ALL.into_iter().find(|k| k.gmsh_id() == Some(id))
     }
 
+    /// The kind's lower-case name (`triangle`, `tetrahedron`, ...).
     pub fn name(self) -> &'static str {
         match self {
             ElementKind::Triangle => "triangle",

@@ -45,6 +45,7 @@ pub struct RuleCount {
 }
 
 impl FixRules {
+    /// True when there are no rules.
     pub fn is_empty(&self) -> bool {
         self.fix_groups.is_empty()
             && self.free_groups.is_empty()

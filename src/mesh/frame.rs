@@ -7,8 +7,10 @@
 
 use crate::metric::mat3::Vec3;
 
+/// Coordinates relative to a centre, in units of a power of two: the frame solvers run in.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
+    /// The centre of the bounding box.
     pub center: Vec3,
     /// A power of two.
     pub scale: f64,
@@ -55,10 +57,12 @@ impl Frame {
         Frame { center, scale }
     }
 
+    /// `p` in this frame: (p - center) / scale.
     pub fn to_local(&self, p: &Vec3) -> Vec3 {
         std::array::from_fn(|k| (p[k] - self.center[k]) / self.scale)
     }
 
+    /// Back from this frame: center + q * scale.
     pub fn to_global(&self, q: &Vec3) -> Vec3 {
         std::array::from_fn(|k| self.center[k] + q[k] * self.scale)
     }

@@ -9,6 +9,8 @@ pub mod order;
 pub mod plane;
 pub mod polyhedron;
 pub mod sweep_order;
+// Public only for the integration tests and benches: mesh topology internals.
+#[doc(hidden)]
 pub mod topology;
 
 pub use data::{DataArray, MeshData, PhysicalName, ValueType, Values};
@@ -23,13 +25,18 @@ use std::borrow::Cow;
 /// treated as fixed; they are never optimised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum LowerKind {
+    /// A point (one vertex).
     Vertex,
+    /// A 2-node line.
     Line,
+    /// A 3-node triangle.
     Triangle,
+    /// A 4-node quadrilateral.
     Quadrilateral,
 }
 
 impl LowerKind {
+    /// Vertices of a cell of this kind.
     pub fn num_vertices(self) -> usize {
         match self {
             LowerKind::Vertex => 1,
@@ -64,6 +71,7 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// A mesh of these points with no elements yet.
     pub fn new(points: Vec<[f64; 3]>) -> Self {
         Mesh {
             points,
@@ -137,14 +145,17 @@ impl Mesh {
         }
     }
 
+    /// Number of points (vertices).
     pub fn num_points(&self) -> usize {
         self.points.len()
     }
 
+    /// Number of elements.
     pub fn num_elements(&self) -> usize {
         self.kinds.len()
     }
 
+    /// The vertex ids of element `e`.
     pub fn element(&self, e: usize) -> &[u32] {
         &self.conn[self.offsets[e]..self.offsets[e + 1]]
     }
@@ -178,6 +189,7 @@ impl Mesh {
         piece
     }
 
+    /// Did the user mark vertex `v` fixed?
     pub fn is_fixed(&self, v: usize) -> bool {
         self.fixed.get(v).copied().unwrap_or(false)
     }

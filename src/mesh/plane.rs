@@ -18,6 +18,7 @@ use std::borrow::Cow;
 /// ASCII float output has, stay well within it).
 pub const PLANARITY_TOLERANCE: f64 = 1e-5;
 
+/// The plane a planar mesh lies in, with an orthonormal frame.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Plane {
     /// A point of the plane.

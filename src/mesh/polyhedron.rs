@@ -15,8 +15,11 @@ use crate::metric::mat3::Vec3;
 /// `elem` stays empty while the mesh has no polyhedron.
 #[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Faces {
+    /// Per element, the offset of its first face (`elements + 1` entries), or empty.
     pub elem: Vec<usize>,
+    /// Per face, the offset of its first vertex in `conn` (`faces + 1` entries).
     pub offsets: Vec<usize>,
+    /// The faces' vertex ids, concatenated.
     pub conn: Vec<u32>,
 }
 
@@ -35,6 +38,7 @@ impl Faces {
         self.offsets.len().saturating_sub(1)
     }
 
+    /// True when no face is stored.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

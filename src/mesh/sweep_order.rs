@@ -59,6 +59,7 @@ pub enum Key {
 }
 
 impl Scheme {
+    /// Every scheme.
     pub const ALL: [Scheme; 10] = [
         Scheme::N,
         Scheme::R,
@@ -88,6 +89,7 @@ impl Scheme {
         }
     }
 
+    /// The per-vertex quantity the scheme sorts by.
     pub fn key(self) -> Key {
         match self {
             Scheme::N | Scheme::R => Key::None,
@@ -107,12 +109,14 @@ impl Scheme {
 /// A scheme and its direction: one of the paper's 20 orderings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SweepOrder {
+    /// The scheme.
     pub scheme: Scheme,
     /// The paper's "-" schemes: the forward list reversed.
     pub reverse: bool,
 }
 
 impl SweepOrder {
+    /// The input order, forward (the paper's N).
     pub const N: SweepOrder = SweepOrder {
         scheme: Scheme::N,
         reverse: false,

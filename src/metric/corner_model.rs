@@ -42,7 +42,9 @@ impl std::fmt::Display for Template {
 /// neighbours; row n+1.. zero) and the dimension.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CornerShape {
+    /// The B rows of the reference corner.
     pub tet: TetShape,
+    /// The corner's dimension: 2 (planar) or 3.
     pub n: usize,
 }
 
@@ -81,7 +83,9 @@ impl CornerShape {
 /// into objective terms.
 #[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Model {
+    /// The corner metric.
     pub metric: MetricKind,
+    /// How corner values combine into the objective.
     pub template: Template,
     /// Untangling's regularisation: det S becomes `smetric::chi(det S, eps)`
     /// (`smetric::eval_regularised`), so inverted corners have finite terms.
@@ -149,6 +153,7 @@ impl Model {
         Some(self.eval(shape, s, None)?.0)
     }
 
+    /// The corner's objective term at positions `x` (corner first); `None` when the corner is infeasible.
     #[inline]
     pub fn value(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<f64> {
         if self.planar(shape.n) {

@@ -1,8 +1,11 @@
 //! 3x3 matrix helpers, row-major `m[row][col]`.
 
+/// A point or vector in 3D.
 pub type Vec3 = [f64; 3];
+/// A 3x3 matrix, row-major `m[row][col]`.
 pub type Mat3 = [[f64; 3]; 3];
 
+/// Determinant.
 pub fn det(m: &Mat3) -> f64 {
     m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
@@ -29,6 +32,7 @@ pub fn cofactor(m: &Mat3) -> Mat3 {
     ]
 }
 
+/// Transpose.
 pub fn transpose(m: &Mat3) -> Mat3 {
     std::array::from_fn(|i| std::array::from_fn(|q| m[q][i]))
 }
@@ -38,10 +42,12 @@ pub fn frob_dot(a: &Mat3, b: &Mat3) -> f64 {
     a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| x * y).sum()
 }
 
+/// Squared Frobenius norm: the sum of the squared entries.
 pub fn frobenius_sq(m: &Mat3) -> f64 {
     m.iter().flatten().map(|v| v * v).sum()
 }
 
+/// Matrix-vector product m v.
 pub fn mul_vec(m: &Mat3, v: &Vec3) -> Vec3 {
     [
         m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
@@ -50,10 +56,12 @@ pub fn mul_vec(m: &Mat3, v: &Vec3) -> Vec3 {
     ]
 }
 
+/// Dot product.
 pub fn dot(a: &Vec3, b: &Vec3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// Difference a - b.
 pub fn sub(a: &Vec3, b: &Vec3) -> Vec3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -114,6 +122,7 @@ pub fn newton_direction(g: &Vec3, h: &Mat3) -> Vec3 {
     })
 }
 
+/// The inverse; `None` when the determinant is 0 or not finite.
 pub fn inverse(m: &Mat3) -> Option<Mat3> {
     let d = det(m);
     if d == 0.0 || !d.is_finite() {

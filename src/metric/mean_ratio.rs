@@ -21,7 +21,9 @@ pub struct TetShape {
 /// A tetrahedral corner's value, gradient and the factors of its Hessian
 /// blocks (`TetShape::block_factors`).
 pub struct BlockFactors {
+    /// The corner's inverse mean ratio.
     pub eta: f64,
+    /// Its gradient with respect to the four vertices.
     pub grad: [Vec3; 4],
     s: Mat3,
     u: [Vec3; 4],

@@ -9,6 +9,8 @@ pub mod mat3;
 pub mod mean_ratio;
 pub mod planar;
 pub mod reference_jacobian;
+// Public only for the integration tests and benches: the symbolic Hessian internals.
+#[doc(hidden)]
 pub mod shess;
 pub mod smetric;
 

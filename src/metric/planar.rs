@@ -20,6 +20,7 @@ use super::mean_ratio::TetShape;
 
 /// What the value, gradient and blocks share.
 pub struct Parts {
+    /// The corner's inverse mean ratio.
     pub eta: f64,
     d: f64,
     s: [[f64; 2]; 2],
@@ -36,6 +37,7 @@ pub fn s_of(tet: &TetShape, x: &[Vec3; 4]) -> Mat3 {
     [[e(0, 0), e(0, 1), 0.0], [e(1, 0), e(1, 1), 0.0], [0.0; 3]]
 }
 
+/// The inverse mean ratio of a planar corner from its 2x2 block of S; `None` when det <= 0 or not finite.
 #[inline]
 pub fn value_of_s(s: &Mat3) -> Option<f64> {
     let d = s[0][0] * s[1][1] - s[0][1] * s[1][0];
@@ -47,6 +49,7 @@ pub fn value_of_s(s: &Mat3) -> Option<f64> {
     eta.is_finite().then_some(eta)
 }
 
+/// The shared parts of the value, gradient and blocks from the 2x2 block of S; `None` when infeasible.
 #[inline]
 pub fn parts(s: &Mat3) -> Option<Parts> {
     let eta = value_of_s(s)?;
@@ -62,6 +65,7 @@ fn mv(m: &[[f64; 2]; 2], v: &Vec3) -> [f64; 2] {
 }
 
 impl Parts {
+    /// The gradient of eta with respect to the vertex whose B row is `b` (z component 0).
     #[inline]
     pub fn gradient(&self, b: &Vec3) -> Vec3 {
         let g = mv(&self.g, b);

@@ -42,6 +42,7 @@ pub enum MetricKind {
 }
 
 impl MetricKind {
+    /// The metric's short name (`imr`, ...), as the command line spells it.
     pub fn name(self) -> &'static str {
         match self {
             MetricKind::InverseMeanRatio => "imr",

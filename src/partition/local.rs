@@ -47,7 +47,9 @@ use std::time::Instant;
 
 /// What the rank-local setup needs from the ranks' communicator.
 pub trait Network {
+    /// This rank's index.
     fn rank(&self) -> usize;
+    /// Number of ranks.
     fn size(&self) -> usize;
     /// Sends `out[s]` to rank s (every rank calls it); what each rank sent
     /// here, by rank.
@@ -90,6 +92,7 @@ pub fn agree<T>(net: &dyn Network, local: Result<T>) -> Result<T> {
 /// A rank's part and where the points of its own mesh went.
 #[derive(Debug)]
 pub struct Local {
+    /// This rank's part.
     pub part: Part,
     /// Global id of each point of the mesh the rank read.
     pub gid: Vec<u32>,
@@ -97,6 +100,7 @@ pub struct Local {
     pub owner: Vec<u32>,
     /// Vertices of the whole mesh (counted, never held).
     pub total_vertices: usize,
+    /// Quality of the partition.
     pub quality: Quality,
 }
 

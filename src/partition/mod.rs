@@ -65,6 +65,7 @@ impl Default for Partitioner {
 }
 
 impl Partitioner {
+    /// The partitioner's name, as the command line spells it.
     pub fn name(self) -> &'static str {
         match self {
             Partitioner::Metis => "metis",
@@ -125,6 +126,7 @@ pub fn edge_cut(p: &Problem, owner: &[u32]) -> usize {
 /// ascending global id, so the i-th sent value is the i-th received one.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Exchange {
+    /// The other part's rank.
     pub rank: u32,
     /// Owned free vertices the other part holds as ghosts.
     pub send: Vec<u32>,
@@ -135,8 +137,11 @@ pub struct Exchange {
 /// One part: its problem, its place in the whole and its halo.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Part {
+    /// This part's rank.
     pub rank: u32,
+    /// Number of parts.
     pub size: u32,
+    /// The part's problem (part numbering, ghosts included).
     pub problem: Problem,
     /// Positions of the part's vertices (part numbering).
     pub x: Vec<Vec3>,

@@ -6,11 +6,14 @@ use super::Part;
 use crate::problem::Problem;
 use std::fmt;
 
+/// Quality measures of a partition.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Quality {
+    /// Number of parts.
     pub parts: usize,
     /// Mesh edges whose ends have different owners.
     pub edge_cut: usize,
+    /// Mesh edges in all.
     pub edges: usize,
     /// Ghost vertices over all parts / vertices of the whole.
     pub ghost_fraction: f64,
@@ -23,6 +26,7 @@ pub struct Quality {
 }
 
 impl Quality {
+    /// The quality of the partition `owner` (owning part per vertex) into `parts` of `p`.
     pub fn of(p: &Problem, owner: &[u32], parts: &[Part]) -> Quality {
         let edges = (0..p.num_vertices())
             .map(|v| p.neighbours.of(v).iter().filter(|&&w| (w as usize) > v).count())

@@ -26,6 +26,7 @@ pub struct Adjacency {
     pub simplicial: bool,
 }
 
+/// Which vertices move and their sweep order, from the mesh graph, the numbering and the corners.
 pub fn adjacency(mesh: &Mesh, graph: &MeshGraph, numbering: &Numbering, corners: &Corners) -> Adjacency {
     let (order, inv) = (&numbering.order, &numbering.inv);
     let n = order.len();

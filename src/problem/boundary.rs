@@ -64,6 +64,7 @@ impl std::fmt::Display for BoundaryMode {
 /// How the boundary is treated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Boundary {
+    /// Fixed or sliding skin vertices.
     pub mode: BoundaryMode,
     /// Faces meeting at more than this angle (degrees) form a feature edge; an
     /// edge turning by more than it makes a corner.
@@ -150,9 +151,13 @@ impl Sliding {
 /// The classification in the mesh's numbering, before renumbering.
 #[derive(Clone, Debug)]
 pub struct SkinClasses {
+    /// Per vertex: surface, edge, corner or interior.
     pub class: Vec<VertexClass>,
+    /// Per vertex: the projector onto the directions it may slide in.
     pub projector: Vec<Mat3>,
+    /// Per vertex: indices into `primitives` it is projected onto.
     pub candidates: Csr,
+    /// Triangles of the boundary, and segments `[a, b, b]` of its feature curves.
     pub primitives: Vec<[Vec3; 3]>,
 }
 

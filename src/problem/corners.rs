@@ -305,20 +305,24 @@ fn number_shapes(own: &[CornerShape], ids: &mut [u32], shapes: &mut Vec<CornerSh
 }
 
 impl Corners {
+    /// Number of corners.
     pub fn len(&self) -> usize {
         self.corners.len()
     }
 
+    /// True when there are no corners.
     pub fn is_empty(&self) -> bool {
         self.corners.is_empty()
     }
 
+    /// The positions of corner `c`'s four vertices (corner first).
     #[inline]
     pub fn points(&self, x: &[Vec3], c: usize) -> [Vec3; 4] {
         let t = &self.corners[c];
         [x[t[0] as usize], x[t[1] as usize], x[t[2] as usize], x[t[3] as usize]]
     }
 
+    /// The reference shape of corner `c`.
     #[inline]
     pub fn shape(&self, c: usize) -> &CornerShape {
         &self.shapes[self.corner_shape[c] as usize]

@@ -48,7 +48,9 @@ use std::time::{Duration, Instant};
 /// What to optimise.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ProblemOptions<'a> {
+    /// The corner metric.
     pub metric: MetricKind,
+    /// How corner values combine into the objective.
     pub template: Template,
     /// A mesh with the same connectivity whose corners are the targets W
     /// (required by `tmp`; optional for the others, which default to the ideal
@@ -117,6 +119,7 @@ impl<'a> ProblemOptions<'a> {
     }
 }
 
+/// A mesh set up for the solvers: renumbered vertices and elements, corners, references, adjacency and colours.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Problem {
     /// Metric dimension: 2 (x and y move) or 3.
@@ -138,6 +141,7 @@ pub struct Problem {
     pub corner_weight: Vec<f64>,
     /// Distinct corner references.
     pub shapes: Vec<CornerShape>,
+    /// Metric, template and regularisation of the objective.
     pub model: Model,
     /// Per vertex (new numbering): incident corners packed as `4 * corner + local slot`.
     pub incidence: Csr,
@@ -241,14 +245,17 @@ impl Problem {
             + self.sliding.as_ref().map_or(0, |s| s.bytes())
     }
 
+    /// Number of vertices.
     pub fn num_vertices(&self) -> usize {
         self.order.len()
     }
 
+    /// Number of elements.
     pub fn num_elements(&self) -> usize {
         self.elem_order.len()
     }
 
+    /// Number of corners.
     pub fn num_corners(&self) -> usize {
         self.corners.len()
     }
@@ -271,12 +278,14 @@ impl Problem {
         out
     }
 
+    /// The positions of corner `c`'s four vertices (corner first).
     #[inline]
     pub fn corner_points(&self, x: &[Vec3], c: usize) -> [Vec3; 4] {
         let t = &self.corners[c];
         [x[t[0] as usize], x[t[1] as usize], x[t[2] as usize], x[t[3] as usize]]
     }
 
+    /// The reference shape of corner `c`.
     #[inline]
     pub fn shape(&self, c: usize) -> &CornerShape {
         &self.shapes[self.corner_shape[c] as usize]

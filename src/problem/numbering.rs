@@ -18,6 +18,7 @@ pub struct MeshGraph {
 }
 
 impl MeshGraph {
+    /// The vertex graph of `mesh`: fixed flags, edge neighbours and vertex elements.
     pub fn of(mesh: &Mesh) -> MeshGraph {
         let (fixed, neighbours, vertex_elements) = topology::vertex_graph(mesh);
         MeshGraph {

@@ -98,6 +98,7 @@ impl<'a> Target<'a> {
         }
     }
 
+    /// The target's name as settings spell it (`auto`, `ideal`, `input`, `size:FIELD`, `metric:FIELD`).
     pub fn name(&self) -> String {
         match self {
             Target::Auto => "auto".into(),
@@ -126,6 +127,7 @@ impl<'a> Target<'a> {
 /// corners.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InputTargets {
+    /// Regularisation passes (0: the input's own corners).
     pub passes: usize,
 }
 
@@ -343,11 +345,14 @@ pub fn element_metrics(mesh: &Mesh, points: &[Vec3], flip: bool) -> Result<Vec<M
 /// corners (in [`Mesh::optimised_corners`] order) in `w`.
 #[derive(Clone, Debug, Default)]
 pub struct CornerTargets {
+    /// Per element, the offset of its first target in `w` (`elements + 1` entries).
     pub offsets: Vec<usize>,
+    /// The target matrices W, element after element.
     pub w: Vec<Mat3>,
 }
 
 impl CornerTargets {
+    /// The targets of element `e`'s used corners.
     pub fn of(&self, e: usize) -> &[Mat3] {
         &self.w[self.offsets[e]..self.offsets[e + 1]]
     }
@@ -1043,9 +1048,13 @@ pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Optio
 /// before, at `vertices` wall vertices.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct LayerChange {
+    /// Wall vertices measured.
     pub vertices: usize,
+    /// The median of after / before.
     pub median_ratio: f64,
+    /// The smallest after / before.
     pub min_ratio: f64,
+    /// The largest after / before.
     pub max_ratio: f64,
     /// The median of |after / before - 1|.
     pub median_change: f64,
@@ -1160,6 +1169,7 @@ pub struct Intent {
     pub anisotropic_share: f64,
     /// The median and the largest regularised element aspect.
     pub median_aspect: f64,
+    /// The largest regularised element aspect.
     pub max_aspect: f64,
     /// The same share for the raw (unregularised) aspects.
     pub raw_share: f64,
@@ -1196,6 +1206,7 @@ pub const STRETCHED_THROUGHOUT: f64 = 0.25;
 /// ...keeps its stretching when it grows at least this much per cell, or
 /// spans at least [`GRADED_RANGE`] in thickness: wall grading.
 pub const STRONG_GROWTH: f64 = 1.25;
+/// The alternative to [`STRONG_GROWTH`]: a stretched mesh whose thickest cell is at least this many times its thinnest is wall-graded.
 pub const GRADED_RANGE: f64 = 100.0;
 
 /// Rounds of regularisation the detection reads the mesh through: fewer than

@@ -40,6 +40,7 @@ pub struct Bcd<'p> {
 }
 
 impl<'p> Bcd<'p> {
+    /// The sweep over `p` on `be`: sequential (one vertex at a time) if asked and the backend can, else by colours.
     pub fn new<B: Backend + ?Sized>(
         be: &mut B,
         p: &'p Problem,

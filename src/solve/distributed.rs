@@ -58,7 +58,9 @@ pub struct Cluster {
 #[cfg(feature = "gpu")]
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RankGpu {
+    /// The adapter whose name contains this (else `MESHSMOOTH_ADAPTER`).
     pub adapter: Option<String>,
+    /// The GPU arithmetic.
     pub precision: Precision,
 }
 
@@ -111,10 +113,12 @@ impl Cluster {
         })
     }
 
+    /// This rank's index.
     pub fn rank(&self) -> usize {
         self.world.rank() as usize
     }
 
+    /// Number of ranks.
     pub fn size(&self) -> usize {
         self.world.size() as usize
     }
@@ -158,16 +162,20 @@ impl Cluster {
 /// One rank's share of a partitioned solve.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RankReport {
+    /// Vertices this rank owns.
     pub owned: usize,
+    /// Ghost vertices this rank holds (owned by others).
     pub ghosts: usize,
     /// Iterations this rank ran: the same on every rank, since every stop
     /// decision is shared (checked by rank 0).
     pub iterations: usize,
     /// Wall time of the solver loop on this rank.
     pub seconds: f64,
+    /// This rank's communication counters.
     pub comm: CommStats,
     /// Vertices (owned and ghosts) and elements of this rank's part.
     pub vertices: usize,
+    /// Elements of this rank's part.
     pub elements: usize,
     /// Peak resident memory of this rank's process (VmHWM), MiB; 0 where unknown.
     pub peak_rss_mib: f64,
@@ -188,8 +196,11 @@ pub struct Report {
     pub vertices: usize,
     /// Did rank 0 hold and split the whole problem (else each rank set up its own part)?
     pub whole_on_rank0: bool,
+    /// Quality of the partition.
     pub quality: Quality,
+    /// One report per rank, by rank.
     pub ranks: Vec<RankReport>,
+    /// Iterations run (the same on every rank).
     pub iterations: usize,
     /// CG iterations (Newton), else 0.
     pub cg_iterations: usize,

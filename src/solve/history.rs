@@ -4,32 +4,39 @@
 use serde::Serialize;
 use std::fmt;
 
+/// One iteration's point of a solver's history.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Record {
     /// 0 is the starting point.
     pub iteration: usize,
     /// Seconds since the solver started (setup excluded).
     pub seconds: f64,
+    /// The objective F.
     pub objective: f64,
     /// 2-norm of the free gradient of F with lengths in mean edge lengths
     /// (unit-free; the quantity `Params::tol` bounds).
     pub grad_norm: f64,
 }
 
+/// A solver's records, one per iteration, the start first.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct History {
+    /// The records in iteration order.
     pub records: Vec<Record>,
 }
 
 impl History {
+    /// Appends a record.
     pub fn push(&mut self, r: Record) {
         self.records.push(r);
     }
 
+    /// The starting point's record.
     pub fn first(&self) -> Option<&Record> {
         self.records.first()
     }
 
+    /// The last iteration's record.
     pub fn last(&self) -> Option<&Record> {
         self.records.last()
     }
@@ -67,7 +74,9 @@ pub enum StopReason {
     Converged,
     /// No vertex moved measurably in a sweep (Laplace), or no step decreased F.
     Stalled,
+    /// The iteration limit `Params::max_iter` was reached.
     MaxIterations,
+    /// The time limit `Params::time_limit` was reached.
     TimeLimit,
     /// The progress callback asked to stop.
     Cancelled,

@@ -8,11 +8,13 @@ use crate::backend::{Backend, Vector};
 use crate::error::{Error, Result};
 use std::time::Instant;
 
+/// Smart-Laplace smoothing's state on the backend (a gradient vector).
 pub struct Laplace {
     g: Vector,
 }
 
 impl Laplace {
+    /// Allocates the state on `be`.
     pub fn new<B: Backend + ?Sized>(be: &mut B) -> Result<Laplace> {
         Ok(Laplace { g: be.vector()? })
     }
@@ -22,6 +24,7 @@ impl Laplace {
         evaluate_at(be, self.g)
     }
 
+    /// One smart-Laplace sweep (stopping early, valid, at `deadline`).
     pub fn step<B: Backend + ?Sized>(&mut self, be: &mut B, deadline: Option<Instant>) -> Result<Sweep> {
         if !be.laplace(MOVED, deadline)? {
             return Err(Error::InvalidArgument(format!(

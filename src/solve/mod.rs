@@ -59,6 +59,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// The method's name, as the command line and settings spell it.
     pub fn name(self) -> &'static str {
         match self {
             Method::Bcd => "bcd",
@@ -130,13 +131,18 @@ pub struct Params {
     pub tol: f64,
     /// Most sweeps (BCD, Laplace) or iterations (Newton, NLCG).
     pub max_iter: usize,
+    /// Stop after this much wall time (the solve alone, setup excluded).
     pub time_limit: Option<Duration>,
     /// Stop as soon as F is at or below this (a baseline-derived stop, as in
     /// the reordering paper's comparisons).
     pub target_objective: Option<f64>,
+    /// Settings of `Method::Bcd` and `Method::BcdColored`.
     pub bcd: BcdParams,
+    /// Settings of `Method::Newton`.
     pub newton: NewtonParams,
+    /// Settings of `Method::Laplace`.
     pub laplace: LaplaceParams,
+    /// Settings of `Method::Nlcg`.
     pub nlcg: NlcgParams,
 }
 
@@ -219,8 +225,11 @@ impl<'a> Device<'a> {
 /// losing work on a device that fails midway.
 #[derive(Clone, Default)]
 pub struct Options<'a> {
+    /// The optimiser.
     pub method: Method,
+    /// Termination and per-method settings.
     pub params: Params,
+    /// Where it runs.
     pub device: Device<'a>,
     /// Download the positions every this many iterations, so that a failure
     /// mid-run (device lost, out of memory) leaves the last feasible
@@ -245,13 +254,19 @@ impl Options<'_> {
 /// What a solve did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Info {
+    /// The method that ran.
     pub method: Method,
     /// Where it ran (`Backend::describe`).
     pub device: String,
+    /// Iterations (sweeps for BCD and Laplace) run.
     pub iterations: usize,
+    /// Why it stopped.
     pub stop: StopReason,
+    /// Objective and gradient norm per iteration.
     pub history: History,
+    /// The final objective F.
     pub objective: f64,
+    /// The final gradient norm (as `Params::tol` measures it).
     pub grad_norm: f64,
     /// Wall time of the iterations (problem and solver setup excluded): the
     /// reordering paper's total time TT.
@@ -485,7 +500,9 @@ fn no_progress(h: &History, window: usize) -> bool {
 /// What one sweep of any backend reports to the shared loop.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Sweep {
+    /// F after the sweep.
     pub objective: f64,
+    /// The gradient norm after the sweep (as `Params::tol` measures it).
     pub grad_norm: f64,
     /// Largest squared vertex displacement of the sweep.
     pub max_move_sq: f64,

@@ -101,6 +101,7 @@ const EVAL: EvalSlots = EvalSlots {
 
 /// Newton's vectors on the backend and what it carries between iterations.
 pub struct Newton {
+    /// Newton's settings.
     pub params: NewtonParams,
     g: Vector,
     rhs: Vector,
@@ -111,6 +112,7 @@ pub struct Newton {
     current: (f64, f64),
     /// What the last PCG solve did.
     pub last_pcg: Option<PcgInfo>,
+    /// CG iterations over all Newton steps so far.
     pub cg_iterations: usize,
     /// Time to build the Hessian pattern and the vectors (reported apart from the iterations).
     pub setup_time: Duration,

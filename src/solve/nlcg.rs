@@ -25,6 +25,7 @@ pub struct NlcgParams {
     /// The first trial of the first search (and of a restart after a failed
     /// search) moves the farthest-moving vertex this many mean edge lengths.
     pub first_move: f64,
+    /// The strong-Wolfe line search's settings.
     pub line_search: Wolfe,
 }
 
@@ -54,6 +55,7 @@ const EVAL: EvalSlots = EvalSlots {
 
 /// NLCG's vectors on the backend and what it carries between iterations.
 pub struct Nlcg {
+    /// NLCG's settings.
     pub params: NlcgParams,
     /// Gradient at the current point.
     g: Vector,
@@ -73,6 +75,7 @@ pub struct Nlcg {
     pub evaluations: usize,
     /// Searches that met the strong Wolfe conditions, and all searches.
     pub wolfe_steps: usize,
+    /// Line searches run.
     pub searches: usize,
 }
 

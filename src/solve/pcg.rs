@@ -9,8 +9,10 @@ pub use crate::backend::settings::Preconditioner;
 use crate::backend::{Backend, Coef, Slot, Vector};
 use crate::error::Result;
 
+/// Settings of one PCG solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PcgParams {
+    /// Most CG iterations.
     pub max_iter: usize,
     /// Stop when |r| <= rtol |b|.
     pub rtol: f64,
@@ -53,18 +55,25 @@ impl std::fmt::Display for NegativeCurvature {
     }
 }
 
+/// Why PCG stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PcgStop {
+    /// |r| <= rtol |b| was reached.
     Converged,
+    /// `PcgParams::max_iter` iterations were run.
     MaxIterations,
     /// p^T A p <= 0 was met; the returned direction is that p, oriented downhill.
     NegativeCurvature,
 }
 
+/// What one PCG solve did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PcgInfo {
+    /// CG iterations run.
     pub iterations: usize,
+    /// Why it stopped.
     pub stop: PcgStop,
+    /// |r| / |b| at the end.
     pub relative_residual: f64,
 }
 
@@ -88,6 +97,7 @@ pub struct PcgWork {
 }
 
 impl PcgWork {
+    /// Allocates the four work vectors on `be`.
     pub fn new<B: Backend + ?Sized>(be: &mut B) -> Result<PcgWork> {
         Ok(PcgWork {
             r: be.vector()?,

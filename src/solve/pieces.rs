@@ -28,17 +28,25 @@ const SWAP_TAG: i32 = 21;
 /// What every rank needs to smooth the pieces of an index.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct PiecesJob {
+    /// The .pvtu index file read.
     pub index: PathBuf,
     /// The pieces' files, in index order.
     pub sources: Vec<PathBuf>,
+    /// The optimiser.
     pub method: Method,
+    /// Termination and per-method settings.
     pub params: Params,
+    /// The corner metric.
     pub metric: MetricKind,
+    /// How corner values combine into the objective.
     pub template: Template,
     /// The vertex order within each part (`Ordering`'s name).
     pub ordering: String,
+    /// Seed of the random orders.
     pub order_seed: u64,
+    /// The output file (or the index, with `pieces`).
     pub output: PathBuf,
+    /// The output format.
     pub format: Format,
     /// Write the pieces (piece i by the rank that read it) and an index, not one gathered file.
     pub pieces: bool,
@@ -48,7 +56,9 @@ pub struct PiecesJob {
 
 /// What rank 0 learns from `Cluster::smooth_pieces`.
 pub struct PiecesOutcome {
+    /// What the solve did.
     pub info: Info,
+    /// The partitioned solve's report.
     pub report: Report,
     /// The rank that read (and wrote) each piece, in piece order.
     pub readers: Vec<usize>,

@@ -51,7 +51,9 @@ impl Strategy {
 
 /// A sweep list and the state its scheme keeps between reorderings.
 pub struct Reorder {
+    /// The ordering scheme.
     pub scheme: SweepOrder,
+    /// When to reorder: once, or every so many sweeps.
     pub strategy: Strategy,
     seed: u64,
     /// Free-vertex indices in the input order: the tie rule's list.
@@ -72,6 +74,7 @@ pub struct Reorder {
 }
 
 impl Reorder {
+    /// The first sweep list of `scheme` over `p`'s free vertices; `seed` drives the random tie-breaks.
     pub fn new(p: &Problem, scheme: SweepOrder, strategy: Strategy, seed: u64) -> Reorder {
         let base: Vec<u32> = (0..p.free_vertices.len() as u32).collect();
         Reorder {

@@ -71,24 +71,29 @@ impl Default for UntangleParams {
 pub struct UntangleInfo {
     /// Elements with an inverted or degenerate corner before and after.
     pub inverted_before: usize,
+    /// Elements with an inverted or degenerate corner after.
     pub inverted_after: usize,
     /// Corners with det S <= 0 before.
     pub inverted_corners_before: usize,
     /// Corners below the margin before and after.
     pub corners_before: usize,
+    /// Corners below the margin after.
     pub corners_after: usize,
     /// Outer iterations (eps values tried) and inner iterations in all.
     pub rounds: usize,
+    /// Inner iterations over all rounds.
     pub iterations: usize,
     /// (eps, smallest det S after the round's solve), one per round, in the
     /// solver's frame.
     pub schedule: Vec<(f64, f64)>,
+    /// Wall-clock seconds of the untangling.
     pub seconds: f64,
     /// Where the inner solves ran.
     pub device: String,
 }
 
 impl UntangleInfo {
+    /// True when no element and no corner is left inverted or below the margin.
     pub fn untangled(&self) -> bool {
         self.inverted_after == 0 && self.corners_after == 0
     }

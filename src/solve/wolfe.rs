@@ -81,8 +81,11 @@ impl Wolfe {
 /// phi and phi' at a feasible step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
+    /// The step length.
     pub alpha: f64,
+    /// phi(alpha): F at the step.
     pub value: f64,
+    /// phi'(alpha): the directional derivative at the step.
     pub slope: f64,
 }
 
@@ -94,6 +97,7 @@ pub struct Search {
     pub step: Option<Sample>,
     /// The step also meets the curvature condition (strong Wolfe).
     pub strong_wolfe: bool,
+    /// Evaluations of F and its gradient the search made.
     pub evaluations: usize,
     /// The smallest step found infeasible (infinity if none was).
     pub alpha_max: f64,

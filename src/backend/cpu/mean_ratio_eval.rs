@@ -6,6 +6,7 @@ use crate::backend::ElementEval;
 use crate::metric::TetShape;
 use crate::metric::mat3::Vec3;
 
+/// Per-tetrahedron inverse mean ratio, its gradient and Hessian (-1 and zeros when infeasible).
 pub fn mean_ratio_eval(shape: &TetShape, tets: &[[u32; 4]], x: &[Vec3]) -> ElementEval {
     let n = tets.len();
     let mut out = ElementEval {

@@ -2,29 +2,75 @@
 //! the reference every GPU result is checked against; each file here is the
 //! CPU twin of the WGSL kernel with the same stem in `shaders/`.
 
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod axpby;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod bcd;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod block_jacobi;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod block_jacobi_factor;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod bsr_spmv;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod cbrt_eval;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod constrain;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod constrain_blocks;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod dot;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod gradient_gather;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod halo_gather;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod halo_scatter;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod hessian_assemble;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod hessian_gather;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod inversion;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod laplace;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod line_search;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod mean_ratio_eval;
 pub mod objective;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod project_boundary;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod reduce;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod reference_position;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod set_slot;
+// Per-kernel CPU twin, public only for the integration tests and benches.
+#[doc(hidden)]
 pub mod sym_hessian;
 
 use super::{Backend, Coef, Entries, EvalSlots, N_SLOTS, Points, Slot, Vector, Visit, guard_passes};
@@ -38,6 +84,7 @@ use rayon::prelude::*;
 use std::time::Instant;
 use sym_hessian::{SymBlockCsr, SymHessian};
 
+/// The CPU [`Backend`]: f64, multithreaded with rayon, each operation run when called.
 pub struct CpuBackend<'p> {
     /// `None` for a bare linear system (`CpuBackend::linear`).
     p: Option<&'p Problem>,

@@ -17,20 +17,25 @@ const HALO_TAG: i32 = 17;
 pub struct CommStats {
     /// Wall time spent in exchanges and reductions (waiting included).
     pub seconds: f64,
+    /// Halo exchanges done.
     pub halo_exchanges: usize,
     /// Bytes this rank sent in halo exchanges.
     pub halo_bytes: usize,
+    /// Reductions over the ranks done.
     pub reductions: usize,
     /// Bytes this rank contributed to reductions.
     pub reduction_bytes: usize,
 }
 
+/// A rank's communicator with its counters.
 pub struct Comm<'w> {
     world: &'w SimpleCommunicator,
+    /// The counters so far.
     pub stats: CommStats,
 }
 
 impl<'w> Comm<'w> {
+    /// A communicator over `world`, counters at zero.
     pub fn new(world: &'w SimpleCommunicator) -> Self {
         Comm {
             world,
@@ -38,6 +43,7 @@ impl<'w> Comm<'w> {
         }
     }
 
+    /// Number of ranks.
     pub fn size(&self) -> usize {
         self.world.size() as usize
     }
@@ -118,6 +124,7 @@ impl<'w> Comm<'w> {
     }
 }
 
+/// a + b: the sum reduction.
 pub fn sum(a: f64, b: f64) -> f64 {
     a + b
 }
@@ -127,6 +134,7 @@ pub fn max(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) }
 }
 
+/// NaN-propagating minimum, like [`max`].
 pub fn min(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() { f64::NAN } else { a.min(b) }
 }

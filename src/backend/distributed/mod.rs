@@ -49,6 +49,7 @@ impl Halo {
     }
 }
 
+/// A [`Backend`](crate::backend::Backend) over MPI: an inner backend on this rank's part, its sums combined over the ranks and its halos exchanged.
 pub struct DistributedBackend<'p, B> {
     inner: B,
     comm: Comm<'p>,
@@ -76,6 +77,7 @@ impl<'p, B: Backend> DistributedBackend<'p, B> {
         })
     }
 
+    /// This rank's communication counters so far.
     pub fn comm_stats(&self) -> CommStats {
         self.comm.stats
     }

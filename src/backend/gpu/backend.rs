@@ -108,6 +108,7 @@ struct Share {
 /// Operations recorded between two submissions (the `Op` buffer's capacity).
 const OPS_PER_BATCH: usize = 512;
 
+/// The GPU [`Backend`]: a problem, its positions and vectors on a device of a [`GpuContext`].
 pub struct GpuBackend<'c> {
     ctx: &'c GpuContext,
     n_vertices: usize,

@@ -12,11 +12,14 @@ const MAX_GROUPS_PER_DIM: u32 = 65_535;
 /// The device limits a problem must fit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BindingLimits {
+    /// Largest storage-buffer binding, in bytes.
     pub max_storage_buffer_binding_size: u64,
+    /// Largest buffer, in bytes.
     pub max_buffer_size: u64,
 }
 
 impl BindingLimits {
+    /// The limits of a wgpu device.
     pub fn of(limits: &wgpu::Limits) -> Self {
         BindingLimits {
             max_storage_buffer_binding_size: limits.max_storage_buffer_binding_size,

@@ -9,11 +9,13 @@ use std::sync::{Arc, Mutex};
 
 pub use crate::backend::settings::Precision;
 
+/// How to open a GPU: which adapter, which arithmetic, and device-side layout choices.
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
     /// Substring of the adapter name (case-insensitive); the environment
     /// variable `MESHSMOOTH_ADAPTER` is used when this is `None`.
     pub adapter: Option<String>,
+    /// The arithmetic wanted.
     pub precision: Precision,
     /// Caps the bytes one storage binding may hold below what the adapter
     /// offers, so that tests reach split arrays (`Binding::split`) with
@@ -70,11 +72,17 @@ crate::error::by_name!(DeviceLayout: "layout" { ByValence = "by-valence", ByColo
 /// One adapter as `meshsmooth devices` lists it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct AdapterSummary {
+    /// The adapter's name.
     pub name: String,
+    /// The graphics API it runs on (wgpu's `Backend`, e.g. Vulkan).
     pub backend: String,
+    /// wgpu's device type (discrete, integrated, virtual, CPU, other).
     pub device_type: String,
+    /// The driver's name.
     pub driver: String,
+    /// The driver's version information.
     pub driver_info: String,
+    /// Does it have `SHADER_F64` (double precision in shaders)?
     pub f64: bool,
     /// Can it run compute shaders at all?
     pub compute: bool,
@@ -158,6 +166,7 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// Opens the adapter `opts` names (or the best one) and builds a device and queue on it.
     pub fn new(opts: &GpuOptions) -> Result<GpuContext> {
         let adapters = ranked();
         let wanted = opts

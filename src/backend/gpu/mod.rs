@@ -8,6 +8,8 @@ pub mod buffers;
 pub mod context;
 pub(crate) mod layout;
 pub mod probes;
+// Public only for the integration tests and benches: the WGSL kernel table.
+#[doc(hidden)]
 pub mod shader;
 pub(crate) mod sweep_layout;
 

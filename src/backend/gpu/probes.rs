@@ -15,6 +15,7 @@ use crate::metric::mat3::Vec3;
 
 pub use crate::backend::ElementEval;
 
+/// Per-tetrahedron inverse mean ratio, gradient and Hessian computed on the device (a probe for tests against the CPU).
 pub fn mean_ratio_eval(ctx: &GpuContext, shape: &TetShape, tets: &[[u32; 4]], x: &[Vec3]) -> Result<ElementEval> {
     let n = tets.len();
     let r = ctx.real_size();
