@@ -48,7 +48,7 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     for &(name, mq_f, mq_fn_s) in MESQUITE {
-        let mesh = io::read(&dir.join(name)).expect("mesh reads");
+        let mesh = io::read(dir.join(name)).expect("mesh reads");
         let tets = mesh.kinds.iter().all(|&k| k == meshsmooth::ElementKind::Tetrahedron);
         let runs: &[(Method, usize)] = if tets {
             &[

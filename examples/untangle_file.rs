@@ -9,7 +9,7 @@ fn main() -> meshsmooth::Result<()> {
         eprintln!("usage: untangle_file IN OUT");
         std::process::exit(2);
     };
-    let mut mesh = meshsmooth::io::read(&input)?;
+    let mut mesh = meshsmooth::io::read(input)?;
     let opts = Options::cpu(Method::Newton, &Params::default());
     let problem = Default::default();
     let info = solve::untangle_mesh(&mut mesh, &problem, &opts, &UntangleParams::default(), &mut |_| true)?;

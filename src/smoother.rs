@@ -886,12 +886,14 @@ mod tests {
 
     #[test]
     fn settings_round_trip_through_toml_and_json() {
-        let mut s = Smoother::default();
-        s.method = Method::BcdColored;
-        s.metric = Some(MetricKind::ShapeSize);
-        s.time_limit = Some(2.5);
-        s.order = "d-wqp".parse().unwrap();
-        s.fix_groups = vec!["wall".into()];
+        let s = Smoother {
+            method: Method::BcdColored,
+            metric: Some(MetricKind::ShapeSize),
+            time_limit: Some(2.5),
+            order: "d-wqp".parse().unwrap(),
+            fix_groups: vec!["wall".into()],
+            ..Smoother::default()
+        };
         let back = Smoother::from_toml(&s.to_toml()).unwrap();
         assert_eq!(back, s);
         let json = serde_json::to_string(&s).unwrap();
@@ -930,9 +932,11 @@ mod tests {
             .unwrap();
         mesh.points[centre] = [1.4, 0.5, 0.5];
         let input = mesh.clone();
-        let mut s = Smoother::default();
-        s.device = DeviceChoice::Cpu;
-        s.untangle = false;
+        let mut s = Smoother {
+            device: DeviceChoice::Cpu,
+            untangle: false,
+            ..Smoother::default()
+        };
         let e = s.smooth(&mut mesh).unwrap_err();
         assert!(matches!(e, Error::Inverted { .. }), "{e}");
         assert!(

@@ -165,7 +165,7 @@ fn save_partial_writes_the_still_tangled_result_beside_the_output() {
     let t = text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
     assert!(!out.exists());
-    let partial = io::read(&dir.path().join("o.partial.vtk")).unwrap();
+    let partial = io::read(dir.path().join("o.partial.vtk")).unwrap();
     assert!(!inverted_elements(&partial, &partial.points).is_empty());
     assert_ne!(partial.points[8], m.points[8]);
 }

@@ -74,7 +74,7 @@ fn colours_never_share_an_element_on_gmsh_and_real_meshes() {
     let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
     for name in ["cub_wedge_like.vtk", "tire.vtk", "cube-clip-5.vtk"] {
         if shared.join(name).exists() {
-            let colours = check_coloring(&io::read(&shared.join(name)).unwrap(), name);
+            let colours = check_coloring(&io::read(shared.join(name)).unwrap(), name);
             eprintln!("{name}: {colours} colours");
         }
     }

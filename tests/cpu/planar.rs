@@ -40,10 +40,8 @@ fn placed(m: &Mesh, f: impl Fn(&Vec3) -> Vec3) -> Mesh {
 type Placement = Box<dyn Fn(&Vec3) -> Vec3>;
 
 fn smooth(m: &mut Mesh, method: Method) -> Info {
-    let params = Params {
-        tol: 1e-9,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = 1e-9;
     solve::smooth_mesh(
         m,
         &Default::default(),
@@ -131,7 +129,7 @@ fn mesquites_planar_meshes_smooth_in_their_planes() {
         return;
     }
     for name in ["tri_5_xz.vtk", "tri_5_not_xy.vtk", "quad_2_not_xy.vtk"] {
-        let start = io::read(&dir.join(name)).unwrap();
+        let start = io::read(dir.join(name)).unwrap();
         assert_eq!(quality_report(&start, &start.points).inverted, 0, "{name}");
         let mut m = start.clone();
         let info = smooth(&mut m, Method::Newton);

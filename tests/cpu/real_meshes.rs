@@ -43,7 +43,7 @@ const MESQUITE_OTHER: &[(&str, f64)] = &[
 fn matches_mesquite(meshes: &[(&str, f64)], method: Method) {
     let Some(dir) = meshes_dir() else { return };
     for &(name, mesquite_f) in meshes {
-        let mut mesh = io::read(&dir.join(name)).unwrap_or_else(|e| panic!("{e}"));
+        let mut mesh = io::read(dir.join(name)).unwrap_or_else(|e| panic!("{e}"));
         let fixed = topology::fixed_vertices(&mesh);
         let start = mesh.points.clone();
         let info = solve::smooth_mesh(
@@ -93,13 +93,13 @@ fn newton_matches_mesquite_on_planar_and_hexahedral_meshes() {
 #[test]
 fn meshes_the_optimiser_cannot_take_are_refused_clearly() {
     let Some(dir) = meshes_dir() else { return };
-    let err = io::read(&dir.join("mixed-hex-pyr-tet.vtk")).unwrap_err().to_string();
+    let err = io::read(dir.join("mixed-hex-pyr-tet.vtk")).unwrap_err().to_string();
     assert!(
         err.contains("mixed-hex-pyr-tet.vtk") && err.contains("pyramid"),
         "{err}"
     );
     // a tangled quad mesh: read fine, refused by the solver
-    let mut mesh = io::read(&dir.join("shest_grid32.vtk")).unwrap();
+    let mut mesh = io::read(dir.join("shest_grid32.vtk")).unwrap();
     let err = solve::smooth_mesh(
         &mut mesh,
         &Default::default(),

@@ -193,10 +193,8 @@ fn check_folder(dir: &Path) -> usize {
         // smoothed (the data must not notice), then written in every format
         let input = m.clone();
         let mut m = m;
-        let params = meshsmooth::solve::Params {
-            max_iter: 20,
-            ..Default::default()
-        };
+        let mut params = meshsmooth::solve::Params::default();
+        params.max_iter = 20;
         let opts = meshsmooth::solve::Options::cpu(meshsmooth::solve::Method::Newton, &params);
         let info = meshsmooth::solve::smooth_mesh(&mut m, &Default::default(), &opts, &mut |_| true)
             .unwrap_or_else(|e| panic!("{name}: smoothing: {e}"));
@@ -478,7 +476,7 @@ fn smoothing_keeps_every_array_unless_told_not_to() {
 
 #[test]
 fn data_arrays_follow_a_reordering() {
-    let mut m = io::read(&local_dir().join("vtk_tri_x_leg42b.vtk")).unwrap();
+    let mut m = io::read(local_dir().join("vtk_tri_x_leg42b.vtk")).unwrap();
     let n = m.num_points();
     let order: Vec<usize> = (0..n).rev().collect();
     let before = m.data.point.clone();

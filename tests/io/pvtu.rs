@@ -279,8 +279,8 @@ fn the_cli_writes_pieces_that_read_back_as_its_whole_output() {
     let (ok, log) = run("parts.pvtu", &["--pieces", "3"]);
     assert!(ok, "{log}");
     assert!(log.contains("wrote 3 pieces"), "{log}");
-    let whole = io::read(&dir.path().join("whole.vtu")).unwrap();
-    assert_eq!(io::read(&dir.path().join("parts.pvtu")).unwrap(), whole);
+    let whole = io::read(dir.path().join("whole.vtu")).unwrap();
+    assert_eq!(io::read(dir.path().join("parts.pvtu")).unwrap(), whole);
     // one piece by default without MPI
     let (ok, log) = run("one.pvtu", &[]);
     assert!(ok, "{log}");
@@ -302,7 +302,7 @@ fn the_cli_writes_pieces_that_read_back_as_its_whole_output() {
     );
     assert!(!dir.path().join("clash_0.vtu").exists() && !dir.path().join("clash.pvtu").exists());
     assert_eq!(
-        io::read(&dir.path().join("clash_1.vtu")).unwrap(),
+        io::read(dir.path().join("clash_1.vtu")).unwrap(),
         io::read(&input).unwrap()
     );
     // --pieces needs a .pvtu index to name them
@@ -318,10 +318,10 @@ fn the_cli_writes_pieces_that_read_back_as_its_whole_output() {
 #[test]
 fn pieces_written_by_vtk_merge_into_the_whole_mesh() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop/pvtu");
-    let whole = io::read(&dir.join("whole.vtu")).unwrap();
+    let whole = io::read(dir.join("whole.vtu")).unwrap();
     let f32_of = |p: &[f64; 3]| p.map(|c| c as f32);
     for index in ["vtk_ghost0.pvtu", "vtk_ghost1.pvtu"] {
-        let got = io::read(&dir.join(index)).unwrap_or_else(|e| panic!("{index}: {e}"));
+        let got = io::read(dir.join(index)).unwrap_or_else(|e| panic!("{index}: {e}"));
         assert_eq!(got.num_points(), whole.num_points(), "{index}");
         assert_eq!(got.num_elements(), whole.num_elements(), "{index}");
         let map: Vec<usize> = got

@@ -248,9 +248,9 @@ fn pieces_of_a_three_rank_run_read_back_as_the_gathered_mesh() {
         for r in 0..3 {
             assert!(path(&format!("pieces_{r}.vtu")).exists(), "{name}: piece {r} missing");
         }
-        let gathered = meshsmooth::io::read(&path("gathered.vtu")).unwrap();
+        let gathered = meshsmooth::io::read(path("gathered.vtu")).unwrap();
         // without MPI: the library reads all pieces and merges them
-        assert_eq!(meshsmooth::io::read(&path("pieces.pvtu")).unwrap(), gathered, "{name}");
+        assert_eq!(meshsmooth::io::read(path("pieces.pvtu")).unwrap(), gathered, "{name}");
         // under MPI, with as many ranks as pieces and with fewer: the same mesh, so the same run
         for (ranks, readers) in [(3, "0, 1, 2"), (2, "0, 0, 1")] {
             let log = smooth(ranks, &path("pieces.pvtu"), &path(&format!("again-pieces-{ranks}.vtu")));
@@ -263,8 +263,8 @@ fn pieces_of_a_three_rank_run_read_back_as_the_gathered_mesh() {
                 &path("gathered.vtu"),
                 &path(&format!("again-gathered-{ranks}.vtu")),
             );
-            let a = meshsmooth::io::read(&path(&format!("again-pieces-{ranks}.vtu"))).unwrap();
-            let b = meshsmooth::io::read(&path(&format!("again-gathered-{ranks}.vtu"))).unwrap();
+            let a = meshsmooth::io::read(path(&format!("again-pieces-{ranks}.vtu"))).unwrap();
+            let b = meshsmooth::io::read(path(&format!("again-gathered-{ranks}.vtu"))).unwrap();
             assert_eq!(a, b, "{name} on {ranks} ranks");
         }
     }
