@@ -121,12 +121,10 @@ fn main() {
             if metric == MetricKind::ConditionNumberPaper && kind.dim() == 2 {
                 continue;
             }
-            let opts = ProblemOptions {
-                metric,
-                template,
-                reference: (metric == MetricKind::TargetShapeSize).then_some(&reference),
-                ..Default::default()
-            };
+            let mut opts = ProblemOptions::default();
+            opts.metric = metric;
+            opts.template = template;
+            opts.reference = (metric == MetricKind::TargetShapeSize).then_some(&reference);
             let p = match Problem::with_options(&mesh, &opts) {
                 Ok(p) => p,
                 Err(e) => {

@@ -98,10 +98,8 @@ fn main() {
     println!("|{}", "---|".repeat(header.matches('|').count() - 1));
     let ls = Default::default();
     for ((name, mesh), (order_name, ordering)) in meshes.iter().flat_map(|m| orderings.iter().map(move |o| (m, o))) {
-        let opts = ProblemOptions {
-            ordering: *ordering,
-            ..Default::default()
-        };
+        let mut opts = ProblemOptions::default();
+        opts.ordering = *ordering;
         let p = Problem::with_options(mesh, &opts).unwrap();
         let x0 = p.gather(&mesh.points);
         let ne = p.num_elements() as f64;

@@ -88,17 +88,13 @@ fn main() {
         let setup = t.elapsed().as_secs_f64();
         for ctx in &gpus {
             for &method in &methods {
-                let params = Params {
-                    max_iter: iters,
-                    tol: 0.0,
-                    ..Params::default()
-                };
-                let options = Options {
-                    method,
-                    params,
-                    device: Device::Gpu(ctx),
-                    ..Default::default()
-                };
+                let mut params = Params::default();
+                params.max_iter = iters;
+                params.tol = 0.0;
+                let mut options = Options::default();
+                options.method = method;
+                options.params = params;
+                options.device = Device::Gpu(ctx);
                 let mut x = x0.clone();
                 let precision = if ctx.is_f64() { "f64" } else { "f32" };
                 let head = format!(

@@ -126,18 +126,16 @@ fn main() {
     println!("|{}", "---|".repeat(header.matches('|').count() - 1));
     let reps = if quick { 3 } else { 5 };
     for case in &cases {
-        let opts = ProblemOptions {
-            metric: if case.general {
-                MetricKind::ConditionNumber
-            } else {
-                MetricKind::InverseMeanRatio
-            },
-            template: if case.general {
-                Template::Average
-            } else {
-                Template::Harmonic
-            },
-            ..Default::default()
+        let mut opts = ProblemOptions::default();
+        opts.metric = if case.general {
+            MetricKind::ConditionNumber
+        } else {
+            MetricKind::InverseMeanRatio
+        };
+        opts.template = if case.general {
+            Template::Average
+        } else {
+            Template::Harmonic
         };
         let setup = Instant::now();
         let p = Problem::with_options(&case.mesh, &opts).unwrap();

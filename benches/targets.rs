@@ -35,10 +35,8 @@ fn main() {
     let params = Params::default();
     let run = |target: Target<'static>| {
         let mut m = start.clone();
-        let opts = ProblemOptions {
-            target,
-            ..Default::default()
-        };
+        let mut opts = ProblemOptions::default();
+        opts.target = target;
         let (resolved, _) = opts.resolved(&m).unwrap();
         let t = std::time::Instant::now();
         let info = solve::smooth_mesh(&mut m, &opts, &Options::cpu(Method::Newton, &params), &mut |_| true).unwrap();

@@ -104,10 +104,8 @@ fn main() {
     println!("RJ {:?} {}", info.info.stop, info.info.iterations);
     show("RJ   ", &metric_summary(&rj, &rj.points, m, None).unwrap());
     let mut cn = mesh.clone();
-    let tight = Params {
-        tol: 1e-9,
-        ..Params::default()
-    };
+    let mut tight = Params::default();
+    tight.tol = 1e-9;
     let ci = rezone::cn_optimise_mesh(&mut cn, &Options::cpu(Method::Newton, &tight), &mut |_| true).unwrap();
     println!("CN {:?} {}", ci.stop, ci.iterations);
     show("CN   ", &metric_summary(&cn, &cn.points, m, None).unwrap());

@@ -34,11 +34,9 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     if let Some(note) = note {
         eprintln!("note: {note}");
     }
-    let opts = Options {
-        params: params.clone(),
-        device: backend.device(),
-        ..Default::default()
-    };
+    let mut opts = Options::default();
+    opts.params = params.clone();
+    opts.device = backend.device();
     let (cmp, infos) =
         meshsmooth::compare::compare(&mesh, &options, methods, &opts).map_err(|e| io::in_file(&a.input, e))?;
     let where_ = infos.first().map_or_else(String::new, |i| i.device.clone());

@@ -37,11 +37,12 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
         eprintln!("note: {note}");
     }
     let opts = RezoneOptions {
-        solve: solve::Options {
-            method: a.method,
-            params,
-            device: backend.device(),
-            ..Default::default()
+        solve: {
+            let mut o = solve::Options::default();
+            o.method = a.method;
+            o.params = params;
+            o.device = backend.device();
+            o
         },
         reference_iters: a.reference_iters,
     };

@@ -47,6 +47,7 @@ use std::time::{Duration, Instant};
 
 /// What to optimise.
 #[derive(Clone, Copy, Debug, Default)]
+#[non_exhaustive]
 pub struct ProblemOptions<'a> {
     /// The corner metric.
     pub metric: MetricKind,

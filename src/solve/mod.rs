@@ -124,6 +124,7 @@ impl Default for LaplaceParams {
 
 /// Termination (shared by every method) and each method's own settings.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[non_exhaustive]
 pub struct Params {
     /// Stop when the 2-norm of the free-vertex gradient of F, with lengths
     /// measured in mean edge lengths of the start (so unit-free, like F), is
@@ -224,6 +225,7 @@ impl<'a> Device<'a> {
 /// How a run is carried out: method, settings, device, and the guard against
 /// losing work on a device that fails midway.
 #[derive(Clone, Default)]
+#[non_exhaustive]
 pub struct Options<'a> {
     /// The optimiser.
     pub method: Method,
@@ -235,8 +237,10 @@ pub struct Options<'a> {
     /// mid-run (device lost, out of memory) leaves the last feasible
     /// positions in `x`. `None`: positions come back only at the end.
     pub checkpoint_every: Option<usize>,
-    /// Testing aid: fail as a lost device would, after this many iterations.
+    /// Testing aid (feature `test-hooks`, not part of the API): fail as a
+    /// lost device would, after this many iterations.
     #[doc(hidden)]
+    #[cfg(feature = "test-hooks")]
     pub fail_after: Option<usize>,
 }
 
@@ -253,6 +257,7 @@ impl Options<'_> {
 
 /// What a solve did.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct Info {
     /// The method that ran.
     pub method: Method,
@@ -418,6 +423,7 @@ pub(crate) fn run_scaled<B: Backend + ?Sized>(
     let mut checkpoint: Option<Vec<Vec3>> = None;
     let result = {
         let mut step = |be: &mut B| -> Result<Sweep> {
+            #[cfg(feature = "test-hooks")]
             if opts.fail_after.is_some_and(|n| steps >= n) {
                 return Err(Error::Gpu("device lost (simulated for testing)".into()));
             }

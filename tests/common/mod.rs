@@ -93,11 +93,12 @@ pub fn random_tets(seed: u64, count: usize, flatten: f64, max_eta: f64) -> Vec<T
 
 /// Options for `method` on `device` with `params`.
 pub fn options<'a>(method: Method, params: &Params, device: Device<'a>) -> Options<'a> {
-    Options {
-        method,
-        params: params.clone(),
-        device,
-        ..Default::default()
+    {
+        let mut o = Options::default();
+        o.method = method;
+        o.params = params.clone();
+        o.device = device;
+        o
     }
 }
 
@@ -265,12 +266,10 @@ pub fn models() -> Vec<(MetricKind, Template)> {
 }
 
 pub fn problem(mesh: &Mesh, reference: &Mesh, metric: MetricKind, template: Template) -> Problem {
-    let opts = ProblemOptions {
-        metric,
-        template,
-        reference: matches!(metric, MetricKind::TargetShapeSize | MetricKind::ShapeSize).then_some(reference),
-        ..Default::default()
-    };
+    let mut opts = ProblemOptions::default();
+    opts.metric = metric;
+    opts.template = template;
+    opts.reference = matches!(metric, MetricKind::TargetShapeSize | MetricKind::ShapeSize).then_some(reference);
     Problem::with_options(mesh, &opts).unwrap()
 }
 

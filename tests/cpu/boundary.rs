@@ -17,20 +17,19 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn slide() -> ProblemOptions<'static> {
-    ProblemOptions {
-        boundary: Boundary {
+    {
+        let mut po = ProblemOptions::default();
+        po.boundary = Boundary {
             mode: BoundaryMode::Slide,
             ..Default::default()
-        },
-        ..Default::default()
+        };
+        po
     }
 }
 
 fn smooth(mesh: &mut Mesh, po: &ProblemOptions, method: Method, device: Device) -> Info {
-    let params = Params {
-        max_iter: 200,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = 200;
     solve::smooth_mesh(mesh, po, &options(method, &params, device), &mut |_| true).unwrap()
 }
 
@@ -472,10 +471,8 @@ fn flat_tet_sphere_slides_on_its_triangulation() {
     // its `fixed` array pins the whole skin (Mesquite's setting): released here
     assert!(!start.fixed.is_empty());
     start.fixed.clear();
-    let params = Params {
-        max_iter: 20,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = 20;
     let run = |po: &ProblemOptions| {
         let mut m = start.clone();
         let info = solve::smooth_mesh(&mut m, po, &options(Method::Newton, &params, Device::Cpu), &mut |_| {

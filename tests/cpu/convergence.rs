@@ -56,14 +56,11 @@ fn bcd_returns_to_the_unperturbed_grid() {
     // the paper's perturbation study: the optimum is the grid the vertices came from
     let grid = generate::tet_box(6, 6, 6, [6.0; 3]);
     let mut mesh = perturbed_box(6, 0.25, 3);
-    let info = smooth(
-        &mut mesh,
-        Method::Bcd,
-        &Params {
-            tol: 1e-9,
-            ..Params::default()
-        },
-    );
+    let info = smooth(&mut mesh, Method::Bcd, &{
+        let mut p = Params::default();
+        p.tol = 1e-9;
+        p
+    });
     assert_eq!(info.stop, StopReason::Converged);
     let worst = mesh
         .points
@@ -78,10 +75,8 @@ fn bcd_returns_to_the_unperturbed_grid() {
 fn smoothing_commutes_with_similarity_transforms() {
     let mesh = perturbed_box(5, 0.3, 11);
     let mut a = mesh.clone();
-    let params = Params {
-        tol: 1e-10,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = 1e-10;
     smooth(&mut a, Method::Bcd, &params);
     let (c, s) = (0.6f64.cos(), 0.6f64.sin());
     let transform = |p: [f64; 3]| {
@@ -94,14 +89,11 @@ fn smoothing_commutes_with_similarity_transforms() {
     let mut b = mesh.clone();
     b.points = b.points.iter().map(|&p| transform(p)).collect();
     // the gradient scales as 1/length and the objective is invariant
-    smooth(
-        &mut b,
-        Method::Bcd,
-        &Params {
-            tol: 1e-10 / 3.0,
-            ..Params::default()
-        },
-    );
+    smooth(&mut b, Method::Bcd, &{
+        let mut p = Params::default();
+        p.tol = 1e-10 / 3.0;
+        p
+    });
     for (pa, pb) in a.points.iter().zip(&b.points) {
         let ta = transform(*pa);
         for i in 0..3 {
@@ -120,14 +112,11 @@ fn laplace_keeps_the_mesh_valid_and_never_worsens_the_worst_element() {
     };
     let fixed = topology::fixed_vertices(&mesh);
     let start = mesh.clone();
-    let info = smooth(
-        &mut mesh,
-        Method::Laplace,
-        &Params {
-            max_iter: 50,
-            ..Params::default()
-        },
-    );
+    let info = smooth(&mut mesh, Method::Laplace, &{
+        let mut p = Params::default();
+        p.max_iter = 50;
+        p
+    });
     assert!(info.iterations > 0);
     assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
     assert!(worst(&mesh) <= worst(&start));
@@ -145,25 +134,19 @@ fn laplace_keeps_the_mesh_valid_and_never_worsens_the_worst_element() {
 #[test]
 fn limits_stop_the_solver_with_a_valid_mesh() {
     let mut mesh = perturbed_box(10, 0.3, 2);
-    let info = smooth(
-        &mut mesh,
-        Method::Bcd,
-        &Params {
-            max_iter: 3,
-            ..Params::default()
-        },
-    );
+    let info = smooth(&mut mesh, Method::Bcd, &{
+        let mut p = Params::default();
+        p.max_iter = 3;
+        p
+    });
     assert_eq!(info.stop, StopReason::MaxIterations);
     assert_eq!(info.iterations, 3);
     assert_eq!(info.history.records.len(), 4);
-    let info = smooth(
-        &mut mesh,
-        Method::Bcd,
-        &Params {
-            time_limit: Some(Duration::from_nanos(1)),
-            ..Params::default()
-        },
-    );
+    let info = smooth(&mut mesh, Method::Bcd, &{
+        let mut p = Params::default();
+        p.time_limit = Some(Duration::from_nanos(1));
+        p
+    });
     assert_eq!(info.stop, StopReason::TimeLimit);
     let mut calls = 0;
     let info = solve::smooth_mesh(
@@ -215,12 +198,10 @@ fn mixed_tet_prism_hex_meshes_optimise_with_every_metric() {
     for metric in [MetricKind::InverseMeanRatio, MetricKind::ConditionNumber] {
         for method in [Method::Newton, Method::Bcd, Method::Nlcg] {
             let mut mesh = base.clone();
-            let po = ProblemOptions {
-                metric,
-                template: Template::Harmonic,
-                reference: None,
-                ..Default::default()
-            };
+            let mut po = ProblemOptions::default();
+            po.metric = metric;
+            po.template = Template::Harmonic;
+            po.reference = None;
             let info = solve::smooth_mesh(
                 &mut mesh,
                 &po,
@@ -282,10 +263,8 @@ fn a_target_objective_stops_at_the_first_iterate_that_reaches_it() {
         // halfway between the start and the optimum
         let target = 0.5 * (f0 + done.objective);
         let mut m = mesh.clone();
-        let params = Params {
-            target_objective: Some(target),
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.target_objective = Some(target);
         let info = smooth(&mut m, method, &params);
         assert_eq!(info.stop, StopReason::TargetReached, "{method}");
         assert!(

@@ -228,10 +228,8 @@ fn assembled_gradient_and_hessian_match_finite_differences() {
 #[test]
 fn newton_and_bcd_reach_the_same_vertex_positions() {
     let mesh = perturbed_box(8, 0.3, 4);
-    let tight = Params {
-        tol: 1e-9,
-        ..Params::default()
-    };
+    let mut tight = Params::default();
+    tight.tol = 1e-9;
     let (na, a) = converged(&mesh, Method::Newton, &tight);
     let (nb, b) = converged(&mesh, Method::Bcd, &tight);
     assert!(
@@ -415,13 +413,11 @@ fn newton_memory_is_within_the_papers_formula() {
         &mesh,
         &Default::default(),
         &[Method::Newton],
-        &solve::Options::cpu(
-            Method::Newton,
-            &Params {
-                max_iter: 1,
-                ..Params::default()
-            },
-        ),
+        &solve::Options::cpu(Method::Newton, &{
+            let mut p = Params::default();
+            p.max_iter = 1;
+            p
+        }),
     )
     .unwrap();
     let r = &cmp.runs[0];
@@ -473,10 +469,8 @@ fn pcg_with_symmetric_gauss_seidel_solves_spd_systems_in_fewer_iterations() {
 /// two runs' results (Jacobi first).
 fn jacobi_and_sgs(mesh: &meshsmooth::Mesh) -> [(solve::Info, meshsmooth::Mesh); 2] {
     [Preconditioner::Jacobi, Preconditioner::Sgs].map(|pc| {
-        let mut params = Params {
-            tol: 1e-10,
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.tol = 1e-10;
         params.newton.preconditioner = pc;
         converged(mesh, Method::Newton, &params)
     })
@@ -525,10 +519,8 @@ fn inversion_fraction_saves_trials_and_keeps_the_optimum() {
     use meshsmooth::generate::{self, HorseshoeKind};
     let (mesh, _) = generate::horseshoe(HorseshoeKind::SqIV, 2000);
     let run = |fraction: f64| {
-        let mut params = Params {
-            tol: 1e-9,
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.tol = 1e-9;
         params.newton.inversion_fraction = fraction;
         let (info, m) = converged(&mesh, Method::Newton, &params);
         assert!(meshsmooth::metric::inverted_elements(&m, &m.points).is_empty());

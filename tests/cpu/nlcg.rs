@@ -32,10 +32,8 @@ fn nlcg_reaches_newtons_objective_on_a_perturbed_tet_box() {
         let mesh = perturbed_box(6, 0.3, seed);
         let p = Problem::new(&mesh).unwrap();
         let x0 = p.gather(&mesh.points);
-        let params = Params {
-            tol: 1e-7,
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.tol = 1e-7;
         let mut xn = x0.clone();
         let newton = solve_on(&p, &mut xn, Method::Newton, &params, Device::Cpu);
         let mut xc = x0.clone();
@@ -74,10 +72,8 @@ fn nlcg_reaches_newtons_objective_for_every_metric_and_element_kind() {
             let x0 = p.gather(&mesh.points);
             // a tighter tolerance is below what a line search on values of
             // F can resolve (F's rounding hides the decrease)
-            let params = Params {
-                tol: 1e-7,
-                ..Params::default()
-            };
+            let mut params = Params::default();
+            params.tol = 1e-7;
             let mut xn = x0.clone();
             let newton = solve_on(&p, &mut xn, Method::Newton, &params, Device::Cpu);
             let mut xc = x0.clone();
@@ -115,9 +111,10 @@ fn nlcg_keeps_a_nearly_inverted_mesh_valid() {
         &p,
         &mut x,
         Method::Nlcg,
-        &Params {
-            nlcg: params,
-            ..Params::default()
+        &{
+            let mut p = Params::default();
+            p.nlcg = params;
+            p
         },
         Device::Cpu,
     );
@@ -134,14 +131,15 @@ fn a_step_below_tol_x_stops_nlcg() {
     let x0 = p.gather(&mesh.points);
     let edge = p.mean_edge_length(&x0);
     let tol_x = 1e-3;
-    let params = |max_iter| Params {
-        tol: 1e-12,
-        max_iter,
-        nlcg: NlcgParams {
+    let params = |max_iter| {
+        let mut p = Params::default();
+        p.tol = 1e-12;
+        p.max_iter = max_iter;
+        p.nlcg = NlcgParams {
             tol_x,
             ..NlcgParams::default()
-        },
-        ..Params::default()
+        };
+        p
     };
     let mut x = x0.clone();
     let info = solve_on(&p, &mut x, Method::Nlcg, &params(1000), Device::Cpu);

@@ -17,11 +17,12 @@ use meshsmooth::solve::{self, BcdParams, Method, Options, Params, StopReason};
 fn with_order(ordering: Ordering, seed: u64) -> ProblemOptions<'static> {
     // the ideal objective, the one the orderings are studied on (the biased
     // horseshoe is graded toward its inner wall and would get input targets)
-    ProblemOptions {
-        ordering,
-        order_seed: seed,
-        target: meshsmooth::problem::Target::Ideal,
-        ..Default::default()
+    {
+        let mut po = ProblemOptions::default();
+        po.ordering = ordering;
+        po.order_seed = seed;
+        po.target = meshsmooth::problem::Target::Ideal;
+        po
     }
 }
 
@@ -174,15 +175,16 @@ fn lng_and_gavm_put_the_vertex_farthest_from_rest_first() {
 }
 
 fn bcd_params(reorder_every: Option<usize>, inner: usize) -> Params {
-    Params {
-        tol: 1e-9,
-        max_iter: 5000,
-        bcd: BcdParams {
+    {
+        let mut p = Params::default();
+        p.tol = 1e-9;
+        p.max_iter = 5000;
+        p.bcd = BcdParams {
             reorder_every,
             inner_iterations: inner,
             ..Default::default()
-        },
-        ..Default::default()
+        };
+        p
     }
 }
 
@@ -272,10 +274,8 @@ fn every_ordering_reaches_the_same_optimum_in_the_input_numbering() {
 fn two_inner_iterations_move_farther_per_sweep_and_reach_the_same_optimum() {
     let m = perturbed_grid(6);
     let one_sweep = |inner| {
-        let p = Params {
-            max_iter: 1,
-            ..bcd_params(None, inner)
-        };
+        let mut p = bcd_params(None, inner);
+        p.max_iter = 1;
         smooth(&m, Ordering::INPUT, &p).1.objective
     };
     let (f1, f2) = (one_sweep(1), one_sweep(2));
@@ -289,10 +289,8 @@ fn two_inner_iterations_move_farther_per_sweep_and_reach_the_same_optimum() {
 fn times_split_into_optimisation_and_reordering_within_the_total() {
     let (m, _) = generate::horseshoe(HorseshoeKind::SqIV, 300);
     let wqp = Ordering::Sweep(SweepOrder::parse("wqp").unwrap());
-    let params = Params {
-        max_iter: 20,
-        ..bcd_params(Some(5), 1)
-    };
+    let mut params = bcd_params(Some(5), 1);
+    params.max_iter = 20;
     let (_, info) = smooth(&m, wqp, &params);
     assert_eq!(info.iterations, 20);
     // at the start, then after sweeps 5, 10, 15 and 20
@@ -311,10 +309,8 @@ fn a_target_objective_stops_a_reordered_sweep_at_the_first_sweep_below_it() {
     let (_, free_run) = smooth(&m, dlng, &bcd_params(Some(1), 1));
     let f0 = free_run.history.first().unwrap().objective;
     let target = free_run.objective + 0.1 * (f0 - free_run.objective);
-    let params = Params {
-        target_objective: Some(target),
-        ..bcd_params(Some(1), 1)
-    };
+    let mut params = bcd_params(Some(1), 1);
+    params.target_objective = Some(target);
     let (_, info) = smooth(&m, dlng, &params);
     assert_eq!(info.stop, StopReason::TargetReached);
     assert!(info.objective <= target);

@@ -12,18 +12,14 @@ use meshsmooth::solve::{self, Method, Params, StopReason};
 #[test]
 fn horseshoe_sqi_converges_to_its_semi_annulus_targets() {
     let (mesh, reference) = generate::horseshoe(HorseshoeKind::SqI, 2000);
-    let opts = ProblemOptions {
-        metric: MetricKind::TargetShapeSize,
-        template: Template::Harmonic,
-        reference: Some(&reference),
-        ..Default::default()
-    };
+    let mut opts = ProblemOptions::default();
+    opts.metric = MetricKind::TargetShapeSize;
+    opts.template = Template::Harmonic;
+    opts.reference = Some(&reference);
     for method in [Method::Newton, Method::Bcd] {
         let mut m = mesh.clone();
-        let params = Params {
-            max_iter: if method == Method::Bcd { 3000 } else { 500 },
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.max_iter = if method == Method::Bcd { 3000 } else { 500 };
         let info = solve::smooth_mesh(&mut m, &opts, &solve::Options::cpu(method, &params), &mut |_| true).unwrap();
         assert_eq!(info.stop, StopReason::Converged, "{method}: {:?}", info.history.last());
         // the boundary keeps the horseshoe, so the targets cannot all be met: F drops, not to 0
@@ -52,10 +48,8 @@ fn horseshoe_sqi_converges_to_its_semi_annulus_targets() {
 fn condition_number_fixes_the_distorted_prism_mesh_like_example_1() {
     let mesh = generate::prism_mesh(true, 1);
     assert_eq!((mesh.num_points(), mesh.num_elements()), (1331, 2000));
-    let cn = ProblemOptions {
-        metric: MetricKind::ConditionNumber,
-        ..Default::default()
-    };
+    let mut cn = ProblemOptions::default();
+    cn.metric = MetricKind::ConditionNumber;
     let before = metric_summary(&mesh, &mesh.points, MetricKind::ConditionNumber, None).unwrap();
     let mut out = mesh.clone();
     let info = solve::smooth_mesh(

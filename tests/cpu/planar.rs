@@ -40,10 +40,8 @@ fn placed(m: &Mesh, f: impl Fn(&Vec3) -> Vec3) -> Mesh {
 type Placement = Box<dyn Fn(&Vec3) -> Vec3>;
 
 fn smooth(m: &mut Mesh, method: Method) -> Info {
-    let params = Params {
-        tol: 1e-9,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = 1e-9;
     solve::smooth_mesh(
         m,
         &Default::default(),

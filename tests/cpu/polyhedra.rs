@@ -449,11 +449,9 @@ fn newton_and_bcd_improve_polyhedral_meshes_for_every_metric() {
         let f0 = objective::value(&p, &p.gather(&start.points)).unwrap();
         let mut finals = Vec::new();
         for method in [Method::Newton, Method::Bcd] {
-            let params = Params {
-                tol: 1e-6,
-                max_iter: 400,
-                ..Params::default()
-            };
+            let mut params = Params::default();
+            params.tol = 1e-6;
+            params.max_iter = 400;
             let mut x = p.gather(&start.points);
             let info = solve::solve(&p, &mut x, &options(method, &params, Device::Cpu), &mut |_| true).unwrap();
             let f = objective::value(&p, &x).unwrap();
@@ -508,10 +506,8 @@ fn smoothing_a_polyhedral_mesh_does_not_depend_on_units() {
     for p in &mut b.points {
         *p = p.map(|c| c * 1024.0);
     }
-    let params = Params {
-        tol: 1e-8,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = 1e-8;
     let ia = solve::smooth_mesh(
         &mut a,
         &Default::default(),

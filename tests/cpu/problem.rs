@@ -19,9 +19,10 @@ fn perturbed(mut m: Mesh, alpha: f64, seed: u64) -> Mesh {
 }
 
 fn with_ordering(ordering: Ordering) -> ProblemOptions<'static> {
-    ProblemOptions {
-        ordering,
-        ..Default::default()
+    {
+        let mut po = ProblemOptions::default();
+        po.ordering = ordering;
+        po
     }
 }
 
@@ -41,10 +42,8 @@ fn input_ordering_keeps_the_file_order_and_reaches_the_same_optimum() {
     let f0_rbfs = objective::value(&rbfs, &rbfs.gather(&mesh.points)).unwrap();
     assert!((f0_input - f0_rbfs).abs() <= 1e-13 * f0_rbfs, "{f0_input} vs {f0_rbfs}");
 
-    let params = Params {
-        tol: 1e-9,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = 1e-9;
     let mut finals = Vec::new();
     for ordering in [Ordering::ReverseBfs, Ordering::INPUT, Ordering::CuthillMcKee] {
         let mut m = mesh.clone();
@@ -100,14 +99,12 @@ fn element_values_via_problem(
 ) -> meshsmooth::Result<Vec<Option<f64>>> {
     let mut m = mesh.clone();
     m.points = points.to_vec();
-    let p = Problem::with_options(
-        &m,
-        &ProblemOptions {
-            metric,
-            reference,
-            ..Default::default()
-        },
-    )?;
+    let p = Problem::with_options(&m, &{
+        let mut po = ProblemOptions::default();
+        po.metric = metric;
+        po.reference = reference;
+        po
+    })?;
     let x = p.gather(points);
     let mut sums = vec![Some(0.0); mesh.num_elements()];
     let mut counts = vec![0usize; mesh.num_elements()];

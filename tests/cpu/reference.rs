@@ -37,11 +37,12 @@ fn quad_grid(n: usize, shear: f64) -> Mesh {
 }
 
 fn tmp_options(reference: &Mesh) -> ProblemOptions<'_> {
-    ProblemOptions {
-        metric: MetricKind::TargetShapeSize,
-        template: Template::Harmonic,
-        reference: Some(reference),
-        ..Default::default()
+    {
+        let mut po = ProblemOptions::default();
+        po.metric = MetricKind::TargetShapeSize;
+        po.template = Template::Harmonic;
+        po.reference = Some(reference);
+        po
     }
 }
 
@@ -52,10 +53,8 @@ fn the_target_metric_brings_a_perturbed_mesh_back_to_its_reference() {
     for (name, reference) in [("tets", tet), ("sheared quads", quad)] {
         for method in [Method::Newton, Method::Bcd] {
             let mut mesh = perturbed(&reference, 3);
-            let params = Params {
-                tol: 1e-10,
-                ..Params::default()
-            };
+            let mut params = Params::default();
+            params.tol = 1e-10;
             let info = solve::smooth_mesh(
                 &mut mesh,
                 &tmp_options(&reference),
@@ -107,12 +106,10 @@ fn every_metric_and_template_converges_on_hexahedra_and_quads() {
             (MetricKind::ConditionNumber, Template::Average),
         ] {
             let mut mesh = perturbed(&reference, 8);
-            let opts = ProblemOptions {
-                metric,
-                template,
-                reference: None,
-                ..Default::default()
-            };
+            let mut opts = ProblemOptions::default();
+            opts.metric = metric;
+            opts.template = template;
+            opts.reference = None;
             let info = solve::smooth_mesh(
                 &mut mesh,
                 &opts,
@@ -158,20 +155,16 @@ fn references_that_do_not_fit_are_refused_with_the_first_mismatch() {
         .to_string();
     assert!(err.contains("inverted or degenerate"), "{err}");
 
-    let no_ref = ProblemOptions {
-        metric: MetricKind::TargetShapeSize,
-        ..Default::default()
-    };
+    let mut no_ref = ProblemOptions::default();
+    no_ref.metric = MetricKind::TargetShapeSize;
     assert!(
         Problem::with_options(&mesh, &no_ref)
             .unwrap_err()
             .to_string()
             .contains("--reference")
     );
-    let avg = ProblemOptions {
-        template: Template::Average,
-        ..tmp_options(&mesh)
-    };
+    let mut avg = tmp_options(&mesh);
+    avg.template = Template::Average;
     assert!(
         Problem::with_options(&mesh, &avg)
             .unwrap_err()

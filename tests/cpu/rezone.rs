@@ -290,10 +290,8 @@ fn rj_and_cn(mesh: &Mesh, rj_options: &rezone::RezoneOptions) -> RjAndCn {
     let mut rj = mesh.clone();
     let info = rezone::rezone_mesh(&mut rj, rj_options, &mut |_| true).unwrap();
     let mut cn = mesh.clone();
-    let tight = Params {
-        tol: 1e-9,
-        ..Params::default()
-    };
+    let mut tight = Params::default();
+    tight.tol = 1e-9;
     let cn_info = rezone::cn_optimise_mesh(&mut cn, &Options::cpu(Method::Newton, &tight), &mut |_| true).unwrap();
     let out = RjAndCn {
         before: summary(mesh),
@@ -427,10 +425,8 @@ fn rj_solve_on_the_gpu_matches_the_cpu_f64() {
         let h = p.mean_edge_length(&x0);
         let run = |device| {
             let mut x = x0.clone();
-            let opts = Options {
-                device,
-                ..Options::cpu(Method::Newton, &Params::default())
-            };
+            let mut opts = Options::cpu(Method::Newton, &Params::default());
+            opts.device = device;
             let info = meshsmooth::solve::solve(&p, &mut x, &opts, &mut |_| true).unwrap();
             (x, info)
         };

@@ -70,10 +70,8 @@ fn perturbed(mesh: &Mesh, alpha: f64, seed: u64) -> Mesh {
 }
 
 fn smooth(mesh: &mut Mesh, opts: &ProblemOptions) -> solve::Info {
-    let params = Params {
-        max_iter: 200,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = 200;
     solve::smooth_mesh(mesh, opts, &Options::cpu(Method::Newton, &params), &mut |_| true).unwrap()
 }
 
@@ -92,10 +90,11 @@ fn first_layer_error(mesh: &Mesh, base: &Mesh) -> (f64, f64) {
 }
 
 fn input_opts() -> ProblemOptions<'static> {
-    ProblemOptions {
-        metric: MetricKind::ShapeSize,
-        target: Target::Input(InputTargets::default()),
-        ..Default::default()
+    {
+        let mut po = ProblemOptions::default();
+        po.metric = MetricKind::ShapeSize;
+        po.target = Target::Input(InputTargets::default());
+        po
     }
 }
 
@@ -105,10 +104,8 @@ fn input_targets_keep_a_boundary_layer_that_the_ideal_objective_destroys() {
     let start = perturbed(&base, 0.3, 7);
     let (m0, x0) = first_layer_error(&start, &base);
     let mut ideal = start.clone();
-    let ideal_opts = ProblemOptions {
-        target: Target::Ideal,
-        ..Default::default()
-    };
+    let mut ideal_opts = ProblemOptions::default();
+    ideal_opts.target = Target::Ideal;
     smooth(&mut ideal, &ideal_opts);
     let (mi, xi) = first_layer_error(&ideal, &base);
     // the default sees the layer and keeps it like input targets
@@ -237,11 +234,9 @@ fn a_size_field_makes_elements_smaller_where_it_is_smaller() {
         (left.0 / left.1) / (right.0 / right.1)
     };
     let before = area_ratio(&mesh);
-    let opts = ProblemOptions {
-        metric: MetricKind::ShapeSize,
-        target: Target::Size("h"),
-        ..Default::default()
-    };
+    let mut opts = ProblemOptions::default();
+    opts.metric = MetricKind::ShapeSize;
+    opts.target = Target::Size("h");
     smooth(&mut mesh, &opts);
     let after = area_ratio(&mesh);
     eprintln!("left/right mean element area: before {before:.3}, after {after:.3}");
@@ -249,10 +244,8 @@ fn a_size_field_makes_elements_smaller_where_it_is_smaller() {
     assert!(after < 0.5 * before, "{after} vs {before}");
     // a field that is missing or not positive is refused by name
     let mut bad = mesh.clone();
-    let opts = ProblemOptions {
-        target: Target::Size("nope"),
-        ..Default::default()
-    };
+    let mut opts = ProblemOptions::default();
+    opts.target = Target::Size("nope");
     let err = solve::smooth_mesh(
         &mut bad,
         &opts,
@@ -411,10 +404,8 @@ fn a_gmsh_boundary_layer_survives_smoothing_with_the_default_targets() {
     let start = perturbed(&base, 0.3, seeds[0]);
     // and the ideal objective, asked for, thickens the layer
     let mut ideal = start.clone();
-    let opts = ProblemOptions {
-        target: Target::Ideal,
-        ..Default::default()
-    };
+    let mut opts = ProblemOptions::default();
+    opts.target = Target::Ideal;
     smooth(&mut ideal, &opts);
     let (med, _) = wall_distance_error(&ideal, &base, &layer);
     eprintln!("ideal: first layer median |d/d0 - 1| {med:.3}");
@@ -444,13 +435,11 @@ fn a_hex_box_graded_toward_a_wall_keeps_its_first_layer() {
     let mut kept = start.clone();
     smooth(&mut kept, &ProblemOptions::default());
     let mut ideal = start.clone();
-    smooth(
-        &mut ideal,
-        &ProblemOptions {
-            target: Target::Ideal,
-            ..Default::default()
-        },
-    );
+    smooth(&mut ideal, &{
+        let mut po = ProblemOptions::default();
+        po.target = Target::Ideal;
+        po
+    });
     let ((mk, xk), (mi, _), (mp, _)) = (error(&kept), error(&ideal), error(&start));
     eprintln!(
         "hex first layer |h/h0 - 1| median/max: default {mk:.3}/{xk:.3}, ideal {mi:.3} median, perturbed {mp:.3}"

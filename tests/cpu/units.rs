@@ -24,10 +24,8 @@ fn run(mesh: &Mesh, scale: f64, shift: f64, method: Method, device: Device) -> (
     for p in &mut m.points {
         *p = p.map(|c| c * scale + shift);
     }
-    let params = Params {
-        tol: 1e-8,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = 1e-8;
     let info = solve::smooth_mesh(
         &mut m,
         &Default::default(),

@@ -30,10 +30,11 @@ fn tangled(reference: &Mesh, alpha: f64, seed: u64) -> (Mesh, f64) {
 }
 
 fn params() -> Params {
-    Params {
-        tol: 1e-7,
-        max_iter: 400,
-        ..Default::default()
+    {
+        let mut p = Params::default();
+        p.tol = 1e-7;
+        p.max_iter = 400;
+        p
     }
 }
 
@@ -383,10 +384,8 @@ fn a_tangle_without_a_valid_position_fails_after_its_rounds() {
 #[test]
 fn the_time_limit_covers_every_round_and_is_named_when_it_ends_the_run() {
     let mut m = c_fan();
-    let params = Params {
-        time_limit: Some(std::time::Duration::from_nanos(1)),
-        ..Default::default()
-    };
+    let mut params = Params::default();
+    params.time_limit = Some(std::time::Duration::from_nanos(1));
     let err = untangle_mesh(
         &mut m,
         &ProblemOptions::default(),

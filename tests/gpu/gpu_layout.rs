@@ -30,11 +30,9 @@ fn layouts_agree(method: Method, precision: Precision, tol_edge: f64) {
     let mesh = perturbed_box(7, 0.3, 3);
     let p = Problem::new(&mesh).unwrap();
     let x0 = p.gather(&mesh.points);
-    let params = Params {
-        max_iter: 3,
-        tol: 0.0,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = 3;
+    params.tol = 0.0;
     let runs: Vec<Vec<_>> = ctxs
         .iter()
         .map(|ctx| {

@@ -230,10 +230,8 @@ fn full_solve(precision: Precision, tol: f64, gpu_tol: f64) {
     let params = Params::default();
     let mut cpu_x = x0.clone();
     let cpu = solve_on(&p, &mut cpu_x, Method::BcdColored, &params, Device::Cpu);
-    let gpu_params = Params {
-        tol: gpu_tol,
-        ..Params::default()
-    };
+    let mut gpu_params = Params::default();
+    gpu_params.tol = gpu_tol;
     let mut x = x0.clone();
     let info = solve_on(&p, &mut x, Method::BcdColored, &gpu_params, Device::Gpu(&ctx));
     eprintln!(
@@ -291,11 +289,9 @@ fn a_failure_midway_leaves_the_last_checkpoint_which_is_feasible() {
     let Some(ctx) = context(Precision::F64) else { return };
     let mut mesh = perturbed_box(6, 0.3, 1);
     let start = mesh.points.clone();
-    let opts = solve::Options {
-        checkpoint_every: Some(2),
-        fail_after: Some(5),
-        ..options(Method::BcdColored, &Params::default(), Device::Gpu(&ctx))
-    };
+    let mut opts = options(Method::BcdColored, &Params::default(), Device::Gpu(&ctx));
+    opts.checkpoint_every = Some(2);
+    opts.fail_after = Some(5);
     let err = solve::smooth_mesh(&mut mesh, &Default::default(), &opts, &mut |_| true).unwrap_err();
     assert!(err.to_string().contains("device lost"), "{err}");
     assert_ne!(
@@ -305,10 +301,8 @@ fn a_failure_midway_leaves_the_last_checkpoint_which_is_feasible() {
     assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
     // the checkpoint is the state after exactly four sweeps
     let mut expected = perturbed_box(6, 0.3, 1);
-    let four = Params {
-        max_iter: 4,
-        ..Params::default()
-    };
+    let mut four = Params::default();
+    four.max_iter = 4;
     let opts = options(Method::BcdColored, &four, Device::Gpu(&ctx));
     solve::smooth_mesh(&mut expected, &Default::default(), &opts, &mut |_| true).unwrap();
     assert_eq!(mesh.points, expected.points);

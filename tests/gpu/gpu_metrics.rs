@@ -90,10 +90,8 @@ fn full_solve(kind: ElementKind, metric: MetricKind) {
     };
     let p = problem(&mesh, &reference, metric, Template::Harmonic);
     let x0 = p.gather(&mesh.points);
-    let params = Params {
-        tol: 1e-8,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = 1e-8;
     let mut cx = x0.clone();
     let cpu = solve_on(&p, &mut cx, Method::BcdColored, &params, Device::Cpu);
     let mut gx = x0.clone();
@@ -128,10 +126,8 @@ fn newton_first_iterates(kind: ElementKind, metric: MetricKind, template: Templa
     let (mesh, reference) = meshes(kind, 5);
     let p = problem(&mesh, &reference, metric, template);
     let x0 = p.gather(&mesh.points);
-    let params = Params {
-        max_iter: 3,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = 3;
     let mut cx = x0.clone();
     let cpu = solve_on(&p, &mut cx, Method::Newton, &params, Device::Cpu);
     let mut gx = x0.clone();
@@ -208,17 +204,13 @@ fn newton_first_iterates_with_input_targets_match_cpu_f64() {
             ..Default::default()
         };
         generate::perturb(&mut mesh, &perturb).unwrap();
-        let opts = ProblemOptions {
-            metric: MetricKind::ShapeSize,
-            target: Target::Input(InputTargets::default()),
-            ..Default::default()
-        };
+        let mut opts = ProblemOptions::default();
+        opts.metric = MetricKind::ShapeSize;
+        opts.target = Target::Input(InputTargets::default());
         let p = Problem::with_options(&mesh, &opts).unwrap();
         let x0 = p.gather(&mesh.points);
-        let params = Params {
-            max_iter: 3,
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.max_iter = 3;
         let mut cx = x0.clone();
         let cpu = solve_on(&p, &mut cx, Method::Newton, &params, Device::Cpu);
         let mut gx = x0.clone();

@@ -76,10 +76,8 @@ fn newton_first_iterates_match_cpu_f64() {
     let mesh = perturbed_box(8, 0.3, 1);
     let p = Problem::new(&mesh).unwrap();
     let x0 = p.gather(&mesh.points);
-    let params = Params {
-        max_iter: 3,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = 3;
     let mut cx = x0.clone();
     let cpu = solve_on(&p, &mut cx, Method::Newton, &params, Device::Cpu);
     let mut gx = x0.clone();
@@ -106,10 +104,8 @@ fn converged_matches(precision: Precision, gpu_tol: f64, rel: f64) {
     let x0 = p.gather(&mesh.points);
     let mut cx = x0.clone();
     let cpu = solve_on(&p, &mut cx, Method::Newton, &Params::default(), Device::Cpu);
-    let params = Params {
-        tol: gpu_tol,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = gpu_tol;
     let mut gx = x0.clone();
     let info = solve_on(&p, &mut gx, Method::Newton, &params, Device::Gpu(&ctx));
     eprintln!(
@@ -210,10 +206,8 @@ fn newton_timings() {
             &Params::default(),
             Device::Gpu(&ctx),
         );
-        let params = Params {
-            tol,
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.tol = tol;
         let mut x = x0.clone();
         let t = Instant::now();
         let info = solve_on(&p, &mut x, Method::Newton, &params, Device::Gpu(&ctx));

@@ -20,10 +20,8 @@ fn nlcg_iterates_match_cpu_f64() {
     let mesh = perturbed_box(7, 0.3, 1);
     let p = Problem::new(&mesh).unwrap();
     let x0 = p.gather(&mesh.points);
-    let params = Params {
-        max_iter: 12,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = 12;
     let mut cx = x0.clone();
     let cpu = solve_on(&p, &mut cx, Method::Nlcg, &params, Device::Cpu);
     let mut gx = x0.clone();
@@ -56,10 +54,8 @@ fn converged_matches(precision: Precision, gpu_tol: f64, rel: f64) {
     let mut cx = x0.clone();
     let cpu = solve_on(&p, &mut cx, Method::Nlcg, &Params::default(), Device::Cpu);
     assert_eq!(cpu.stop, StopReason::Converged);
-    let params = Params {
-        tol: gpu_tol,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.tol = gpu_tol;
     let mut gx = x0.clone();
     let info = solve_on(&p, &mut gx, Method::Nlcg, &params, Device::Gpu(&ctx));
     eprintln!(
@@ -110,10 +106,8 @@ fn nlcg_matches_cpu_for_every_metric_and_element_kind_f64() {
         for (metric, template) in models() {
             let p = problem(&mesh, &reference, metric, template);
             let x0 = p.gather(&mesh.points);
-            let params = Params {
-                max_iter: 8,
-                ..Params::default()
-            };
+            let mut params = Params::default();
+            params.max_iter = 8;
             let mut cx = x0.clone();
             let cpu = solve_on(&p, &mut cx, Method::Nlcg, &params, Device::Cpu);
             let mut gx = x0.clone();

@@ -59,11 +59,9 @@ fn split_matches_on(
         );
         assert!(be.max_parts() >= 3, "the cap should split arrays");
     }
-    let params = Params {
-        max_iter: iters,
-        tol: 0.0,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.max_iter = iters;
+    params.tol = 0.0;
     let run = |device| {
         let mut x = x0.clone();
         let info = solve_on(&p, &mut x, method, &params, device);

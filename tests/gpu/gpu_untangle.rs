@@ -46,13 +46,11 @@ fn tangled_cases() -> Vec<(String, Problem, Vec<Vec3>)> {
             "{kind}: nothing inverted"
         );
         for metric in [MetricKind::InverseMeanRatio, MetricKind::ConditionNumber] {
-            let mut p = Problem::with_options(
-                &mesh,
-                &ProblemOptions {
-                    metric,
-                    ..Default::default()
-                },
-            )
+            let mut p = Problem::with_options(&mesh, &{
+                let mut po = ProblemOptions::default();
+                po.metric = metric;
+                po
+            })
             .unwrap();
             p.model = untangling_model(p.model, 0.05);
             let x = p.gather(&mesh.points);
@@ -165,12 +163,10 @@ fn untangle_on_gpu(precision: Precision, tol: f64) {
         params.newton.preconditioner = Preconditioner::Jacobi;
         let run = |device: Device| {
             let mut x = x0.clone();
-            let o = Options {
-                method: Method::Newton,
-                params: params.clone(),
-                device,
-                ..Default::default()
-            };
+            let mut o = Options::default();
+            o.method = Method::Newton;
+            o.params = params.clone();
+            o.device = device;
             let info = untangle(&p, &mut x, &o, &UntangleParams::default(), &mut |_| true).unwrap_or_else(|e| {
                 panic!(
                     "{kind} on {}: {e}",

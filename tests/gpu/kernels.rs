@@ -93,12 +93,10 @@ fn slide_cases() -> Vec<Case> {
         // the whole truncated octahedra leave a bumpy skin whose faces meet at
         // 55 and 71 degrees: every skin vertex would be a corner at 30
         let feature_angle = if kind == ElementKind::Polyhedron { 80.0 } else { 30.0 };
-        let opts = ProblemOptions {
-            boundary: Boundary {
-                mode: BoundaryMode::Slide,
-                feature_angle,
-            },
-            ..Default::default()
+        let mut opts = ProblemOptions::default();
+        opts.boundary = Boundary {
+            mode: BoundaryMode::Slide,
+            feature_angle,
         };
         let p = Problem::with_options(&mesh, &opts).unwrap();
         assert!(

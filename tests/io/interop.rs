@@ -193,10 +193,8 @@ fn check_folder(dir: &Path) -> usize {
         // smoothed (the data must not notice), then written in every format
         let input = m.clone();
         let mut m = m;
-        let params = meshsmooth::solve::Params {
-            max_iter: 20,
-            ..Default::default()
-        };
+        let mut params = meshsmooth::solve::Params::default();
+        params.max_iter = 20;
         let opts = meshsmooth::solve::Options::cpu(meshsmooth::solve::Method::Newton, &params);
         let info = meshsmooth::solve::smooth_mesh(&mut m, &Default::default(), &opts, &mut |_| true)
             .unwrap_or_else(|e| panic!("{name}: smoothing: {e}"));
