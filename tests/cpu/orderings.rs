@@ -399,11 +399,11 @@ fn the_cli_takes_paper_names_in_any_case_and_refuses_unknown_ones() {
     );
     let (ok, text) = smooth(&["--order", "rbfs", "--reorder-every", "2"]);
     assert!(
-        !ok && text.contains("--reorder-every needs one of the paper's schemes"),
+        !ok && text.contains("--reorder-every: needs one of the reordering paper's schemes"),
         "{text}"
     );
     let (ok, text) = smooth(&["--order", "wqp", "--inner-iterations", "0"]);
-    assert!(!ok && text.contains("--inner-iterations must be at least 1"), "{text}");
+    assert!(!ok && text.contains("--inner-iterations: must be at least 1"), "{text}");
     let (ok, text) = meshsmooth(&["compare", i, "--order", "bogus"]);
     assert!(!ok && text.contains("unknown ordering 'bogus'"), "{text}");
     let (ok, text) = meshsmooth(&[

@@ -161,7 +161,7 @@ fn references_that_do_not_fit_are_refused_with_the_first_mismatch() {
         Problem::with_options(&mesh, &no_ref)
             .unwrap_err()
             .to_string()
-            .contains("--reference")
+            .contains("needs a reference mesh")
     );
     let mut avg = tmp_options(&mesh);
     avg.template = Template::Average;
