@@ -17,7 +17,7 @@
 //! let mut smoother = Smoother::default();
 //! smoother.device = meshsmooth::DeviceChoice::Cpu;
 //! let report = smoother.smooth(&mut mesh)?;
-//! assert!(report.quality.eta.mean < report.start.quality.eta.mean);
+//! assert!(report.quality.eta.avg < report.start.quality.eta.avg);
 //! # Ok::<(), meshsmooth::Error>(())
 //! ```
 
