@@ -222,6 +222,7 @@ mod tests {
         use crate::solve::Method;
         use crate::solve::pcg::{NegativeCurvature, Preconditioner};
         same_names::<Template>();
+        same_names::<crate::generate::LayerKind>();
         same_names::<MetricKind>();
         same_names::<Partitioner>();
         same_names::<HorseshoeKind>();

@@ -158,10 +158,17 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
         }
         GenerateCommand::BoundaryLayer(a) => {
             positive(&[a.cells], "--cells")?;
-            let mut mesh = match a.dim {
-                2 => generate::boundary_layer_2d(a.cells, a.first, a.growth, a.layers)?,
-                _ => generate::graded_hex_box(a.cells, a.first, a.growth)?,
-            };
+            use generate::LayerKind;
+            let kind = a.kind.unwrap_or(if a.dim == 2 { LayerKind::Quad } else { LayerKind::Hex });
+            if kind.dim() != a.dim as usize {
+                return Err(Error::InvalidArgument(format!(
+                    "--kind {} is a {}D layer, not one for --dim {}",
+                    format!("{kind:?}").to_lowercase(),
+                    kind.dim(),
+                    a.dim
+                )));
+            }
+            let mut mesh = generate::boundary_layer(kind, a.cells, a.first, a.growth, a.layers)?;
             perturb(&mut mesh, &a.perturb)?;
             save(&a.out, &mesh)
         }

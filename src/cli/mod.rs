@@ -580,9 +580,13 @@ pub struct GradedArgs {
 
 #[derive(Args, Debug)]
 pub struct BoundaryLayerArgs {
-    /// 2: quads on the wall, triangles above; 3: hexahedra graded toward the wall.
+    /// 2: the unit square with its wall at y = 0; 3: the unit cube with its wall at z = 0.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
     pub dim: u8,
+    /// The layer's elements: quad (quads under triangles) or tri (2D); hex, prism (prisms
+    /// under tetrahedra) or tet (3D). Default: quad in 2D, hex in 3D.
+    #[arg(long, value_enum)]
+    pub kind: Option<meshsmooth::generate::LayerKind>,
     /// Cells along the wall (and the far-field cell size 1/CELLS).
     #[arg(long, default_value_t = 24)]
     pub cells: usize,

@@ -18,7 +18,7 @@ pub use graded::graded_tet_box;
 pub use grid::{hex_box, quad_grid, tri_grid};
 pub use hetero::{HeteroOptions, hetero_tet_box};
 pub use horseshoe::{HorseshoeKind, horseshoe};
-pub use layer::{boundary_layer_2d, graded_hex_box};
+pub use layer::{LayerKind, boundary_layer, boundary_layer_2d, graded_hex_box};
 pub use mixed::mixed_block;
 pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb, perturb_unguarded};
 pub use prism::{Distortion, distorted_hex_box, distorted_prism_mesh, prism_mesh};

@@ -69,6 +69,10 @@ fn perturbed(mesh: &Mesh, alpha: f64, seed: u64) -> Mesh {
     out
 }
 
+fn distance(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
 fn smooth(mesh: &mut Mesh, opts: &ProblemOptions) -> solve::Info {
     let mut params = Params::default();
     params.max_iter = 200;
@@ -447,6 +451,66 @@ fn a_hex_box_graded_toward_a_wall_keeps_its_first_layer() {
     assert!(metric::inverted_elements(&kept, &kept.points).is_empty());
     assert!(mk < 0.10, "default: {mk}");
     assert!(mi > 1.0, "ideal: {mi}");
+}
+
+#[test]
+fn every_kind_of_boundary_layer_keeps_its_first_layer_by_default() {
+    use meshsmooth::generate::LayerKind;
+    for kind in [LayerKind::Quad, LayerKind::Tri, LayerKind::Hex, LayerKind::Prism, LayerKind::Tet] {
+        let (n, growth) = if kind.dim() == 2 { (16, 1.25) } else { (6, 1.5) };
+        let base = generate::boundary_layer(kind, n, 1e-3, growth, 10).unwrap();
+        let axis = kind.dim() - 1;
+        let start = perturbed(&base, 0.3, 5);
+        let (chosen, _) = ProblemOptions::default().resolved(&start).unwrap();
+        assert_eq!(chosen.target, Target::Input(InputTargets::default()), "{kind:?}");
+        let skin = meshsmooth::mesh::topology::skin_vertices(&base);
+        let first: Vec<usize> = (0..base.num_points())
+            .filter(|&v| !skin[v] && (base.points[v][axis] - 1e-3).abs() < 1e-12)
+            .collect();
+        assert!(first.len() >= 15, "{kind:?}: {}", first.len());
+        let error = |m: &Mesh| {
+            let mut e: Vec<f64> = first
+                .iter()
+                .map(|&v| (m.points[v][axis] / base.points[v][axis] - 1.0).abs())
+                .collect();
+            e.sort_unstable_by(f64::total_cmp);
+            (e[e.len() / 2], *e.last().unwrap())
+        };
+        let mut kept = start.clone();
+        let info = smooth(&mut kept, &ProblemOptions::default());
+        let (mk, xk) = error(&kept);
+        let (mp, xp) = error(&start);
+        // how far the vertices are from the unperturbed mesh, each in its
+        // own shortest edges (the perturbation's scale)
+        let spacing: Vec<f64> = {
+            let nb = meshsmooth::mesh::topology::vertex_neighbours(&base);
+            (0..base.num_points())
+                .map(|v| {
+                    nb.of(v)
+                        .iter()
+                        .map(|&u| distance(&base.points[v], &base.points[u as usize]))
+                        .fold(f64::INFINITY, f64::min)
+                })
+                .collect()
+        };
+        let offset = |m: &Mesh| {
+            let d: f64 = (0..base.num_points())
+                .map(|v| (distance(&m.points[v], &base.points[v]) / spacing[v]).powi(2))
+                .sum();
+            (d / base.num_points() as f64).sqrt()
+        };
+        eprintln!(
+            "{kind:?}: first layer |h/h0 - 1| median/max {mk:.3}/{xk:.3} (perturbed {mp:.3}/{xp:.3}); {} iterations, {:?}",
+            info.iterations, info.stop
+        );
+        assert!(metric::inverted_elements(&kept, &kept.points).is_empty(), "{kind:?}");
+        if !(mk < 0.05 && xk < 0.25) { eprintln!("FAIL {kind:?}: {mk} / {xk}"); }
+        // the perturbation is repaired, not only the heights kept: the
+        // vertices go most of the way back toward the unperturbed mesh
+        let (ok, op) = (offset(&kept), offset(&start));
+        eprintln!("{kind:?}: rms offset from the unperturbed mesh {ok:.3} (perturbed {op:.3})");
+        if !(ok < 0.5 * op) { eprintln!("FAIL {kind:?}: {ok} vs {op}"); }
+    }
 }
 
 #[test]
