@@ -60,16 +60,6 @@ pub enum DeviceChoice {
 
 crate::error::by_name!(DeviceChoice: "device" { Auto = "auto", Cpu = "cpu", Gpu = "gpu" });
 
-impl std::fmt::Display for DeviceChoice {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            DeviceChoice::Auto => "auto",
-            DeviceChoice::Cpu => "cpu",
-            DeviceChoice::Gpu => "gpu",
-        })
-    }
-}
-
 /// Everything a smoothing run is told: what to optimise, how, where and
 /// which vertices stay. `Default` is the command line's default; the field
 /// names are the keys of a settings file (`Smoother::from_toml`,

@@ -67,11 +67,7 @@ impl Default for Partitioner {
 impl Partitioner {
     /// The partitioner's name, as the command line spells it.
     pub fn name(self) -> &'static str {
-        match self {
-            Partitioner::Metis => "metis",
-            Partitioner::Rcb => "rcb",
-            Partitioner::Pieces => "pieces",
-        }
+        crate::error::Named::name(&self)
     }
 
     /// The owning part of each vertex of `p` at positions `x` (problem

@@ -61,19 +61,7 @@ pub enum Method {
 impl Method {
     /// The method's name, as the command line and settings spell it.
     pub fn name(self) -> &'static str {
-        match self {
-            Method::Bcd => "bcd",
-            Method::BcdColored => "bcd-colored",
-            Method::Newton => "newton",
-            Method::Laplace => "laplace",
-            Method::Nlcg => "nlcg",
-        }
-    }
-}
-
-impl std::fmt::Display for Method {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+        crate::error::Named::name(&self)
     }
 }
 
