@@ -623,7 +623,8 @@ impl Smoother {
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
             let start = s.start(mesh, &options, rules, None, note);
             observer(Event::Start(&start));
-            let untangled = s.untangle_phase(mesh, &options, backend.device(), observer)?;
+            let inverted = metric::inverted_elements(mesh, &mesh.points);
+            let untangled = s.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
             Ok(UntangleReport {
                 quality: quality_report(mesh, &mesh.points),
                 start,
@@ -682,22 +683,25 @@ impl Smoother {
         }
     }
 
-    /// Untangles a tangled `mesh` (a no-op for an untangled one).
+    /// Untangles a tangled `mesh` whose inverted elements are `inverted`
+    /// (a no-op when there are none).
     fn untangle_phase(
         &self,
         mesh: &mut Mesh,
+        inverted: &[usize],
         options: &ProblemOptions,
         device: Device,
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<Option<UntangleInfo>> {
-        let bad = metric::inverted_elements(mesh, &mesh.points);
-        if bad.is_empty() {
+        if inverted.is_empty() {
             return Ok(None);
         }
         if let Some(msg) = solve::untangle::convention_problem(mesh) {
             return Err(Error::InvalidMesh(msg));
         }
-        observer(Event::Untangling { inverted: bad.len() });
+        observer(Event::Untangling {
+            inverted: inverted.len(),
+        });
         let opts = solve::Options {
             method: untangle_method(self.method),
             params: self.params()?,
@@ -730,11 +734,13 @@ impl Smoother {
         let options = self.problem_options(reference.as_ref())?;
         // refuse what cannot be smoothed before anything moves
         options.check(mesh)?;
+        // once for the run: nothing moves before untangling, which is handed it
+        let inverted = metric::inverted_elements(mesh, &mesh.points);
         // the default target is decided on the input, before any untangling
-        let (options, targets) = options.resolved(mesh)?;
-        let tangled = !metric::inverted_elements(mesh, &mesh.points).is_empty();
+        let (options, targets) = options.resolved_with(mesh, Some(&inverted))?;
+        let tangled = !inverted.is_empty();
         if tangled && !self.untangle {
-            return Err(Error::inverted(metric::inverted_elements(mesh, &mesh.points)));
+            return Err(Error::inverted(inverted));
         }
         if let Some(msg) = tangled.then(|| solve::untangle::convention_problem(mesh)).flatten() {
             return Err(Error::InvalidMesh(msg));
@@ -744,7 +750,7 @@ impl Smoother {
         if !observer(Event::Start(&start)) {
             return Err(Error::InvalidArgument("cancelled before the run began".into()));
         }
-        let untangled = self.untangle_phase(mesh, &options, backend.device(), observer)?;
+        let untangled = self.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
         let begin = mesh.points.clone();
         // other metrics get a table of their own values as well (reference
         // meshes, not constructed targets, give that table its targets)
