@@ -347,11 +347,8 @@ impl Smoother {
                 format!("must be between 0 and 180 degrees, got {a}"),
             ));
         }
-        if self.device == DeviceChoice::Cpu && self.precision == Precision::F32 {
-            return Err(bad(
-                "precision",
-                "f32 is a GPU arithmetic; the CPU backend computes in f64 (choose the gpu device)",
-            ));
+        if self.device == DeviceChoice::Cpu {
+            self.cpu_precision()?;
         }
         if self.device == DeviceChoice::Gpu {
             gpu_allowed(self.method)?;
@@ -494,18 +491,26 @@ impl Smoother {
         }
     }
 
+    /// Refuses f32 asked of the CPU (`auto` falling back to the CPU notes
+    /// it instead): the CPU computes in f64 only, and an explicit f32 there
+    /// is a mistake better told than silently widened.
+    fn cpu_precision(&self) -> Result<()> {
+        if self.precision == Precision::F32 {
+            return Err(bad(
+                "precision",
+                "f32 is a GPU arithmetic; the CPU backend computes in f64 (choose the gpu device)",
+            ));
+        }
+        Ok(())
+    }
+
     /// Picks the backend for `methods` (see [`DeviceChoice`]); a note says
     /// why `auto` chose the CPU.
     #[cfg_attr(not(feature = "gpu"), allow(unused_variables))]
     pub fn backend(&self, methods: &[Method]) -> Result<(Backend, Option<String>)> {
         match self.device {
             DeviceChoice::Cpu => {
-                if self.precision == Precision::F32 {
-                    return Err(bad(
-                        "precision",
-                        "f32 is a GPU arithmetic; the CPU backend computes in f64 (choose the gpu device)",
-                    ));
-                }
+                self.cpu_precision()?;
                 Ok((Backend::Cpu, None))
             }
             #[cfg(not(feature = "gpu"))]
@@ -820,15 +825,13 @@ fn untangle_method(method: Method) -> Method {
     }
 }
 
-/// Why `method` cannot run on the GPU, if it cannot.
+/// Why `method` cannot run on the GPU, if it cannot: [`Device::supports`]'s
+/// check, asked before a GPU context is made and worded as a setting's error.
 fn gpu_allowed(method: Method) -> Result<()> {
-    if method == Method::Laplace {
-        return Err(bad(
-            "device",
-            format!("{method} runs on the CPU only (the GPU runs bcd, colour by colour, bcd-colored, newton and nlcg)"),
-        ));
+    match method.cpu_only() {
+        Some(why) => Err(bad("device", why)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Settings enums by the names the command line and Python use.
