@@ -140,6 +140,10 @@ pub trait Named: Sized + Copy + 'static {
     /// Every variant that may be named, in declaration order, with its name.
     const NAMES: &'static [(&'static str, Self)];
 
+    /// The variant's name: its `NAMES` entry, or for a variant left out of
+    /// `NAMES` (one not offered by name) the name it is shown by.
+    fn name(&self) -> &'static str;
+
     /// The variant called `s`, in any (ASCII) case.
     fn by_name(s: &str) -> Option<Self> {
         Self::NAMES
@@ -158,20 +162,33 @@ pub fn parse_value_enum<T: Named>(what: &str, s: &str) -> Result<T> {
     })
 }
 
-/// [`Named`] for an option enum from its variants' names (clap's spelling:
-/// kebab-case unless `#[value(name = ...)]` says otherwise; a
-/// `#[value(skip)]` variant is left out) and, given the option's name
+/// [`Named`] and `Display` (the name) for an option enum from its variants'
+/// names (clap's spelling: kebab-case unless `#[value(name = ...)]` says
+/// otherwise; a `#[value(skip)]` variant goes in the trailing `unnamed { ... }`
+/// list, which is displayed but not parsed) and, given the option's name
 /// (`Type: "what" { ... }`), `FromStr` through [`parse_value_enum`], as the
 /// Python API and configuration files name them. A unit test checks every
 /// table against clap's derive (feature `cli`).
 macro_rules! by_name {
-    ($t:ty { $($v:ident = $name:literal),* $(,)? }) => {
+    ($t:ty { $($v:ident = $name:literal),* $(,)? } $(unnamed { $($u:ident = $uname:literal),* $(,)? })?) => {
         impl $crate::error::Named for $t {
             const NAMES: &'static [(&'static str, Self)] = &[$(($name, <$t>::$v)),*];
+
+            fn name(&self) -> &'static str {
+                match self {
+                    $(Self::$v => $name,)*
+                    $($(Self::$u => $uname,)*)?
+                }
+            }
+        }
+        impl std::fmt::Display for $t {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str($crate::error::Named::name(self))
+            }
         }
     };
-    ($t:ty: $what:literal { $($v:ident = $name:literal),* $(,)? }) => {
-        $crate::error::by_name!($t { $($v = $name),* });
+    ($t:ty: $what:literal { $($v:ident = $name:literal),* $(,)? } $(unnamed { $($u:ident = $uname:literal),* $(,)? })?) => {
+        $crate::error::by_name!($t { $($v = $name),* } $(unnamed { $($u = $uname),* })?);
         impl std::str::FromStr for $t {
             type Err = $crate::Error;
             fn from_str(s: &str) -> $crate::Result<Self> {
@@ -207,6 +224,7 @@ mod tests {
         assert_eq!(ours, clap, "{}", std::any::type_name::<T>());
         for (name, v) in &ours {
             assert_eq!(T::by_name(&name.to_uppercase()), Some(*v));
+            assert_eq!(v.name(), name);
             assert_eq!(<T as ValueEnum>::from_str(&name.to_uppercase(), true).ok(), Some(*v));
         }
         assert_eq!(T::by_name("no-such-name"), None);

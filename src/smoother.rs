@@ -60,16 +60,6 @@ pub enum DeviceChoice {
 
 crate::error::by_name!(DeviceChoice: "device" { Auto = "auto", Cpu = "cpu", Gpu = "gpu" });
 
-impl std::fmt::Display for DeviceChoice {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            DeviceChoice::Auto => "auto",
-            DeviceChoice::Cpu => "cpu",
-            DeviceChoice::Gpu => "gpu",
-        })
-    }
-}
-
 /// Everything a smoothing run is told: what to optimise, how, where and
 /// which vertices stay. `Default` is the command line's default; the field
 /// names are the keys of a settings file (`Smoother::from_toml`,
@@ -357,11 +347,8 @@ impl Smoother {
                 format!("must be between 0 and 180 degrees, got {a}"),
             ));
         }
-        if self.device == DeviceChoice::Cpu && self.precision == Precision::F32 {
-            return Err(bad(
-                "precision",
-                "f32 is a GPU arithmetic; the CPU backend computes in f64 (choose the gpu device)",
-            ));
+        if self.device == DeviceChoice::Cpu {
+            self.cpu_precision()?;
         }
         if self.device == DeviceChoice::Gpu {
             gpu_allowed(self.method)?;
@@ -504,18 +491,26 @@ impl Smoother {
         }
     }
 
+    /// Refuses f32 asked of the CPU (`auto` falling back to the CPU notes
+    /// it instead): the CPU computes in f64 only, and an explicit f32 there
+    /// is a mistake better told than silently widened.
+    fn cpu_precision(&self) -> Result<()> {
+        if self.precision == Precision::F32 {
+            return Err(bad(
+                "precision",
+                "f32 is a GPU arithmetic; the CPU backend computes in f64 (choose the gpu device)",
+            ));
+        }
+        Ok(())
+    }
+
     /// Picks the backend for `methods` (see [`DeviceChoice`]); a note says
     /// why `auto` chose the CPU.
     #[cfg_attr(not(feature = "gpu"), allow(unused_variables))]
     pub fn backend(&self, methods: &[Method]) -> Result<(Backend, Option<String>)> {
         match self.device {
             DeviceChoice::Cpu => {
-                if self.precision == Precision::F32 {
-                    return Err(bad(
-                        "precision",
-                        "f32 is a GPU arithmetic; the CPU backend computes in f64 (choose the gpu device)",
-                    ));
-                }
+                self.cpu_precision()?;
                 Ok((Backend::Cpu, None))
             }
             #[cfg(not(feature = "gpu"))]
@@ -633,7 +628,8 @@ impl Smoother {
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
             let start = s.start(mesh, &options, rules, None, note);
             observer(Event::Start(&start));
-            let untangled = s.untangle_phase(mesh, &options, backend.device(), observer)?;
+            let inverted = metric::inverted_elements(mesh, &mesh.points);
+            let untangled = s.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
             Ok(UntangleReport {
                 quality: quality_report(mesh, &mesh.points),
                 start,
@@ -692,22 +688,25 @@ impl Smoother {
         }
     }
 
-    /// Untangles a tangled `mesh` (a no-op for an untangled one).
+    /// Untangles a tangled `mesh` whose inverted elements are `inverted`
+    /// (a no-op when there are none).
     fn untangle_phase(
         &self,
         mesh: &mut Mesh,
+        inverted: &[usize],
         options: &ProblemOptions,
         device: Device,
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<Option<UntangleInfo>> {
-        let bad = metric::inverted_elements(mesh, &mesh.points);
-        if bad.is_empty() {
+        if inverted.is_empty() {
             return Ok(None);
         }
         if let Some(msg) = solve::untangle::convention_problem(mesh) {
             return Err(Error::InvalidMesh(msg));
         }
-        observer(Event::Untangling { inverted: bad.len() });
+        observer(Event::Untangling {
+            inverted: inverted.len(),
+        });
         let opts = solve::Options {
             method: untangle_method(self.method),
             params: self.params()?,
@@ -740,11 +739,13 @@ impl Smoother {
         let options = self.problem_options(reference.as_ref())?;
         // refuse what cannot be smoothed before anything moves
         options.check(mesh)?;
+        // once for the run: nothing moves before untangling, which is handed it
+        let inverted = metric::inverted_elements(mesh, &mesh.points);
         // the default target is decided on the input, before any untangling
-        let (options, targets) = options.resolved(mesh)?;
-        let tangled = !metric::inverted_elements(mesh, &mesh.points).is_empty();
+        let (options, targets) = options.resolved_with(mesh, Some(&inverted))?;
+        let tangled = !inverted.is_empty();
         if tangled && !self.untangle {
-            return Err(Error::inverted(metric::inverted_elements(mesh, &mesh.points)));
+            return Err(Error::inverted(inverted));
         }
         if let Some(msg) = tangled.then(|| solve::untangle::convention_problem(mesh)).flatten() {
             return Err(Error::InvalidMesh(msg));
@@ -754,7 +755,7 @@ impl Smoother {
         if !observer(Event::Start(&start)) {
             return Err(Error::InvalidArgument("cancelled before the run began".into()));
         }
-        let untangled = self.untangle_phase(mesh, &options, backend.device(), observer)?;
+        let untangled = self.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
         let begin = mesh.points.clone();
         // other metrics get a table of their own values as well (reference
         // meshes, not constructed targets, give that table its targets)
@@ -824,15 +825,13 @@ fn untangle_method(method: Method) -> Method {
     }
 }
 
-/// Why `method` cannot run on the GPU, if it cannot.
+/// Why `method` cannot run on the GPU, if it cannot: [`Device::supports`]'s
+/// check, asked before a GPU context is made and worded as a setting's error.
 fn gpu_allowed(method: Method) -> Result<()> {
-    if method == Method::Laplace {
-        return Err(bad(
-            "device",
-            format!("{method} runs on the CPU only (the GPU runs bcd, colour by colour, bcd-colored, newton and nlcg)"),
-        ));
+    match method.cpu_only() {
+        Some(why) => Err(bad("device", why)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Settings enums by the names the command line and Python use.

@@ -48,16 +48,6 @@ pub enum Preconditioner {
 
 crate::error::by_name!(Preconditioner: "preconditioner" { Auto = "auto", Jacobi = "jacobi", Sgs = "sgs" });
 
-impl std::fmt::Display for Preconditioner {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Preconditioner::Auto => "auto",
-            Preconditioner::Jacobi => "jacobi",
-            Preconditioner::Sgs => "sgs",
-        })
-    }
-}
-
 /// The reference-position steps (`Backend::reference_positions`, on every
 /// backend) stop once Newton's direction is shorter than this fraction of the
 /// vertex's local size: Newton converges quadratically, so the position is
@@ -82,13 +72,3 @@ pub enum Precision {
 }
 
 crate::error::by_name!(Precision: "precision" { F32 = "f32", F64 = "f64", Auto = "auto" });
-
-impl std::fmt::Display for Precision {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Precision::F32 => "f32",
-            Precision::F64 => "f64",
-            Precision::Auto => "auto",
-        })
-    }
-}

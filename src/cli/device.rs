@@ -138,6 +138,38 @@ pub fn words(e: &Error) -> String {
         Error::Parse { msg, .. } if msg.contains("must be untangled first") => {
             format!("{e} (meshsmooth untangle, or smooth without --no-untangle)")
         }
-        _ => e.to_string(),
+        _ => flagged(&e.to_string()),
     }
+}
+
+/// `message` with the settings that library messages quote by key and value
+/// (`` `partitioner pieces` ``) as the flags that set them (`--partitioner
+/// pieces`). Only a quoted settings key is taken for one, so other quoted
+/// words stay as they are.
+pub fn flagged(message: &str) -> String {
+    let keys = match serde_json::to_value(Smoother::default()).expect("settings serialise") {
+        serde_json::Value::Object(m) => m,
+        _ => unreachable!("settings serialise as an object"),
+    };
+    // the run's settings kept outside the Smoother (the cluster's)
+    let is_key = |k: &str| k == "partitioner" || keys.contains_key(k);
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(open) = rest.find('`') {
+        let Some(len) = rest[open + 1..].find('`') else {
+            break;
+        };
+        let quoted = &rest[open + 1..open + 1 + len];
+        let key = quoted.split(' ').next().unwrap_or_default();
+        out.push_str(&rest[..open]);
+        if is_key(key) {
+            out.push_str(&flag(key));
+            out.push_str(&quoted[key.len()..]);
+        } else {
+            out.push_str(&rest[open..open + len + 2]);
+        }
+        rest = &rest[open + len + 2..];
+    }
+    out.push_str(rest);
+    out
 }

@@ -28,7 +28,11 @@ pub fn run_under_mpi(command: impl FnOnce() -> i32) -> i32 {
         match follow(cluster) {
             Ok(()) => 0,
             Err(e) => {
-                eprintln!("error (rank {}): {e}", cluster.rank());
+                eprintln!(
+                    "error (rank {}): {}",
+                    cluster.rank(),
+                    super::device::flagged(&e.to_string())
+                );
                 1
             }
         }

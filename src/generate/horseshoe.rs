@@ -49,7 +49,6 @@
 //! thousand vertices, a fraction of a percent from 20K), with at least 8 segments
 //! along the bend, so tiny targets get more free vertices than asked.
 
-use std::fmt;
 use std::str::FromStr;
 
 use rand::{RngExt, SeedableRng};
@@ -110,13 +109,7 @@ impl HorseshoeKind {
 
     /// The kind's command-line name (`sqi`, `utiv`, ...).
     pub fn name(self) -> &'static str {
-        match self {
-            HorseshoeKind::SqI => "sqi",
-            HorseshoeKind::SqII => "sqii",
-            HorseshoeKind::SqIV => "sqiv",
-            HorseshoeKind::UtI => "uti",
-            HorseshoeKind::UtIV => "utiv",
-        }
+        crate::error::Named::name(&self)
     }
 
     fn biased(self) -> bool {
@@ -125,12 +118,6 @@ impl HorseshoeKind {
 }
 
 crate::error::by_name!(HorseshoeKind { SqI = "sqi", SqII = "sqii", SqIV = "sqiv", UtI = "uti", UtIV = "utiv" });
-
-impl fmt::Display for HorseshoeKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 impl FromStr for HorseshoeKind {
     type Err = Error;

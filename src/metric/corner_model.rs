@@ -29,15 +29,6 @@ pub enum Template {
 
 crate::error::by_name!(Template: "template" { Harmonic = "harmonic", Average = "average" });
 
-impl std::fmt::Display for Template {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Template::Harmonic => "harmonic",
-            Template::Average => "average",
-        })
-    }
-}
-
 /// A corner's reference: the B rows (vertex 0 = the corner, 1..=n its
 /// neighbours; row n+1.. zero) and the dimension.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

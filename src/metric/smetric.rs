@@ -44,14 +44,7 @@ pub enum MetricKind {
 impl MetricKind {
     /// The metric's short name (`imr`, ...), as the command line spells it.
     pub fn name(self) -> &'static str {
-        match self {
-            MetricKind::InverseMeanRatio => "imr",
-            MetricKind::ConditionNumber => "cn",
-            MetricKind::TargetShapeSize => "tmp",
-            MetricKind::ShapeSize => "shape-size",
-            MetricKind::ConditionNumberPaper => "cn-paper",
-            MetricKind::ReferenceJacobian => "rj",
-        }
+        crate::error::Named::name(&self)
     }
 
     /// Evaluated at every corner of every element against the octant corner
@@ -68,13 +61,9 @@ crate::error::by_name!(MetricKind: "metric" {
     TargetShapeSize = "tmp",
     ShapeSize = "shape-size",
     ConditionNumberPaper = "cn-paper",
+} unnamed {
+    ReferenceJacobian = "rj",
 });
-
-impl std::fmt::Display for MetricKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 /// det of the leading n x n block.
 pub fn det_n(s: &Mat3, n: usize) -> f64 {

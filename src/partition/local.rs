@@ -134,7 +134,7 @@ pub fn build(net: &dyn Network, mesh: &Mesh, ids: Option<&[i64]>, opts: &Problem
             Ok(())
         } else {
             Err(Error::Unsupported(
-                "--partitioner pieces: only the fixed boundary and the ideal targets (no --boundary slide, no --reference)"
+                "`partitioner pieces`: only the fixed boundary and the ideal targets (no `boundary slide`, no `reference`)"
                     .into(),
             ))
         },
@@ -144,7 +144,7 @@ pub fn build(net: &dyn Network, mesh: &Mesh, ids: Option<&[i64]>, opts: &Problem
     let me32 = me as u32;
     let built = Problem::with_options(&local, opts).and_then(|p| match p.plane {
         Some(_) => Err(Error::Unsupported(
-            "--partitioner pieces: a planar mesh outside the planes z = constant".into(),
+            "`partitioner pieces`: a planar mesh outside the planes z = constant".into(),
         )),
         None => Ok(p),
     });

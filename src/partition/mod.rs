@@ -67,11 +67,7 @@ impl Default for Partitioner {
 impl Partitioner {
     /// The partitioner's name, as the command line spells it.
     pub fn name(self) -> &'static str {
-        match self {
-            Partitioner::Metis => "metis",
-            Partitioner::Rcb => "rcb",
-            Partitioner::Pieces => "pieces",
-        }
+        crate::error::Named::name(&self)
     }
 
     /// The owning part of each vertex of `p` at positions `x` (problem
@@ -84,11 +80,11 @@ impl Partitioner {
             Partitioner::Metis => metis(p, parts),
             #[cfg(not(feature = "metis"))]
             Partitioner::Metis => Err(crate::error::Error::Unsupported(
-                "--partitioner metis: this build has no METIS (build with --features metis or mpi); use rcb".into(),
+                "`partitioner metis`: this build has no METIS (build with --features metis or mpi); use rcb".into(),
             )),
             Partitioner::Rcb => Ok(rcb(x, parts)),
             Partitioner::Pieces => Err(crate::error::Error::Unsupported(
-                "--partitioner pieces takes the parts from a .pvtu input's pieces under mpirun; it cannot split a whole mesh (use metis or rcb)".into(),
+                "`partitioner pieces` takes the parts from a .pvtu input's pieces under mpirun; it cannot split a whole mesh (use metis or rcb)".into(),
             )),
         }
     }

@@ -52,15 +52,6 @@ pub enum BoundaryMode {
 
 crate::error::by_name!(BoundaryMode: "boundary" { Fixed = "fixed", Slide = "slide" });
 
-impl std::fmt::Display for BoundaryMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            BoundaryMode::Fixed => "fixed",
-            BoundaryMode::Slide => "slide",
-        })
-    }
-}
-
 /// How the boundary is treated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Boundary {

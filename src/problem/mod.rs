@@ -83,6 +83,21 @@ impl<'a> ProblemOptions<'a> {
     /// boundary layer or wall grading; otherwise the ideal objective, as
     /// before. Anything but `Auto` is returned as it is.
     pub fn resolved(&self, mesh: &Mesh) -> crate::error::Result<(ProblemOptions<'a>, Option<String>)> {
+        self.resolved_with(mesh, None)
+    }
+
+    /// [`ProblemOptions::resolved`] given the mesh's inverted elements
+    /// (`metric::inverted_elements`) when the caller has them already.
+    pub(crate) fn resolved_with(
+        &self,
+        mesh: &Mesh,
+        inverted: Option<&[usize]>,
+    ) -> crate::error::Result<(ProblemOptions<'a>, Option<String>)> {
+        // only wanted once the cheaper tests have passed
+        let tangled = || match inverted {
+            Some(bad) => !bad.is_empty(),
+            None => !crate::metric::inverted_elements(mesh, &mesh.points).is_empty(),
+        };
         let ideal = ProblemOptions {
             target: Target::Ideal,
             ..*self
@@ -93,7 +108,7 @@ impl<'a> ProblemOptions<'a> {
         if self.metric != MetricKind::InverseMeanRatio
             || self.reference.is_some()
             || mesh.kinds.contains(&crate::mesh::ElementKind::Polyhedron)
-            || !crate::metric::inverted_elements(mesh, &mesh.points).is_empty()
+            || tangled()
         {
             return Ok((ideal, None));
         }

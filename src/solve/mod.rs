@@ -59,21 +59,17 @@ pub enum Method {
 }
 
 impl Method {
+    /// Why the method has no GPU version, if it has none; one wording for
+    /// [`Device::supports`] and the settings' check made before a GPU exists.
+    pub(crate) fn cpu_only(self) -> Option<String> {
+        (self == Method::Laplace).then(|| {
+            format!("{self} runs on the CPU only (the GPU runs bcd, colour by colour, bcd-colored, newton and nlcg)")
+        })
+    }
+
     /// The method's name, as the command line and settings spell it.
     pub fn name(self) -> &'static str {
-        match self {
-            Method::Bcd => "bcd",
-            Method::BcdColored => "bcd-colored",
-            Method::Newton => "newton",
-            Method::Laplace => "laplace",
-            Method::Nlcg => "nlcg",
-        }
-    }
-}
-
-impl std::fmt::Display for Method {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+        crate::error::Named::name(&self)
     }
 }
 
@@ -190,12 +186,10 @@ impl<'a> Device<'a> {
             Device::Gpu(_) => true,
             _ => false,
         };
-        if gpu && method == Method::Laplace {
-            return Err(Error::InvalidArgument(
-                "method 'laplace' has no GPU version (use bcd, bcd-colored, newton or nlcg)".into(),
-            ));
+        match method.cpu_only() {
+            Some(why) if gpu => Err(Error::InvalidArgument(why)),
+            _ => Ok(()),
         }
-        Ok(())
     }
 
     /// The backend of this device holding problem `p` and positions `x`

@@ -46,15 +46,6 @@ pub enum NegativeCurvature {
 
 crate::error::by_name!(NegativeCurvature: "negative_curvature" { Direction = "direction", Iterate = "iterate" });
 
-impl std::fmt::Display for NegativeCurvature {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            NegativeCurvature::Direction => "direction",
-            NegativeCurvature::Iterate => "iterate",
-        })
-    }
-}
-
 /// Why PCG stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PcgStop {

@@ -76,7 +76,7 @@ impl Cluster {
         }
         if job.sources.len() < self.size() {
             return Err(Error::Unsupported(format!(
-                "--partitioner pieces: {} has {} pieces for {} ranks; run with at most as many ranks as pieces",
+                "`partitioner pieces`: {} has {} pieces for {} ranks; run with at most as many ranks as pieces",
                 job.index.display(),
                 job.sources.len(),
                 self.size()
@@ -178,7 +178,7 @@ pub(super) fn run_pieces(
         &net,
         job.ordering
             .parse()
-            .map_err(|e| Error::InvalidArgument(format!("--order {}: {e:?}", job.ordering))),
+            .map_err(|e| Error::InvalidArgument(format!("`order {}`: {e:?}", job.ordering))),
     )?;
     let opts = ProblemOptions {
         metric: job.metric,
@@ -196,7 +196,7 @@ pub(super) fn run_pieces(
             Ok(())
         } else {
             Err(Error::Unsupported(format!(
-                "--partitioner pieces: {bad} inverted elements in rank {me}'s part; it does not untangle (use --partitioner metis or rcb)"
+                "`partitioner pieces`: {bad} inverted elements in rank {me}'s part; it does not untangle (use `partitioner metis` or rcb)"
             )))
         },
     )?;

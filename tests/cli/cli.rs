@@ -325,3 +325,43 @@ fn smooth_converges_on_the_perturbed_20_box_keeping_the_boundary() {
     }
     assert!(moved > 6000, "only {moved} interior vertices moved");
 }
+
+/// The library quotes the partitioner by its settings key; the command line
+/// names the flag.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn partitioner_refusals_name_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.vtk");
+    let out = dir.path().join("out.pvtu");
+    generate_box(&input, [3, 3, 3], "random:0.1", 1);
+    let smooth = |partitioner: &str| {
+        meshsmooth(&[
+            "smooth",
+            s(&input),
+            "-o",
+            s(&out),
+            "--device",
+            "cpu",
+            "--partitioner",
+            partitioner,
+            "-q",
+        ])
+    };
+    let o = smooth("pieces");
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        text(&o).contains("error: unsupported: --partitioner pieces takes the parts from a .pvtu input's pieces"),
+        "{}",
+        text(&o)
+    );
+    if !cfg!(feature = "metis") {
+        let o = smooth("metis");
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(
+            text(&o).contains("error: unsupported: --partitioner metis: this build has no METIS"),
+            "{}",
+            text(&o)
+        );
+    }
+}
