@@ -152,7 +152,11 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
                     a.ratio
                 )));
             }
-            let mut mesh = generate::graded_tet_box(a.cells, a.ratio);
+            let mut mesh = if a.aniso {
+                generate::graded_tet_box_aniso(a.cells, a.ratio)
+            } else {
+                generate::graded_tet_box(a.cells, a.ratio)
+            };
             perturb(&mut mesh, &a.perturb)?;
             save(&a.out, &mesh)
         }

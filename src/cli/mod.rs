@@ -411,7 +411,8 @@ pub enum GenerateCommand {
     Horseshoe(HorseshoeArgs),
     /// The 1331-node, 2000-prism mesh of the reference-Jacobian paper.
     Prism(PrismArgs),
-    /// A tetrahedral box graded toward one corner (element volume max:min about RATIO).
+    /// A tetrahedral box graded toward one corner (element volume max:min about RATIO), or
+    /// with --aniso toward the wall z = 0.
     Graded(GradedArgs),
     /// A mesh graded toward a wall: the unit square with a quad boundary layer on y = 0 under
     /// triangles (--dim 2), or the unit cube of hexahedra graded toward z = 0 (--dim 3).
@@ -572,6 +573,10 @@ pub struct GradedArgs {
     /// Element volume max:min.
     #[arg(long, default_value_t = 1e3)]
     pub ratio: f64,
+    /// Grade along z alone, toward the wall z = 0: flat cells near the wall (aspect up to
+    /// about RATIO) instead of shapes kept while the size changes.
+    #[arg(long)]
+    pub aniso: bool,
     #[command(flatten)]
     pub perturb: PerturbArgs,
     #[command(flatten)]

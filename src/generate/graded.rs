@@ -30,6 +30,21 @@ const BISECTIONS: usize = 100;
 /// If `n` is zero, or `ratio` is below 1, not finite, or beyond what
 /// `p = 64` reaches.
 pub fn graded_tet_box(n: usize, ratio: f64) -> Mesh {
+    graded_by(n, ratio, grade)
+}
+
+/// [`graded_tet_box`]'s anisotropic sibling: the same cube and volume
+/// ratio, graded along z alone (`z -> z^p`) toward the wall z = 0, so the
+/// cells near the wall are flat, of aspect up to about `ratio`: the layered
+/// anisotropy input targets keep and the ideal objective flattens out.
+///
+/// # Panics
+/// As [`graded_tet_box`].
+pub fn graded_tet_box_aniso(n: usize, ratio: f64) -> Mesh {
+    graded_by(n, ratio, |x, p| [x[0], x[1], x[2].powf(p)])
+}
+
+fn graded_by(n: usize, ratio: f64, grade: fn([f64; 3], f64) -> [f64; 3]) -> Mesh {
     assert!(n > 0, "graded_tet_box needs at least one cell per axis");
     assert!(
         ratio.is_finite() && ratio >= 1.0,

@@ -14,7 +14,7 @@ pub mod prism;
 pub mod voronoi;
 
 pub use box_mesh::{duct, tet_box};
-pub use graded::graded_tet_box;
+pub use graded::{graded_tet_box, graded_tet_box_aniso};
 pub use grid::{hex_box, quad_grid, tri_grid};
 pub use hetero::{HeteroOptions, hetero_tet_box};
 pub use horseshoe::{HorseshoeKind, horseshoe};

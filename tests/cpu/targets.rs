@@ -529,6 +529,50 @@ fn every_kind_of_boundary_layer_keeps_its_first_layer_by_default() {
 }
 
 #[test]
+fn an_anisotropically_graded_tet_box_is_thickened_less_by_default_than_by_the_ideal_objective() {
+    let base = generate::graded_tet_box_aniso(8, 100.0);
+    let volumes: Vec<f64> = (0..base.num_elements())
+        .map(|e| metric::element_min_det(&base, &base.points, e))
+        .collect();
+    let ratio = volumes.iter().cloned().fold(0.0, f64::max) / volumes.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!((ratio / 100.0 - 1.0).abs() < 1e-6, "{ratio}");
+    // graded along z alone: every layer of vertices stays a plane z = const
+    let mut zs: Vec<f64> = base.points.iter().map(|p| p[2]).collect();
+    zs.sort_by(f64::total_cmp);
+    zs.dedup();
+    assert_eq!(zs.len(), 9);
+    let first = zs[1];
+    let start = perturbed(&base, 0.3, 3);
+    let (chosen, _) = ProblemOptions::default().resolved(&start).unwrap();
+    assert_eq!(chosen.target, Target::Input(InputTargets::default()));
+    let skin = meshsmooth::mesh::topology::skin_vertices(&base);
+    let layer: Vec<usize> = (0..base.num_points())
+        .filter(|&v| !skin[v] && base.points[v][2] == first)
+        .collect();
+    let error = |m: &Mesh| {
+        let mut e: Vec<f64> = layer.iter().map(|&v| (m.points[v][2] / first - 1.0).abs()).collect();
+        e.sort_unstable_by(f64::total_cmp);
+        e[e.len() / 2]
+    };
+    let mut kept = start.clone();
+    smooth(&mut kept, &ProblemOptions::default());
+    let mut ideal = start.clone();
+    smooth(&mut ideal, &{
+        let mut po = ProblemOptions::default();
+        po.target = Target::Ideal;
+        po
+    });
+    let (mk, mi, mp) = (error(&kept), error(&ideal), error(&start));
+    eprintln!("aniso graded tets, first layer median |h/h0 - 1|: default {mk:.3}, ideal {mi:.3}, perturbed {mp:.3}");
+    assert!(metric::inverted_elements(&kept, &kept.points).is_empty());
+    // a known limit: flat tetrahedra are a split cell's sheared images of
+    // the ideal one, whose regularised metric thickens the layer (about 4x
+    // here, the ideal objective 17x); what is guarded is that the default
+    // stays well clear of the ideal objective's damage
+    assert!(mi > 3.0 * mk, "default {mk}, ideal {mi}");
+}
+
+#[test]
 fn the_mesquite_meshes_keep_the_ideal_target_by_default() {
     // their F and iterations stay those of the ideal objective
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
