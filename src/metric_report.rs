@@ -10,7 +10,7 @@ use crate::mesh::topology;
 use crate::metric::corner_model::{Model, Template};
 use crate::metric::mat3::Vec3;
 use crate::metric::smetric::MetricKind;
-use crate::problem::{self, Numbering, ProblemOptions};
+use crate::problem::{self, Numbering, ProblemOptions, Target};
 use serde::Serialize;
 use std::fmt;
 
@@ -53,11 +53,45 @@ pub fn element_values(
         reference,
         ..Default::default()
     };
-    let plane = problem::check(mesh, points, &opts)?;
-    let points = in_plane(plane.as_ref(), points);
-    let corners = problem::corners(mesh, &points, &opts, &Numbering::identity(mesh))?;
-    let model = Model {
+    values(mesh, points, points, &opts)
+}
+
+/// Per-element value of `metric` at `points` against the constructed
+/// `target` built from the vertices at `targets_at` (for [`Target::Input`]:
+/// the mesh before smoothing, whose regularised corners are what smoothing
+/// aimed for; `points` itself to measure a mesh against its own).
+pub fn target_values(
+    mesh: &Mesh,
+    points: &[Vec3],
+    metric: MetricKind,
+    target: Target,
+    targets_at: &[Vec3],
+) -> Result<Vec<Option<f64>>> {
+    let opts = ProblemOptions {
         metric,
+        template: Template::Harmonic,
+        target,
+        ..Default::default()
+    };
+    values(mesh, points, targets_at, &opts)
+}
+
+/// `opts.metric` per element at `points`, its corners (and targets) built at
+/// `built_at`; both sets in the plane fitted to `built_at`.
+fn values(mesh: &Mesh, points: &[Vec3], built_at: &[Vec3], opts: &ProblemOptions) -> Result<Vec<Option<f64>>> {
+    if points.len() != built_at.len() {
+        return Err(crate::Error::InvalidArgument(format!(
+            "the mesh the targets are built from has {} points, this one {}",
+            built_at.len(),
+            points.len()
+        )));
+    }
+    let plane = problem::check(mesh, built_at, opts)?;
+    let built = in_plane(plane.as_ref(), built_at);
+    let points = in_plane(plane.as_ref(), points);
+    let corners = problem::corners(mesh, &built, opts, &Numbering::identity(mesh))?;
+    let model = Model {
+        metric: opts.metric,
         template: opts.template,
         eps: 0.0,
     };
@@ -71,7 +105,11 @@ pub fn metric_summary(
     metric: MetricKind,
     reference: Option<&Mesh>,
 ) -> Result<MetricSummary> {
-    let values = element_values(mesh, points, metric, reference)?;
+    Ok(summary(metric.to_string(), &element_values(mesh, points, metric, reference)?))
+}
+
+/// The banded summary of per-element `values` (`None`: inverted) under the name `metric`.
+pub fn summary(metric: String, values: &[Option<f64>]) -> MetricSummary {
     let ok: Vec<f64> = values.iter().flatten().copied().collect();
     let n = ok.len().max(1) as f64;
     let bands = PAPER_BANDS
@@ -84,15 +122,15 @@ pub fn metric_summary(
         })
         .collect();
     let below = 100.0 * ok.iter().filter(|&&v| v < PAPER_BANDS[0]).count() as f64 / n;
-    Ok(MetricSummary {
-        metric: metric.to_string(),
+    MetricSummary {
+        metric,
         min: ok.iter().copied().fold(f64::INFINITY, f64::min),
         avg: ok.iter().sum::<f64>() / n,
         max: ok.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         bands,
         below,
         inverted: values.len() - ok.len(),
-    })
+    }
 }
 
 /// Vertex displacement in percent of the average local spacing (the mean
@@ -224,6 +262,72 @@ impl fmt::Display for SideBySide<'_> {
                     &mut self.displacement.iter().map(|(_, d)| format!("{:.1}", pick(d))),
                 )?;
             }
+        }
+        Ok(())
+    }
+}
+
+/// A mesh measured against the targets smoothing aims for: their shape
+/// alone and their shape and size, and how the first layer on the walls
+/// changed where the mesh before smoothing is known.
+#[derive(Clone, Debug, Serialize)]
+pub struct TargetReport {
+    /// The targets, as settings name them (`input`, `size:h`, ...).
+    pub target: String,
+    /// The inverse mean ratio against the targets: 1 where a corner has its target's shape.
+    pub shape: MetricSummary,
+    /// The shape+size metric against the targets: 1 where a corner is its target.
+    pub shape_size: MetricSummary,
+    /// The first-layer height change from the mesh before to this one.
+    pub first_layer: Option<crate::problem::targets::LayerChange>,
+}
+
+/// The mesh at `points` (`None`: at `before`'s own points) measured against
+/// `target` built from `before`, the mesh as it was before smoothing.
+/// [`Target::Auto`] is decided on `before` as smoothing decides it; `None`
+/// where that is the ideal target, which the plain quality report measures.
+pub fn target_report(before: &Mesh, points: Option<&[Vec3]>, target: Target) -> Result<Option<TargetReport>> {
+    let target = match target {
+        Target::Auto => ProblemOptions::default().resolved(before)?.0.target,
+        t => t,
+    };
+    if !target.is_constructed() {
+        return Ok(None);
+    }
+    let at = points.unwrap_or(&before.points);
+    let measure = |metric: MetricKind| -> Result<MetricSummary> {
+        let v = target_values(before, at, metric, target, &before.points)?;
+        Ok(summary(metric.to_string(), &v))
+    };
+    Ok(Some(TargetReport {
+        target: target.name(),
+        shape: measure(MetricKind::InverseMeanRatio)?,
+        shape_size: measure(MetricKind::ShapeSize)?,
+        first_layer: points.and_then(|p| crate::problem::targets::first_layer_change(before, &before.points, p)),
+    }))
+}
+
+impl fmt::Display for TargetReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let line = |f: &mut fmt::Formatter<'_>, what: &str, s: &MetricSummary| {
+            writeln!(
+                f,
+                "  {what:<44} min {:.4}  avg {:.4}  max {:.4}{}",
+                s.min,
+                s.avg,
+                s.max,
+                if s.inverted > 0 {
+                    format!("  ({} inverted)", s.inverted)
+                } else {
+                    String::new()
+                }
+            )
+        };
+        writeln!(f, "against the targets ({}):", self.target)?;
+        line(f, "shape (imr; 1: the target's shape)", &self.shape)?;
+        line(f, "shape and size (shape-size; 1: the target)", &self.shape_size)?;
+        if let Some(change) = &self.first_layer {
+            writeln!(f, "  {change}")?;
         }
         Ok(())
     }

@@ -572,12 +572,47 @@ fn read_on_ranks(input: &Path, quiet: bool) -> Result<Mesh> {
 pub fn quality(a: &QualityArgs) -> Result<()> {
     let mesh = io::read(&a.input)?;
     let report = quality_report(&mesh, &mesh.points);
+    let target = meshsmooth::problem::Target::parse(&a.target)?;
+    let before = match &a.before {
+        Some(path) => {
+            let before = io::read(path)?;
+            if before.kinds != mesh.kinds || before.conn != mesh.conn {
+                return Err(Error::InvalidArgument(format!(
+                    "--before {} does not have the connectivity of {} ({} and {} elements)",
+                    path.display(),
+                    a.input.display(),
+                    before.num_elements(),
+                    mesh.num_elements()
+                )));
+            }
+            Some(before)
+        }
+        None => None,
+    };
+    let targets = match &before {
+        Some(b) => meshsmooth::metric_report::target_report(b, Some(&mesh.points), target)?,
+        None => meshsmooth::metric_report::target_report(&mesh, None, target)?,
+    };
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report).expect("report serialises"));
+        #[derive(serde::Serialize)]
+        struct Out<'a> {
+            #[serde(flatten)]
+            quality: &'a meshsmooth::report::QualityReport,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            targets: Option<&'a meshsmooth::metric_report::TargetReport>,
+        }
+        let out = Out {
+            quality: &report,
+            targets: targets.as_ref(),
+        };
+        println!("{}", serde_json::to_string_pretty(&out).expect("report serialises"));
     } else {
         println!("{}\n{report}", a.input.display());
         let intent = meshsmooth_intent(&mesh)?;
         println!("anisotropy: {}", intent.describe());
+        if let Some(t) = &targets {
+            print!("{t}");
+        }
     }
     Ok(())
 }

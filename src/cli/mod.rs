@@ -394,6 +394,14 @@ pub struct CompareArgs {
 #[derive(Args, Debug)]
 pub struct QualityArgs {
     pub input: PathBuf,
+    /// Also measure the mesh against targets: auto (what smoothing chooses by default),
+    /// ideal, input, size:FIELD or metric:FIELD, built from --before where given.
+    #[arg(long, default_value = "auto")]
+    pub target: String,
+    /// The mesh before smoothing (same connectivity): the targets are built from it, and the
+    /// first-layer height change from it to INPUT is reported.
+    #[arg(long, value_name = "MESH")]
+    pub before: Option<PathBuf>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,

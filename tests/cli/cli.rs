@@ -365,3 +365,60 @@ fn partitioner_refusals_name_the_flag() {
         );
     }
 }
+
+/// `quality --before` measures the smoothed mesh against the targets built
+/// from the mesh before smoothing: its shape+size average is the objective
+/// smoothing reached, and the first-layer change is the one `smooth` printed.
+#[test]
+fn quality_measures_a_smoothed_layer_against_the_targets_it_was_smoothed_toward() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output, history) = (
+        dir.path().join("layer.vtk"),
+        dir.path().join("smooth.vtk"),
+        dir.path().join("h.csv"),
+    );
+    let o = meshsmooth(&[
+        "generate",
+        "boundary-layer",
+        "--perturb",
+        "random-shortest:0.3",
+        "-o",
+        s(&input),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&output), "--history", s(&history)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let smoothed = text(&o);
+    let layer_line = smoothed
+        .lines()
+        .find(|l| l.starts_with("first-layer height"))
+        .expect("smooth reports the first layer")
+        .to_string();
+    let f = history_rows(&history).last().unwrap()[2];
+
+    let o = meshsmooth(&["quality", s(&output), "--before", s(&input), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let t = &json["targets"];
+    assert_eq!(t["target"], "input");
+    let avg = t["shape_size"]["avg"].as_f64().unwrap();
+    assert!((avg - f).abs() < 1e-9 * f, "quality {avg} vs the smoothing's F {f}");
+    assert!(t["shape"]["avg"].as_f64().unwrap() >= 1.0);
+    // the before mesh is farther from its targets than the smoothed one
+    let o = meshsmooth(&["quality", s(&input), "--json"]);
+    let own: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(own["targets"]["shape_size"]["avg"].as_f64().unwrap() > avg + 0.1);
+    assert!(own["targets"]["first_layer"].is_null());
+    let o = meshsmooth(&["quality", s(&output), "--before", s(&input)]);
+    assert!(text(&o).contains(&layer_line), "{}\nvs {layer_line}", text(&o));
+    // the ideal target has nothing to add to the plain report
+    let o = meshsmooth(&["quality", s(&output), "--target", "ideal", "--json"]);
+    let plain: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(plain.get("targets").is_none());
+    // a before mesh of other connectivity is refused by name
+    let other = dir.path().join("box.vtk");
+    generate_box(&other, [2, 2, 2], "random:0.1", 1);
+    let o = meshsmooth(&["quality", s(&output), "--before", s(&other)]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("does not have the connectivity"), "{}", text(&o));
+}
