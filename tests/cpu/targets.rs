@@ -573,6 +573,58 @@ fn an_anisotropically_graded_tet_box_is_thickened_less_by_default_than_by_the_id
 }
 
 #[test]
+fn a_layer_whose_wall_vertices_slide_keeps_its_heights_with_every_method() {
+    use meshsmooth::problem::{Boundary, BoundaryMode};
+    let base = generate::boundary_layer(generate::LayerKind::Quad, 24, 1e-3, 1.25, 12).unwrap();
+    let dx = 1.0 / 24.0;
+    // the interior perturbed, and the wall's own vertices moved along it
+    let mut start = perturbed(&base, 0.3, 9);
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let wall: Vec<usize> = (0..base.num_points())
+        .filter(|&v| base.points[v][1] == 0.0 && base.points[v][0] > 0.0 && base.points[v][0] < 1.0)
+        .collect();
+    for &v in &wall {
+        start.points[v][0] += 0.3 * dx * rng.random_range(-1.0..1.0);
+    }
+    let skin = meshsmooth::mesh::topology::skin_vertices(&base);
+    let first: Vec<usize> = (0..base.num_points())
+        .filter(|&v| !skin[v] && (base.points[v][1] - 1e-3).abs() < 1e-12)
+        .collect();
+    let spacing_spread = |m: &Mesh| {
+        let mut xs: Vec<f64> = wall.iter().map(|&v| m.points[v][0]).chain([0.0, 1.0]).collect();
+        xs.sort_by(f64::total_cmp);
+        let gaps: Vec<f64> = xs.windows(2).map(|w| w[1] - w[0]).collect();
+        gaps.iter().cloned().fold(0.0, f64::max) / gaps.iter().cloned().fold(f64::INFINITY, f64::min)
+    };
+    for method in [Method::Newton, Method::Bcd, Method::Nlcg] {
+        let mut po = ProblemOptions::default();
+        po.boundary = Boundary {
+            mode: BoundaryMode::Slide,
+            ..Default::default()
+        };
+        let mut m = start.clone();
+        let mut params = Params::default();
+        params.max_iter = if method == Method::Newton { 200 } else { 3000 };
+        let info = solve::smooth_mesh(&mut m, &po, &Options::cpu(method, &params), &mut |_| true).unwrap();
+        assert!(metric::inverted_elements(&m, &m.points).is_empty(), "{method:?}");
+        // the wall stays the wall, and its spacing is evened out again
+        for &v in &wall {
+            assert!(m.points[v][1].abs() < 1e-12, "{method:?}: wall vertex {v} left the wall");
+        }
+        let (sm, sp) = (spacing_spread(&m), spacing_spread(&start));
+        let mut err: Vec<f64> = first.iter().map(|&v| (m.points[v][1] / 1e-3 - 1.0).abs()).collect();
+        err.sort_unstable_by(f64::total_cmp);
+        let (med, max) = (err[err.len() / 2], *err.last().unwrap());
+        eprintln!(
+            "slide, {method:?}: first layer |h/h0 - 1| median/max {med:.3}/{max:.3}; wall spacing max/min {sm:.3} (perturbed {sp:.3}); {} iterations, {:?}",
+            info.iterations, info.stop
+        );
+        assert!(sm < 1.0 + 0.5 * (sp - 1.0), "{method:?}: wall spacing {sm} vs {sp}");
+        assert!(med < 0.05 && max < 0.25, "{method:?}: first layer {med} / {max}");
+    }
+}
+
+#[test]
 fn the_mesquite_meshes_keep_the_ideal_target_by_default() {
     // their F and iterations stay those of the ideal objective
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
