@@ -504,6 +504,7 @@ fn smooth_pieces(a: &SmoothArgs, settings: &Smoother, pieces: Option<Option<usiz
         metric: objective.metric,
         template: objective.template,
         ordering: objective.ordering.to_string(),
+        target: settings.target.clone(),
         order_seed: objective.order_seed,
         output: a.output.clone(),
         format,

@@ -42,6 +42,10 @@ pub struct PiecesJob {
     pub template: Template,
     /// The vertex order within each part (`Ordering`'s name).
     pub ordering: String,
+    /// The targets asked for (`Target`'s spelling): the parts are smoothed
+    /// toward the ideal ones only, so anything that would construct targets
+    /// is refused rather than smoothed away.
+    pub target: String,
     /// Seed of the random orders.
     pub order_seed: u64,
     /// The output file (or the index, with `pieces`).
@@ -153,6 +157,40 @@ impl Network for World<'_> {
     }
 }
 
+/// Refuses targets the parts cannot be given: each part would need the
+/// targets of its neighbours' elements, which no rank builds. With `auto`,
+/// a part with stretched elements (which the default may keep with input
+/// targets) is refused, never smoothed toward the ideal shape that would
+/// destroy a boundary layer.
+fn ideal_targets_only(job: &PiecesJob, share: &Mesh, me: usize) -> Result<()> {
+    let asked = crate::problem::Target::parse(&job.target)?;
+    let keep = match asked {
+        // a part is not the mesh: a cut through a layer hides the wall the
+        // default's detection looks for, so any part with the share of
+        // coherently stretched elements that sets the detection going is refused
+        crate::problem::Target::Auto => {
+            use crate::problem::targets;
+            job.metric == MetricKind::InverseMeanRatio
+                && targets::raw_anisotropic_share(share, &share.points)? >= targets::ANISOTROPIC_SHARE
+                && targets::intent(share, &share.points)?.anisotropic_share >= targets::ANISOTROPIC_SHARE
+        }
+        t => t.is_constructed(),
+    };
+    if !keep {
+        return Ok(());
+    }
+    let why = if asked == crate::problem::Target::Auto {
+        format!(
+            "rank {me}'s part has stretched elements, which the default keeps with `target input` where they were built on purpose (`target ideal` smooths them toward the ideal shape)"
+        )
+    } else {
+        format!("`target {}` was asked for", job.target)
+    };
+    Err(Error::Unsupported(format!(
+        "`partitioner pieces` smooths toward the ideal targets only, and {why} (use `partitioner metis` or rcb, which build the targets)"
+    )))
+}
+
 /// Every rank: read its pieces, set up its part, solve, write. Rank 0's
 /// outcome carries the whole run's; the others' are theirs alone.
 pub(super) fn run_pieces(
@@ -180,6 +218,7 @@ pub(super) fn run_pieces(
             .parse()
             .map_err(|e| Error::InvalidArgument(format!("`order {}`: {e:?}", job.ordering))),
     )?;
+    agree(&net, ideal_targets_only(job, &share, me))?;
     let opts = ProblemOptions {
         metric: job.metric,
         template: job.template,

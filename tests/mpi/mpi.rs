@@ -783,6 +783,40 @@ fn pieces_set_up_on_the_ranks_are_written_back_by_them() {
     refused(2, input, &[], "give a .pvtu input");
     refused(2, &pvtu, &["--boundary", "slide"], "only the fixed boundary");
     refused(4, &pvtu, &[], "3 pieces for 4 ranks");
+    // targets the parts cannot be given are refused, not smoothed away: a
+    // boundary layer (the default would keep it) and input targets asked for
+    let layer = dir.path().join("layer.vtu");
+    let o = Command::new(BIN)
+        .args(["generate", "boundary-layer", "--cells", "12", "--perturb", "random-shortest:0.2", "-o"])
+        .arg(&layer)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let layer_pieces = pieces_of(&layer, 2, true);
+    refused(
+        2,
+        &layer_pieces,
+        &[],
+        "--partitioner pieces smooths toward the ideal targets only, and rank 0's part has stretched elements",
+    );
+    refused(2, &pvtu, &["--target", "input"], "and --target input was asked for");
+    // the ideal target, asked for, runs
+    let o = mpirun(
+        2,
+        &[
+            "smooth".as_ref(),
+            layer_pieces.as_os_str(),
+            "-o".as_ref(),
+            dir.path().join("ideal.vtu").as_os_str(),
+            "--partitioner".as_ref(),
+            "pieces".as_ref(),
+            "--target".as_ref(),
+            "ideal".as_ref(),
+            "--device".as_ref(),
+            "cpu".as_ref(),
+        ],
+    );
+    assert!(o.contains("wrote"), "{o}");
 }
 
 /// A boundary layer gets the default's input targets on every rank, built
