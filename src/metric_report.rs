@@ -105,7 +105,10 @@ pub fn metric_summary(
     metric: MetricKind,
     reference: Option<&Mesh>,
 ) -> Result<MetricSummary> {
-    Ok(summary(metric.to_string(), &element_values(mesh, points, metric, reference)?))
+    Ok(summary(
+        metric.to_string(),
+        &element_values(mesh, points, metric, reference)?,
+    ))
 }
 
 /// The banded summary of per-element `values` (`None`: inverted) under the name `metric`.

@@ -163,7 +163,9 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
         GenerateCommand::BoundaryLayer(a) => {
             positive(&[a.cells], "--cells")?;
             use generate::LayerKind;
-            let kind = a.kind.unwrap_or(if a.dim == 2 { LayerKind::Quad } else { LayerKind::Hex });
+            let kind = a
+                .kind
+                .unwrap_or(if a.dim == 2 { LayerKind::Quad } else { LayerKind::Hex });
             if kind.dim() != a.dim as usize {
                 return Err(Error::InvalidArgument(format!(
                     "--kind {} is a {}D layer, not one for --dim {}",

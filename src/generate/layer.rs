@@ -169,7 +169,11 @@ fn extruded_layer(n: usize, first: f64, growth: f64, prisms: bool) -> Result<Mes
                     let mut b = tri.map(|c| h[c]);
                     b.sort_unstable();
                     let t = b.map(|v| h[(0..4).find(|&c| h[c] == v).unwrap() + 4]);
-                    for mut tet in [[b[0], b[1], b[2], t[0]], [b[1], b[2], t[0], t[1]], [b[2], t[0], t[1], t[2]]] {
+                    for mut tet in [
+                        [b[0], b[1], b[2], t[0]],
+                        [b[1], b[2], t[0], t[1]],
+                        [b[2], t[0], t[1], t[2]],
+                    ] {
                         let x = tet.map(|v| mesh.points[v as usize]);
                         if crate::metric::tet_det(&x) < 0.0 {
                             tet.swap(1, 2);
@@ -211,7 +215,13 @@ mod tests {
 
     #[test]
     fn every_layer_kind_is_conforming_and_positive() {
-        for kind in [LayerKind::Quad, LayerKind::Tri, LayerKind::Hex, LayerKind::Prism, LayerKind::Tet] {
+        for kind in [
+            LayerKind::Quad,
+            LayerKind::Tri,
+            LayerKind::Hex,
+            LayerKind::Prism,
+            LayerKind::Tet,
+        ] {
             let m = boundary_layer(kind, 5, 1e-3, 1.5, 6).unwrap();
             assert_eq!(m.dim(), kind.dim(), "{kind:?}");
             assert!(crate::metric::inverted_elements(&m, &m.points).is_empty(), "{kind:?}");

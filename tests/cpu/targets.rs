@@ -485,8 +485,9 @@ fn every_kind_of_boundary_layer_keeps_its_first_layer_by_default() {
         // the shape against the unperturbed mesh's own cells (1: the same
         // shapes): the perturbation is repaired, not only the heights kept
         let shape = |m: &Mesh| {
-            let v = meshsmooth::metric_report::element_values(&base, &m.points, MetricKind::InverseMeanRatio, Some(&base))
-                .unwrap();
+            let v =
+                meshsmooth::metric_report::element_values(&base, &m.points, MetricKind::InverseMeanRatio, Some(&base))
+                    .unwrap();
             v.iter().map(|x| x.unwrap() - 1.0).sum::<f64>() / v.len() as f64
         };
         let mut kept = start.clone();
@@ -609,7 +610,10 @@ fn a_layer_whose_wall_vertices_slide_keeps_its_heights_with_every_method() {
         assert!(metric::inverted_elements(&m, &m.points).is_empty(), "{method:?}");
         // the wall stays the wall, and its spacing is evened out again
         for &v in &wall {
-            assert!(m.points[v][1].abs() < 1e-12, "{method:?}: wall vertex {v} left the wall");
+            assert!(
+                m.points[v][1].abs() < 1e-12,
+                "{method:?}: wall vertex {v} left the wall"
+            );
         }
         let (sm, sp) = (spacing_spread(&m), spacing_spread(&start));
         let mut err: Vec<f64> = first.iter().map(|&v| (m.points[v][1] / 1e-3 - 1.0).abs()).collect();

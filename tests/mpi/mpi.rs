@@ -787,7 +787,15 @@ fn pieces_set_up_on_the_ranks_are_written_back_by_them() {
     // boundary layer (the default would keep it) and input targets asked for
     let layer = dir.path().join("layer.vtu");
     let o = Command::new(BIN)
-        .args(["generate", "boundary-layer", "--cells", "12", "--perturb", "random-shortest:0.2", "-o"])
+        .args([
+            "generate",
+            "boundary-layer",
+            "--cells",
+            "12",
+            "--perturb",
+            "random-shortest:0.2",
+            "-o",
+        ])
         .arg(&layer)
         .output()
         .unwrap();
@@ -875,7 +883,10 @@ fn input_targets_on_two_ranks_match_one_process() {
     let (a, b) = (*one.objective.last().unwrap(), *two.objective.last().unwrap());
     let gap = a.max(b) - optimum;
     eprintln!("nlcg: F {a} (one) and {b} (two ranks), Newton's optimum {optimum}");
-    assert!(a >= optimum - 1e-10 && b >= optimum - 1e-10, "below the optimum: {a}, {b} vs {optimum}");
+    assert!(
+        a >= optimum - 1e-10 && b >= optimum - 1e-10,
+        "below the optimum: {a}, {b} vs {optimum}"
+    );
     assert!((a - b).abs() <= gap, "nlcg: F {a} vs {b}, {gap:e} from the optimum");
     assert!(inverted_elements(&mesh, &two.points).is_empty());
 }
