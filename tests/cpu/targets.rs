@@ -69,10 +69,6 @@ fn perturbed(mesh: &Mesh, alpha: f64, seed: u64) -> Mesh {
     out
 }
 
-fn distance(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
-}
-
 fn smooth(mesh: &mut Mesh, opts: &ProblemOptions) -> solve::Info {
     let mut params = Params::default();
     params.max_iter = 200;
@@ -489,29 +485,6 @@ fn every_kind_of_boundary_layer_keeps_its_first_layer_by_default() {
                 meshsmooth::metric_report::element_values(&base, &m.points, MetricKind::InverseMeanRatio, Some(&base))
                     .unwrap();
             v.iter().map(|x| x.unwrap() - 1.0).sum::<f64>() / v.len() as f64
-        };
-        let mut kept = start.clone();
-        let info = smooth(&mut kept, &ProblemOptions::default());
-        let (mk, xk) = error(&kept);
-        let (mp, xp) = error(&start);
-        // how far the vertices are from the unperturbed mesh, each in its
-        // own shortest edges (the perturbation's scale)
-        let spacing: Vec<f64> = {
-            let nb = meshsmooth::mesh::topology::vertex_neighbours(&base);
-            (0..base.num_points())
-                .map(|v| {
-                    nb.of(v)
-                        .iter()
-                        .map(|&u| distance(&base.points[v], &base.points[u as usize]))
-                        .fold(f64::INFINITY, f64::min)
-                })
-                .collect()
-        };
-        let offset = |m: &Mesh| {
-            let d: f64 = (0..base.num_points())
-                .map(|v| (distance(&m.points[v], &base.points[v]) / spacing[v]).powi(2))
-                .sum();
-            (d / base.num_points() as f64).sqrt()
         };
         eprintln!(
             "{kind:?}: first layer |h/h0 - 1| median/max {mk:.3}/{xk:.3} (perturbed {mp:.3}/{xp:.3}); {} iterations, {:?}",
