@@ -632,3 +632,68 @@ fn the_mesquite_meshes_keep_the_ideal_target_by_default() {
         assert_eq!(chosen.metric, MetricKind::InverseMeanRatio);
     }
 }
+
+#[test]
+fn a_metric_field_stretches_elements_along_its_eigenvectors() {
+    // a band across the middle where the field asks for edges 3x shorter
+    // across the band than along it: the band's elements get thinner across
+    // it, whichever way the band (the field's eigenvectors) runs
+    let n = 16;
+    let spacing = 1.0 / n as f64;
+    for across in [1usize, 0] {
+        let mut mesh = generate::tri_grid(n, n, [1.0, 1.0]);
+        let along = 1 - across;
+        let m: Vec<f64> = mesh
+            .points
+            .iter()
+            .flat_map(|p| {
+                let d = (p[across] - 0.5).abs();
+                let h_across = spacing * (1.0 - (2.0 / 3.0) * (-(d / 0.15).powi(2)).exp());
+                let (l_across, l_along) = (1.0 / (h_across * h_across), 1.0 / (spacing * spacing));
+                // [m_xx, m_xy, m_yy]
+                if across == 1 {
+                    [l_along, 0.0, l_across]
+                } else {
+                    [l_across, 0.0, l_along]
+                }
+            })
+            .collect();
+        mesh.data
+            .point
+            .push(DataArray::new("m", ValueType::F64, 3, Values::Float(m)));
+        // the mean extent across and along the band of the elements in it
+        let extents = |m: &Mesh| {
+            let (mut a, mut b, mut count) = (0.0, 0.0, 0.0);
+            for e in 0..m.num_elements() {
+                let p: Vec<[f64; 3]> = m.element(e).iter().map(|&v| m.points[v as usize]).collect();
+                let c = (p[0][across] + p[1][across] + p[2][across]) / 3.0;
+                if (c - 0.5).abs() < 0.1 {
+                    let span = |k: usize| {
+                        let (lo, hi) = p
+                            .iter()
+                            .fold((f64::MAX, f64::MIN), |(lo, hi), q| (lo.min(q[k]), hi.max(q[k])));
+                        hi - lo
+                    };
+                    a += span(across);
+                    b += span(along);
+                    count += 1.0;
+                }
+            }
+            (a / count, b / count)
+        };
+        let (a0, b0) = extents(&mesh);
+        let mut opts = ProblemOptions::default();
+        opts.metric = MetricKind::ShapeSize;
+        opts.target = Target::Metric("m");
+        smooth(&mut mesh, &opts);
+        let (a1, b1) = extents(&mesh);
+        eprintln!("band across axis {across}: extent across {a0:.4} -> {a1:.4}, along {b0:.4} -> {b1:.4}");
+        assert!(metric::inverted_elements(&mesh, &mesh.points).is_empty());
+        assert!(
+            a1 / b1 < 0.75 * (a0 / b0),
+            "axis {across}: across/along {} -> {}",
+            a0 / b0,
+            a1 / b1
+        );
+    }
+}
