@@ -56,29 +56,48 @@ pub fn element_values(
     values(mesh, points, points, &opts)
 }
 
-/// Per-element value of `metric` at `points` against the constructed
-/// `target` built from the vertices at `targets_at` (for [`Target::Input`]:
-/// the mesh before smoothing, whose regularised corners are what smoothing
-/// aimed for; `points` itself to measure a mesh against its own).
+/// Per-element value of each of `metrics` at `points` against the
+/// constructed `target` built once from the vertices at `targets_at` (for
+/// [`Target::Input`]: the mesh before smoothing, whose regularised corners
+/// are what smoothing aimed for; `points` itself to measure a mesh against
+/// its own). The metrics must use the same corners (not `cn-paper`).
 pub fn target_values(
     mesh: &Mesh,
     points: &[Vec3],
-    metric: MetricKind,
+    metrics: &[MetricKind],
     target: Target,
     targets_at: &[Vec3],
-) -> Result<Vec<Option<f64>>> {
+) -> Result<Vec<Vec<Option<f64>>>> {
+    let Some(&first) = metrics.first() else {
+        return Ok(Vec::new());
+    };
+    assert!(
+        metrics.iter().all(|m| m.every_corner() == first.every_corner()),
+        "target_values: metrics over different corners"
+    );
     let opts = ProblemOptions {
-        metric,
+        metric: first,
         template: Template::Harmonic,
         target,
         ..Default::default()
     };
-    values(mesh, points, targets_at, &opts)
+    corner_values(mesh, points, targets_at, &opts, metrics)
 }
 
 /// `opts.metric` per element at `points`, its corners (and targets) built at
 /// `built_at`; both sets in the plane fitted to `built_at`.
 fn values(mesh: &Mesh, points: &[Vec3], built_at: &[Vec3], opts: &ProblemOptions) -> Result<Vec<Option<f64>>> {
+    Ok(corner_values(mesh, points, built_at, opts, &[opts.metric])?.remove(0))
+}
+
+/// [`values`] for each of `metrics`, from one build of the corners.
+fn corner_values(
+    mesh: &Mesh,
+    points: &[Vec3],
+    built_at: &[Vec3],
+    opts: &ProblemOptions,
+    metrics: &[MetricKind],
+) -> Result<Vec<Vec<Option<f64>>>> {
     if points.len() != built_at.len() {
         return Err(crate::Error::InvalidArgument(format!(
             "the mesh the targets are built from has {} points, this one {}",
@@ -90,12 +109,17 @@ fn values(mesh: &Mesh, points: &[Vec3], built_at: &[Vec3], opts: &ProblemOptions
     let built = in_plane(plane.as_ref(), built_at);
     let points = in_plane(plane.as_ref(), points);
     let corners = problem::corners(mesh, &built, opts, &Numbering::identity(mesh))?;
-    let model = Model {
-        metric: opts.metric,
-        template: opts.template,
-        eps: 0.0,
-    };
-    Ok(corners.element_values(&model, &points, mesh.num_elements()))
+    Ok(metrics
+        .iter()
+        .map(|&metric| {
+            let model = Model {
+                metric,
+                template: opts.template,
+                eps: 0.0,
+            };
+            corners.element_values(&model, &points, mesh.num_elements())
+        })
+        .collect())
 }
 
 /// The banded summary of `metric` over the elements at `points`.
@@ -298,14 +322,13 @@ pub fn target_report(before: &Mesh, points: Option<&[Vec3]>, target: Target) -> 
         return Ok(None);
     }
     let at = points.unwrap_or(&before.points);
-    let measure = |metric: MetricKind| -> Result<MetricSummary> {
-        let v = target_values(before, at, metric, target, &before.points)?;
-        Ok(summary(metric.to_string(), &v))
-    };
+    let metrics = [MetricKind::InverseMeanRatio, MetricKind::ShapeSize];
+    let values = target_values(before, at, &metrics, target, &before.points)?;
+    let [shape, shape_size] = [0, 1].map(|k| summary(metrics[k].to_string(), &values[k]));
     Ok(Some(TargetReport {
         target: target.name(),
-        shape: measure(MetricKind::InverseMeanRatio)?,
-        shape_size: measure(MetricKind::ShapeSize)?,
+        shape,
+        shape_size,
         first_layer: points.and_then(|p| crate::problem::targets::first_layer_change(before, &before.points, p)),
     }))
 }

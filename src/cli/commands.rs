@@ -577,15 +577,14 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
     let before = match &a.before {
         Some(path) => {
             let before = io::read(path)?;
-            if before.kinds != mesh.kinds || before.conn != mesh.conn {
-                return Err(Error::InvalidArgument(format!(
-                    "--before {} does not have the connectivity of {} ({} and {} elements)",
+            meshsmooth::problem::same_connectivity(&mesh, &before, "it", "it").map_err(|e| match e {
+                Error::InvalidArgument(why) => Error::InvalidArgument(format!(
+                    "--before {} does not have the connectivity of {}: {why}",
                     path.display(),
-                    a.input.display(),
-                    before.num_elements(),
-                    mesh.num_elements()
-                )));
-            }
+                    a.input.display()
+                )),
+                other => other,
+            })?;
             Some(before)
         }
         None => None,

@@ -168,8 +168,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
                 .unwrap_or(if a.dim == 2 { LayerKind::Quad } else { LayerKind::Hex });
             if kind.dim() != a.dim as usize {
                 return Err(Error::InvalidArgument(format!(
-                    "--kind {} is a {}D layer, not one for --dim {}",
-                    format!("{kind:?}").to_lowercase(),
+                    "--kind {kind} is a {}D layer, not one for --dim {}",
                     kind.dim(),
                     a.dim
                 )));

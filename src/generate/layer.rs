@@ -37,6 +37,12 @@ fn wall_coordinates(first: f64, growth: f64, layers: usize, far: f64) -> Result<
 /// an `nx`-wide grid split in two) up to y = 1. Cell `e`'s data is not set;
 /// the layer's quads come first.
 pub fn boundary_layer_2d(nx: usize, first: f64, growth: f64, layers: usize) -> Result<Mesh> {
+    layer_2d(nx, first, growth, layers, true)
+}
+
+/// [`boundary_layer_2d`], its layer's squares kept as quads (`quads`) or
+/// split into triangles as the far field's are.
+fn layer_2d(nx: usize, first: f64, growth: f64, layers: usize, quads: bool) -> Result<Mesh> {
     let z = wall_coordinates(first, growth, layers, 1.0 / nx.max(1) as f64)?;
     let ny = z.len() - 1;
     let grid = quad_grid(nx, ny, [1.0, 1.0]);
@@ -44,18 +50,19 @@ pub fn boundary_layer_2d(nx: usize, first: f64, growth: f64, layers: usize) -> R
     for p in &mut mesh.points {
         p[1] = z[(p[1] * ny as f64).round() as usize];
     }
-    for e in 0..grid.num_elements() {
-        let q = grid.element(e);
-        if e / nx < layers {
-            mesh.push_element(ElementKind::Quadrilateral, q);
+    let split = |mesh: &mut Mesh, q: &[u32]| {
+        mesh.push_element(ElementKind::Triangle, &[q[0], q[1], q[2]]);
+        mesh.push_element(ElementKind::Triangle, &[q[0], q[2], q[3]]);
+    };
+    for e in 0..layers * nx {
+        if quads {
+            mesh.push_element(ElementKind::Quadrilateral, grid.element(e));
+        } else {
+            split(&mut mesh, grid.element(e));
         }
     }
-    for e in 0..grid.num_elements() {
-        let q = grid.element(e);
-        if e / nx >= layers {
-            mesh.push_element(ElementKind::Triangle, &[q[0], q[1], q[2]]);
-            mesh.push_element(ElementKind::Triangle, &[q[0], q[2], q[3]]);
-        }
+    for e in layers * nx..grid.num_elements() {
+        split(&mut mesh, grid.element(e));
     }
     Ok(mesh)
 }
@@ -97,20 +104,7 @@ impl LayerKind {
 pub fn boundary_layer(kind: LayerKind, cells: usize, first: f64, growth: f64, layers: usize) -> Result<Mesh> {
     match kind {
         LayerKind::Quad => boundary_layer_2d(cells, first, growth, layers),
-        LayerKind::Tri => {
-            let quads = boundary_layer_2d(cells, first, growth, layers)?;
-            let mut mesh = Mesh::new(quads.points.clone());
-            for e in 0..quads.num_elements() {
-                let q = quads.element(e);
-                if quads.kinds[e] == ElementKind::Quadrilateral {
-                    mesh.push_element(ElementKind::Triangle, &[q[0], q[1], q[2]]);
-                    mesh.push_element(ElementKind::Triangle, &[q[0], q[2], q[3]]);
-                } else {
-                    mesh.push_element(quads.kinds[e], q);
-                }
-            }
-            Ok(mesh)
-        }
+        LayerKind::Tri => layer_2d(cells, first, growth, layers, false),
         LayerKind::Hex => graded_hex_box(cells, first, growth),
         LayerKind::Prism | LayerKind::Tet => extruded_layer(cells, first, growth, kind == LayerKind::Prism),
     }

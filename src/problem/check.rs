@@ -64,28 +64,38 @@ impl ProblemOptions<'_> {
 
 /// A reference mesh must match the mesh vertex for vertex and element for element.
 fn check_same_connectivity(mesh: &Mesh, r: &Mesh) -> Result<()> {
-    if r.num_points() != mesh.num_points() {
+    same_connectivity(mesh, r, "reference mesh", "the reference")
+}
+
+/// Whether `other` (named `what` in a sentence, `short` after "in") matches
+/// `mesh` vertex for vertex and element for element; the error names the
+/// first difference.
+pub fn same_connectivity(mesh: &Mesh, other: &Mesh, what: &str, short: &str) -> Result<()> {
+    if other.num_points() != mesh.num_points() {
         return Err(Error::InvalidArgument(format!(
-            "reference mesh has {} vertices, the mesh {}",
-            r.num_points(),
+            "{what} has {} vertices, the mesh {}",
+            other.num_points(),
             mesh.num_points()
         )));
     }
-    if r.num_elements() != mesh.num_elements() {
+    if other.num_elements() != mesh.num_elements() {
         return Err(Error::InvalidArgument(format!(
-            "reference mesh has {} elements, the mesh {}",
-            r.num_elements(),
+            "{what} has {} elements, the mesh {}",
+            other.num_elements(),
             mesh.num_elements()
         )));
     }
     for e in 0..mesh.num_elements() {
-        if r.kinds[e] != mesh.kinds[e] || r.element(e) != mesh.element(e) || !r.faces.of(e).eq(mesh.faces.of(e)) {
+        if other.kinds[e] != mesh.kinds[e]
+            || other.element(e) != mesh.element(e)
+            || !other.faces.of(e).eq(mesh.faces.of(e))
+        {
             return Err(Error::InvalidArgument(format!(
-                "reference mesh differs at element {e}: {} {:?} in the mesh, {} {:?} in the reference",
+                "{what} differs at element {e}: {} {:?} in the mesh, {} {:?} in {short}",
                 mesh.kinds[e],
                 mesh.element(e),
-                r.kinds[e],
-                r.element(e)
+                other.kinds[e],
+                other.element(e)
             )));
         }
     }

@@ -30,7 +30,7 @@ pub mod targets;
 pub(crate) use adjacency::sharing_neighbours;
 pub use adjacency::{Adjacency, adjacency, colours};
 pub use boundary::{Boundary, BoundaryMode, Sliding};
-pub use check::check;
+pub use check::{check, same_connectivity};
 pub use corners::{Corners, corners, element_vertices};
 pub use numbering::{MeshGraph, Numbering, order};
 pub use targets::{InputTargets, Target};

@@ -171,16 +171,14 @@ pub fn reference_points(kind: ElementKind) -> Option<&'static [Vec3]> {
     })
 }
 
-#[doc(hidden)]
-pub fn mul(a: &Mat3, b: &Mat3) -> Mat3 {
+pub(crate) fn mul(a: &Mat3, b: &Mat3) -> Mat3 {
     std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
 }
 
 /// Corner matrix (columns = edges from the corner vertex) of local corner
 /// `c` at the element's points `x`, in the leading n x n block (the rest
 /// identity, so every matrix here stays invertible in 2D).
-#[doc(hidden)]
-pub fn corner_matrix(x: &[Vec3], c: &[usize; 4], n: usize) -> Mat3 {
+pub(crate) fn corner_matrix(x: &[Vec3], c: &[usize; 4], n: usize) -> Mat3 {
     let mut a = IDENTITY;
     for col in 0..n {
         let e = sub(&x[c[col + 1]], &x[c[0]]);

@@ -75,6 +75,26 @@ fn smooth(mesh: &mut Mesh, opts: &ProblemOptions) -> solve::Info {
     solve::smooth_mesh(mesh, opts, &Options::cpu(Method::Newton, &params), &mut |_| true).unwrap()
 }
 
+/// The free vertices of `base` at height `h` above the wall where
+/// coordinate `axis` is 0: its first layer.
+fn layer_at(base: &Mesh, axis: usize, h: f64) -> Vec<usize> {
+    let skin = meshsmooth::mesh::topology::skin_vertices(base);
+    (0..base.num_points())
+        .filter(|&v| !skin[v] && (base.points[v][axis] - h).abs() < 1e-12)
+        .collect()
+}
+
+/// Median and max over `layer` of |h / h0 - 1|, the heights along `axis`
+/// in `mesh` over those in `base`.
+fn height_error(mesh: &Mesh, base: &Mesh, layer: &[usize], axis: usize) -> (f64, f64) {
+    let mut e: Vec<f64> = layer
+        .iter()
+        .map(|&v| (mesh.points[v][axis] / base.points[v][axis] - 1.0).abs())
+        .collect();
+    e.sort_unstable_by(f64::total_cmp);
+    (e[e.len() / 2], *e.last().unwrap())
+}
+
 /// First-layer heights (second row of vertices above the wall y = 0),
 /// relative to the unperturbed ones: (median, max) of |h / h0 - 1|.
 fn first_layer_error(mesh: &Mesh, base: &Mesh) -> (f64, f64) {
@@ -419,19 +439,9 @@ fn a_hex_box_graded_toward_a_wall_keeps_its_first_layer() {
     let start = perturbed(&base, 0.3, 5);
     let (chosen, _) = ProblemOptions::default().resolved(&start).unwrap();
     assert_eq!(chosen.target, Target::Input(InputTargets::default()));
-    let skin = meshsmooth::mesh::topology::skin_vertices(&base);
-    let first: Vec<usize> = (0..base.num_points())
-        .filter(|&v| !skin[v] && (base.points[v][2] - 1e-3).abs() < 1e-12)
-        .collect();
+    let first = layer_at(&base, 2, 1e-3);
     assert!(first.len() >= 25, "{}", first.len());
-    let error = |m: &Mesh| {
-        let mut e: Vec<f64> = first
-            .iter()
-            .map(|&v| (m.points[v][2] / base.points[v][2] - 1.0).abs())
-            .collect();
-        e.sort_unstable_by(f64::total_cmp);
-        (e[e.len() / 2], *e.last().unwrap())
-    };
+    let error = |m: &Mesh| height_error(m, &base, &first, 2);
     let mut kept = start.clone();
     smooth(&mut kept, &ProblemOptions::default());
     let mut ideal = start.clone();
@@ -461,19 +471,9 @@ fn every_kind_of_boundary_layer_keeps_its_first_layer_by_default() {
         let start = perturbed(&base, 0.3, 5);
         let (chosen, _) = ProblemOptions::default().resolved(&start).unwrap();
         assert_eq!(chosen.target, Target::Input(InputTargets::default()), "{kind:?}");
-        let skin = meshsmooth::mesh::topology::skin_vertices(&base);
-        let first: Vec<usize> = (0..base.num_points())
-            .filter(|&v| !skin[v] && (base.points[v][axis] - 1e-3).abs() < 1e-12)
-            .collect();
+        let first = layer_at(&base, axis, 1e-3);
         assert!(first.len() >= 15, "{kind:?}: {}", first.len());
-        let error = |m: &Mesh| {
-            let mut e: Vec<f64> = first
-                .iter()
-                .map(|&v| (m.points[v][axis] / base.points[v][axis] - 1.0).abs())
-                .collect();
-            e.sort_unstable_by(f64::total_cmp);
-            (e[e.len() / 2], *e.last().unwrap())
-        };
+        let error = |m: &Mesh| height_error(m, &base, &first, axis);
         let mut kept = start.clone();
         let info = smooth(&mut kept, &ProblemOptions::default());
         let (mk, xk) = error(&kept);
@@ -519,15 +519,8 @@ fn an_anisotropically_graded_tet_box_is_thickened_less_by_default_than_by_the_id
     let start = perturbed(&base, 0.3, 3);
     let (chosen, _) = ProblemOptions::default().resolved(&start).unwrap();
     assert_eq!(chosen.target, Target::Input(InputTargets::default()));
-    let skin = meshsmooth::mesh::topology::skin_vertices(&base);
-    let layer: Vec<usize> = (0..base.num_points())
-        .filter(|&v| !skin[v] && base.points[v][2] == first)
-        .collect();
-    let error = |m: &Mesh| {
-        let mut e: Vec<f64> = layer.iter().map(|&v| (m.points[v][2] / first - 1.0).abs()).collect();
-        e.sort_unstable_by(f64::total_cmp);
-        e[e.len() / 2]
-    };
+    let layer = layer_at(&base, 2, first);
+    let error = |m: &Mesh| height_error(m, &base, &layer, 2).0;
     let mut kept = start.clone();
     smooth(&mut kept, &ProblemOptions::default());
     let mut ideal = start.clone();
@@ -560,10 +553,7 @@ fn a_layer_whose_wall_vertices_slide_keeps_its_heights_with_every_method() {
     for &v in &wall {
         start.points[v][0] += 0.3 * dx * rng.random_range(-1.0..1.0);
     }
-    let skin = meshsmooth::mesh::topology::skin_vertices(&base);
-    let first: Vec<usize> = (0..base.num_points())
-        .filter(|&v| !skin[v] && (base.points[v][1] - 1e-3).abs() < 1e-12)
-        .collect();
+    let first = layer_at(&base, 1, 1e-3);
     let spacing_spread = |m: &Mesh| {
         let mut xs: Vec<f64> = wall.iter().map(|&v| m.points[v][0]).chain([0.0, 1.0]).collect();
         xs.sort_by(f64::total_cmp);
@@ -589,9 +579,7 @@ fn a_layer_whose_wall_vertices_slide_keeps_its_heights_with_every_method() {
             );
         }
         let (sm, sp) = (spacing_spread(&m), spacing_spread(&start));
-        let mut err: Vec<f64> = first.iter().map(|&v| (m.points[v][1] / 1e-3 - 1.0).abs()).collect();
-        err.sort_unstable_by(f64::total_cmp);
-        let (med, max) = (err[err.len() / 2], *err.last().unwrap());
+        let (med, max) = height_error(&m, &base, &first, 1);
         eprintln!(
             "slide, {method:?}: first layer |h/h0 - 1| median/max {med:.3}/{max:.3}; wall spacing max/min {sm:.3} (perturbed {sp:.3}); {} iterations, {:?}",
             info.iterations, info.stop
