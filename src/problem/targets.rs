@@ -34,6 +34,8 @@ use crate::metric::smetric::MetricKind;
 use rayon::prelude::*;
 use std::borrow::Cow;
 
+mod split_layers;
+
 /// Where each corner's target W comes from.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Target<'a> {
@@ -364,12 +366,18 @@ impl CornerTargets {
 pub fn build(mesh: &Mesh, points: &[Vec3], flip: bool, target: Target, unit: f64) -> Result<Option<CornerTargets>> {
     let n = mesh.dim();
     let unit = if unit > 0.0 { unit } else { 1.0 };
+    // the input's layers of stretched simplices: their cells and the points
+    // whose corners are those cells' targets (see `split_layers`)
+    let mut layers = None;
     let g = match target {
         // an unresolved default is the ideal objective (today's): only the
         // smoothing entry, which sees the whole mesh, decides otherwise
         Target::Ideal | Target::Auto => return Ok(None),
         Target::Input(opts) => {
             let mut g = element_metrics(mesh, points, flip)?;
+            if opts.passes > 0 {
+                layers = split_layers::regularised_layers(mesh, points, &g, opts.passes);
+            }
             let logs: Vec<Mat3> = g.iter().map(|m| sym_fn(m, |l| l.max(f64::MIN_POSITIVE).ln())).collect();
             let smoothed = regularise(mesh, points, logs, opts.passes);
             for (gi, l) in g.iter_mut().zip(&smoothed) {
@@ -441,7 +449,17 @@ pub fn build(mesh: &Mesh, points: &[Vec3], flip: bool, target: Target, unit: f64
                 .collect()
         }
     };
-    Ok(Some(from_metrics(mesh, points, flip, &g)?))
+    let mut out = from_metrics(mesh, points, flip, &g)?;
+    if let Some((cells, x)) = layers {
+        for e in (0..mesh.num_elements()).filter(|&e| cells[e]) {
+            let xe = element_points(mesh, &x, e, flip);
+            let used = used_corners(mesh, e)?;
+            for (w, c) in out.w[out.offsets[e]..out.offsets[e + 1]].iter_mut().zip(used.iter()) {
+                *w = corner_matrix(&xe, c, n);
+            }
+        }
+    }
+    Ok(Some(out))
 }
 
 /// A point-data field of `comps` components as f64 tuples, checked finite
