@@ -57,6 +57,8 @@ pub fn run_cli(args: &[&OsStr], timeout: Duration) -> Run {
         })
     };
     let mut status = 0;
+    // ru_maxrss is an upper bound: Linux starts a child's peak at its
+    // parent's RSS when it spawns (the exec'd image replaces a copy of it)
     // SAFETY: rusage is plain data, filled in by wait4
     let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
     // SAFETY: waits for our own child; `child` is never waited on afterwards
