@@ -806,10 +806,9 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
                 if let Some(slot) = main {
                     if s.name == "offsets"
                         && let Decoded::Num(_, Values::Int(v)) = &d
+                        && let Some(n) = v.last().map_or(Some(0), |&o| usize::try_from(o).ok())
                     {
-                        if let Some(n) = v.last().map_or(Some(0), |&o| usize::try_from(o).ok()) {
-                            ctx.conn_len.set(Some(n));
-                        }
+                        ctx.conn_len.set(Some(n));
                     }
                     *slot = Some((
                         match d {

@@ -25,6 +25,8 @@ pub struct Run {
 }
 
 /// `meshsmooth ARGS`, its peak RSS and time; killed after `timeout`.
+// the child is reaped by wait4, which also reports its resource use
+#[allow(clippy::zombie_processes)]
 pub fn run_cli(args: &[&OsStr], timeout: Duration) -> Run {
     let start = Instant::now();
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
@@ -157,7 +159,7 @@ pub fn declared_256m() -> Vec<(&'static str, Vec<u8>, &'static str)> {
 /// dictionary), from Python's `lzma.compress(bytes(2 << 20),
 /// format=FORMAT_XZ, check=CHECK_NONE, filters=[{"id": FILTER_LZMA2,
 /// "preset": 0, "lc": 0, "lp": 0, "pb": 0}])`.
-const XZ_HEAD: &str = concat!("fd377a585a000000ff12d941020021010c0000008f98419c",);
+const XZ_HEAD: &str = "fd377a585a000000ff12d941020021010c0000008f98419c";
 
 /// That stream's first LZMA2 chunk without its control byte: 2096914 zeros
 /// in 346 bytes. With no position or literal context (lc = lp = pb = 0) and
@@ -205,7 +207,7 @@ pub fn xz_zeros(chunks: usize) -> Vec<u8> {
     }
     out.push(0);
     let unpadded = (out.len() - block_start) as u64;
-    while (out.len() - block_start) % 4 != 0 {
+    while !(out.len() - block_start).is_multiple_of(4) {
         out.push(0);
     }
     let mut index = vec![0u8];
