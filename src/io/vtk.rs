@@ -732,16 +732,20 @@ fn encode_name(s: &str) -> String {
     out
 }
 
+/// Type names of the legacy format's version 3.0 that meshio (5.3) reads as
+/// well as VTK: meshio's table has no `signed_char` or `vtktypeint64` (a
+/// KeyError), and takes `char` and `long` as int8 and int64, as VTK does on
+/// 64-bit Linux and macOS.
 fn legacy_type(t: ValueType) -> &'static str {
     match t {
-        ValueType::I8 => "signed_char",
+        ValueType::I8 => "char",
         ValueType::U8 => "unsigned_char",
         ValueType::I16 => "short",
         ValueType::U16 => "unsigned_short",
         ValueType::I32 => "int",
         ValueType::U32 => "unsigned_int",
-        ValueType::I64 => "vtktypeint64",
-        ValueType::U64 => "vtktypeuint64",
+        ValueType::I64 => "long",
+        ValueType::U64 => "unsigned_long",
         ValueType::F32 => "float",
         ValueType::F64 => "double",
         ValueType::Str => "string",
