@@ -132,6 +132,8 @@ pub struct OrderStudyArgs {
 pub struct RezoneArgs {
     /// Input mesh (.vtk, .vtu, .msh, .mesh), three-dimensional.
     pub input: PathBuf,
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// Output mesh (the rezoned one).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -160,10 +162,26 @@ pub struct RezoneArgs {
     pub quiet: bool,
 }
 
+/// How meshes are read, shared by the commands that read them.
+#[derive(Args, Debug, Clone, Default)]
+pub struct ReadArgs {
+    /// Most memory reading one mesh file may take (its bytes, decompressed blocks and
+    /// decoded arrays): a size such as 512M or 4G. A file that would need more is refused
+    /// with an error naming the array. Default: half the physical memory.
+    #[arg(long, value_name = "SIZE", value_parser = parse_max_memory)]
+    pub max_memory: Option<u64>,
+}
+
+fn parse_max_memory(s: &str) -> Result<u64, String> {
+    meshsmooth::io::ReadLimits::parse_size(s).map_err(|e| e.to_string())
+}
+
 #[derive(Args, Debug)]
 pub struct SmoothArgs {
     /// Input mesh (.vtk, .vtu, .msh, .mesh).
     pub input: PathBuf,
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// Output mesh; the format follows the extension unless --format is given.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -207,6 +225,8 @@ pub struct SmoothArgs {
 pub struct UntangleArgs {
     /// Input mesh (.vtk, .vtu, .msh, .mesh).
     pub input: PathBuf,
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// Output mesh; the format follows the extension unless --format is given.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -364,6 +384,8 @@ pub struct ObjectiveArgs {
 pub struct CompareArgs {
     pub input: PathBuf,
     #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
     pub objective: ObjectiveArgs,
     /// Comma-separated methods to run.
     #[arg(long, value_enum, default_values_t = [Method::Bcd, Method::Newton], value_delimiter = ',')]
@@ -394,6 +416,8 @@ pub struct CompareArgs {
 #[derive(Args, Debug)]
 pub struct QualityArgs {
     pub input: PathBuf,
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// Also measure the mesh against targets: auto (what smoothing chooses by default),
     /// ideal, input, size:FIELD or metric:FIELD, built from --before where given.
     #[arg(long, default_value = "auto")]
@@ -689,6 +713,18 @@ fn dispatch(args: impl IntoIterator<Item = OsString>) -> i32 {
             Some(Command::Demo(a)) => a.solver.given = given,
             _ => {}
         }
+    }
+    let read = match &cli.command {
+        Some(Command::Smooth(a)) => Some(&a.read),
+        Some(Command::Untangle(a)) => Some(&a.read),
+        Some(Command::Quality(a)) => Some(&a.read),
+        Some(Command::Compare(a)) => Some(&a.read),
+        Some(Command::Rezone(a)) => Some(&a.read),
+        _ => None,
+    };
+    if let Some(max_bytes) = read.and_then(|r| r.max_memory) {
+        // every read in this process, the pieces of a .pvtu and other ranks' included
+        meshsmooth::io::ReadLimits { max_bytes }.set_default();
     }
     let result = match cli.command {
         // no command: the demo with its defaults, as `meshsmooth demo` would parse them

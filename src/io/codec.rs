@@ -10,6 +10,7 @@
 use std::io::{Read, Write};
 
 use super::lex::{Endian, Scalar};
+use super::limits::Budget;
 
 /// The compressors VTK ships.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,8 +30,17 @@ impl Codec {
         }
     }
 
-    /// Inflate `input` to exactly `size` bytes.
+    /// Inflate `input` to exactly `size` bytes. A block that could not
+    /// inflate to `size` is refused before decoding, and decoding stops at
+    /// `size`: a forged stream never allocates more than its header says.
     fn inflate(self, input: &[u8], size: usize) -> Result<Vec<u8>, String> {
+        let most = self.most(input.len());
+        if size > most {
+            return Err(format!(
+                "its header says it inflates to {size} bytes, more than {} bytes of {self:?} data can hold ({most})",
+                input.len()
+            ));
+        }
         let out = match self {
             Codec::Zlib => {
                 let mut out = Vec::with_capacity(size);
@@ -42,6 +52,15 @@ impl Codec {
             }
             Codec::Lz4 => lz4_flex::block::decompress(input, size).map_err(|e| format!("LZ4: {e}"))?,
             Codec::Lzma => {
+                // lzma-rs keeps a whole LZMA2 run in memory before it writes
+                // any of it, so the run's size is read from its chunk
+                // headers first
+                let declared = xz_unpacked_size(input).map_err(|m| format!("LZMA: {m}"))?;
+                if declared > size as u64 {
+                    return Err(format!(
+                        "LZMA: its chunks inflate to {declared} bytes, the block header says {size}"
+                    ));
+                }
                 let mut out = Limited {
                     buf: Vec::with_capacity(size),
                     limit: size,
@@ -58,6 +77,70 @@ impl Codec {
             ));
         }
         Ok(out)
+    }
+
+    /// The most bytes `input` can inflate to: deflate's best case is 258
+    /// bytes from a 2-bit code (1032:1), LZ4's a 255-byte length run per
+    /// input byte; LZMA's is only known from its chunk headers.
+    fn most(self, n: usize) -> usize {
+        match self {
+            Codec::Zlib => n.saturating_mul(1032).saturating_add(1 << 10),
+            Codec::Lz4 => n.saturating_mul(256).saturating_add(1 << 10),
+            Codec::Lzma => usize::MAX,
+        }
+    }
+}
+
+/// What an xz stream (VTK's LZMA blocks: `lzma_easy_buffer_encode`) inflates
+/// to, summed from its LZMA2 chunk headers without decoding: each chunk
+/// states its unpacked size. Errors for a stream that is not xz with LZMA2
+/// chunks, which the decoder would refuse too.
+fn xz_unpacked_size(b: &[u8]) -> Result<u64, String> {
+    const MAGIC: &[u8] = &[0xfd, b'7', b'z', b'X', b'Z', 0];
+    let short = || "the stream ends early (truncated?)".to_string();
+    if b.len() < 12 || &b[..6] != MAGIC {
+        return Err("not an xz stream".into());
+    }
+    let check = match b[7] & 0x0f {
+        0 => 0,
+        c => 4usize << ((c - 1) / 3),
+    };
+    let mut at = 12;
+    let mut total = 0u64;
+    loop {
+        let head = *b.get(at).ok_or_else(short)?;
+        if head == 0 {
+            // the index: no more blocks
+            return Ok(total);
+        }
+        let block = at;
+        at += (head as usize + 1) * 4;
+        loop {
+            let c = *b.get(at).ok_or_else(short)?;
+            let word = |i: usize| -> Result<usize, String> {
+                let s = b.get(i..i + 2).ok_or_else(short)?;
+                Ok(u16::from_be_bytes([s[0], s[1]]) as usize + 1)
+            };
+            match c {
+                0 => {
+                    at += 1;
+                    break;
+                }
+                1 | 2 => {
+                    let n = word(at + 1)?;
+                    total += n as u64;
+                    at += 3 + n;
+                }
+                0x80.. => {
+                    let unpacked = ((c as usize & 0x1f) << 16) + word(at + 1)?;
+                    let packed = word(at + 3)?;
+                    total += unpacked as u64;
+                    at += 5 + usize::from(c >= 0xc0) + packed;
+                }
+                _ => return Err(format!("invalid LZMA2 chunk type {c}")),
+            }
+        }
+        at = block + (at - block).next_multiple_of(4) + check;
     }
 }
 
@@ -317,8 +400,9 @@ impl Layout {
     }
 
     /// One array's bytes: header, then the (possibly compressed) data. `max`
-    /// bounds the inflated size (what the array can hold at most).
-    pub fn read(&self, src: &mut dyn Source, max: usize) -> PResult<Vec<u8>> {
+    /// bounds the inflated size (what the array can hold at most); the bytes
+    /// are charged to `budget` before they are allocated.
+    pub fn read(&self, src: &mut dyn Source, max: usize, budget: &Budget) -> PResult<Vec<u8>> {
         let Some(codec) = self.codec else {
             let at = src.at();
             let n = self.word(src, "the byte count")?;
@@ -328,6 +412,18 @@ impl Layout {
                     format!("the header says {n} bytes, more than the array can hold ({max})"),
                 ));
             }
+            if n > src.left() {
+                return Err((
+                    at,
+                    format!(
+                        "the header says {n} bytes, the data holds at most {} (truncated file?)",
+                        src.left()
+                    ),
+                ));
+            }
+            budget
+                .charge("the data", n as u64)
+                .map_err(|_| (at, budget.over_msg("the data", n as u64)))?;
             return src.take(n);
         };
         let at = src.at();
@@ -358,6 +454,30 @@ impl Layout {
         for _ in 0..nb {
             sizes.push(self.word(src, "a compressed block size")?);
         }
+        let packed = sizes.iter().fold(0usize, |a, &c| a.saturating_add(c));
+        if packed > src.left() {
+            return Err((
+                at,
+                format!(
+                    "the compressed blocks are {packed} bytes, the data holds at most {} (truncated file?)",
+                    src.left()
+                ),
+            ));
+        }
+        let most = sizes.iter().fold(0usize, |a, &c| a.saturating_add(codec.most(c)));
+        if total > most {
+            return Err((
+                at,
+                format!(
+                    "compression header: {nb} blocks of {bs} bytes (last {last}) cannot come from \
+                     {packed} bytes of {codec:?} data (at most {most} bytes)"
+                ),
+            ));
+        }
+        let what = format!("{nb} compressed blocks inflating to {total} bytes");
+        budget
+            .charge(&what, total as u64)
+            .map_err(|_| (at, budget.over_msg(&what, total as u64)))?;
         let mut out = Vec::with_capacity(total);
         for (i, &cs) in sizes.iter().enumerate() {
             let at = src.at();
@@ -471,6 +591,10 @@ mod tests {
     use base64::Engine;
     use base64::engine::general_purpose::STANDARD as B64;
 
+    fn big() -> Budget {
+        Budget::new(std::path::Path::new("t"), &crate::io::ReadLimits { max_bytes: 1 << 40 })
+    }
+
     #[test]
     fn base64_runs_decode_as_one_stream() {
         let (a, b) = (B64.encode([1u8, 2, 3, 4]), B64.encode([5u8, 6]));
@@ -539,7 +663,7 @@ mod tests {
             // VTK's layout: the header in its own padded run
             let text = format!("\n  {}{}\n  ", B64.encode(count), B64.encode(&bytes));
             let by_bytes = layout
-                .read(&mut B64Source::new(text.as_bytes(), 0, 0), bytes.len())
+                .read(&mut B64Source::new(text.as_bytes(), 0, 0), bytes.len(), &big())
                 .unwrap();
             assert_eq!(by_bytes, bytes);
             let fused = b64_values(&layout, text.as_bytes(), vals.len(), 8, get);
@@ -572,13 +696,13 @@ mod tests {
             pos: 0,
             base: 0,
         };
-        assert_eq!(layout.read(&mut src, data.len()).unwrap(), data);
+        assert_eq!(layout.read(&mut src, data.len(), &big()).unwrap(), data);
         // a bound below the real size is refused before inflating
         let mut src = RawSource {
             data: &all,
             pos: 0,
             base: 0,
         };
-        assert!(layout.read(&mut src, data.len() - 1).is_err());
+        assert!(layout.read(&mut src, data.len() - 1, &big()).is_err());
     }
 }

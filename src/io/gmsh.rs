@@ -139,8 +139,9 @@ struct Reader<'a> {
     entity_physical: HashMap<(i32, i32), i64>,
 }
 
-pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
+pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> Result<RawMesh> {
     let mut c = Cursor::new(path, data);
+    c.budget = Some(budget);
     let (_, t) = c.line_tokens().ok_or_else(|| c.eof("$MeshFormat"))?;
     if t.first() != Some(&"$MeshFormat") {
         return Err(c.err("expected $MeshFormat at the start of a Gmsh file"));
@@ -338,7 +339,7 @@ impl Reader<'_> {
         self.has_nodes = true;
         if !self.v4 {
             let n = self.text_count("the number of nodes")?;
-            self.raw.points.reserve(self.c.cap(n, 8));
+            self.raw.points.reserve(self.c.reserve("$Nodes", n, 8, 24)?);
             for i in 0..n {
                 if self.eof_text() {
                     return Err(self.truncated("$Nodes", n, i));
@@ -351,7 +352,7 @@ impl Reader<'_> {
             let n = self.count(true, "numNodes")?;
             self.uint(true, "minNodeTag")?;
             self.uint(true, "maxNodeTag")?;
-            self.raw.points.reserve(self.c.cap(n, 8));
+            self.raw.points.reserve(self.c.reserve("$Nodes", n, 8, 24)?);
             let mut read = 0;
             for _ in 0..blocks {
                 if self.eof_text() {

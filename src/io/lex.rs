@@ -20,6 +20,8 @@ pub(crate) struct Cursor<'a> {
     tok_line: usize,
     /// Medit allows `#` comments running to the end of the line.
     pub hash_comments: bool,
+    /// What the read may still allocate.
+    pub budget: Option<&'a super::limits::Budget>,
 }
 
 fn is_ws(b: u8) -> bool {
@@ -35,6 +37,7 @@ impl<'a> Cursor<'a> {
             line: 1,
             tok_line: 1,
             hash_comments: false,
+            budget: None,
         }
     }
 
@@ -50,6 +53,20 @@ impl<'a> Cursor<'a> {
     /// never make us allocate more than the file could hold.
     pub fn cap(&self, n: usize, min_bytes: usize) -> usize {
         n.min(self.remaining() / min_bytes.max(1) + 1)
+    }
+
+    /// Capacity for `n` items of at least `min_bytes` each in the file, as
+    /// [`cap`](Self::cap), taking `n` items of `each` bytes from the budget
+    /// first (what the section will hold when the file is whole): a declared
+    /// count past the budget is refused, naming `what`.
+    pub fn reserve(&self, what: &str, n: usize, min_bytes: usize, each: usize) -> crate::Result<usize> {
+        let cap = self.cap(n, min_bytes);
+        if let Some(b) = self.budget {
+            let bytes = (n as u64).saturating_mul(each as u64);
+            b.charge(format_args!("{what} ({n} declared)"), bytes)
+                .map_err(|_| self.err(b.over_msg(format_args!("{what} ({n} declared)"), bytes)))?;
+        }
+        Ok(cap)
     }
 
     /// Parse error at the line of the last token.

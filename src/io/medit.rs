@@ -25,8 +25,9 @@ fn section_shape(kw: &str) -> Option<Shape> {
     })
 }
 
-pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
+pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> Result<RawMesh> {
     let mut c = Cursor::new(path, data);
+    c.budget = Some(budget);
     c.hash_comments = true;
     let mut dim: Option<usize> = None;
     let mut raw = RawMesh::default();
@@ -53,6 +54,7 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                 has_vertices = true;
                 let n = c.count("the number of Vertices")?;
                 let total = n.checked_mul(d + 1).ok_or_else(|| c.err("Vertices count too large"))?;
+                c.reserve("Vertices", n, 2 * (d + 1), 24)?;
                 let vals: Vec<f64> = c.numbers(total, "Vertices")?;
                 raw.points.reserve(n);
                 for (i, v) in vals.chunks_exact(d + 1).enumerate() {

@@ -23,8 +23,9 @@ mod atomic;
 mod batch;
 mod codec;
 mod gmsh;
+mod input;
 mod lex;
-mod mapped;
+mod limits;
 mod medit;
 mod pvtu;
 mod smoothed;
@@ -32,6 +33,7 @@ mod vtk;
 mod vtu;
 
 pub use atomic::{same_file, same_target, write_atomic};
+pub use limits::ReadLimits;
 pub use pvtu::{
     GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, merge_pieces, merge_share, piece_error, piece_path,
     piece_paths, point_ids, write_index, write_pieces, write_pieces_with,
@@ -189,8 +191,17 @@ fn sniff(data: &[u8]) -> Option<Family> {
 /// Read a mesh, detecting the format from the content (falling back to the
 /// extension), and validate it. A `.pvtu` index is read with all its pieces,
 /// merged into one mesh (see `pvtu`).
+/// Reading allocates at most [`ReadLimits::default`] (half the physical
+/// memory unless [`ReadLimits::set_default`] said otherwise).
 pub fn read(path: impl AsRef<Path>) -> Result<Mesh> {
-    read_file(path.as_ref(), true)
+    read_file(path.as_ref(), true, &ReadLimits::default())
+}
+
+/// [`read`] within `limits`: a file whose declared sizes, decompressed
+/// blocks or decoded arrays would take more than `limits.max_bytes` is
+/// refused with an error naming the file and the array or section.
+pub fn read_with_limits(path: impl AsRef<Path>, limits: &ReadLimits) -> Result<Mesh> {
+    read_file(path.as_ref(), true, limits)
 }
 
 /// The `.pvtu` index at `path`, its pieces read by `read_pieces` (given
@@ -201,7 +212,7 @@ pub fn read_pvtu_with(
     path: &Path,
     read_pieces: &mut dyn FnMut(&[std::path::PathBuf]) -> Result<Vec<Mesh>>,
 ) -> Result<Mesh> {
-    let data = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let data = input::read_file(path, &limits::Budget::new(path, &ReadLimits::default()))?;
     if !pvtu::is_index(&data) {
         return read(path);
     }
@@ -213,16 +224,17 @@ pub fn read_pvtu_with(
 /// One piece of a `.pvtu` index, unmerged: any mesh file but another
 /// index (errors name the piece only: see [`piece_error`]).
 pub fn read_pvtu_piece(path: &Path) -> Result<Mesh> {
-    read_piece(path)
+    read_piece(path, &ReadLimits::default())
 }
 
 /// One piece of a `.pvtu` index: any mesh file but another index.
-fn read_piece(path: &Path) -> Result<Mesh> {
-    read_file(path, false)
+fn read_piece(path: &Path, limits: &ReadLimits) -> Result<Mesh> {
+    read_file(path, false, limits)
 }
 
-fn read_file(path: &Path, index_allowed: bool) -> Result<Mesh> {
-    let data = mapped::FileBytes::of(path)?;
+fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Mesh> {
+    let budget = limits::Budget::new(path, limits);
+    let data = input::read_file(path, &budget)?;
     if data.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(Error::parse(path, None, "file is empty"));
     }
@@ -239,16 +251,17 @@ fn read_file(path: &Path, index_allowed: bool) -> Result<Mesh> {
         if !index_allowed {
             return Err(Error::parse(path, None, "a piece of a .pvtu index is itself an index"));
         }
-        let mesh = pvtu::read(path, &data)?;
+        let mesh = pvtu::read(path, &data, limits)?;
         mesh.validate().map_err(|e| in_file(path, e))?;
         return Ok(mesh);
     }
     let raw = match family {
-        Family::Vtk => vtk::read(path, &data)?,
-        Family::Vtu => vtu::read(path, &data)?,
-        Family::Gmsh => gmsh::read(path, &data)?,
-        Family::Medit => medit::read(path, &data)?,
+        Family::Vtk => vtk::read(path, &data, &budget)?,
+        Family::Vtu => vtu::read(path, &data, &budget)?,
+        Family::Gmsh => gmsh::read(path, &data, &budget)?,
+        Family::Medit => medit::read(path, &data, &budget)?,
     };
+    drop(data);
     let mesh = raw.into_mesh(path)?;
     if index_allowed {
         mesh.validate().map_err(|e| in_file(path, e))?;

@@ -93,12 +93,12 @@ pub fn piece_paths(path: &Path, data: &[u8]) -> Result<Vec<PathBuf>> {
 }
 
 /// Reads every piece of the index at `path` (holding `data`) and merges them.
-pub(crate) fn read(path: &Path, data: &[u8]) -> Result<Mesh> {
+pub(crate) fn read(path: &Path, data: &[u8], limits: &super::ReadLimits) -> Result<Mesh> {
     read_with(path, data, &mut |sources| {
         sources
             .par_iter()
             .enumerate()
-            .map(|(i, s)| read_piece(path, i, s))
+            .map(|(i, s)| read_piece(path, i, s, limits))
             .collect()
     })
 }
@@ -154,8 +154,8 @@ pub fn merge_share(index: &Path, pieces: &[Mesh], names: &[PathBuf]) -> Result<(
 }
 
 /// Piece `i` (file `piece`) of the index `index`, unmerged; errors name both.
-fn read_piece(index: &Path, i: usize, piece: &Path) -> Result<Mesh> {
-    super::read_piece(piece).map_err(|e| piece_error(index, i, piece, e))
+fn read_piece(index: &Path, i: usize, piece: &Path, limits: &super::ReadLimits) -> Result<Mesh> {
+    super::read_piece(piece, limits).map_err(|e| piece_error(index, i, piece, e))
 }
 
 /// An error reading piece `i` (file `piece`) of `index`, naming both.

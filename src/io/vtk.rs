@@ -136,8 +136,9 @@ struct Reader<'a> {
     cells_at: Option<(Cursor<'a>, usize, usize)>,
 }
 
-pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
+pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> Result<RawMesh> {
     let mut c = Cursor::new(path, data);
+    c.budget = Some(budget);
     let (_, head) = c.line_tokens().ok_or_else(|| c.eof("the header"))?;
     if head.first() != Some(&"#") || !head.get(1).is_some_and(|t| t.eq_ignore_ascii_case("vtk")) {
         return Err(c.err("not a legacy VTK file: the first line must be '# vtk DataFile Version x.y'"));
@@ -296,7 +297,7 @@ impl Reader<'_> {
         let n = self.header_count(toks, 1)?;
         let ty = self.header_type(toks, 2)?;
         let total = n.checked_mul(3).ok_or_else(|| self.c.err("POINTS count too large"))?;
-        let mut pts = Vec::with_capacity(self.c.cap(n, 3 * ty.size().min(2)));
+        let mut pts = Vec::with_capacity(self.c.reserve("POINTS", n, 3 * ty.size().min(2), 24)?);
         let mut p = [0.0; 3];
         self.array(ty, total, "POINTS", |i, v| {
             if !v.is_finite() {
@@ -346,7 +347,7 @@ impl Reader<'_> {
             // VTK 5.1: `a` offsets (cells + 1), `b` connectivity entries.
             let (_, t) = self.c.line_tokens().unwrap_or_default();
             let ty = self.header_type(&t, 1)?;
-            let mut offsets = Vec::with_capacity(self.c.cap(a, 2));
+            let mut offsets = Vec::with_capacity(self.c.reserve("OFFSETS", a, 2, 8)?);
             self.array(ty, a, "OFFSETS", |i, v| {
                 let prev = offsets.last().copied().unwrap_or(0);
                 match as_index(v, b.saturating_add(1)) {
@@ -369,7 +370,7 @@ impl Reader<'_> {
             }
             let (_, t) = self.c.line_tokens().unwrap_or_default();
             let ty = self.header_type(&t, 1)?;
-            let mut conn = Vec::with_capacity(self.c.cap(b, 2));
+            let mut conn = Vec::with_capacity(self.c.reserve("CONNECTIVITY", b, 2, 4)?);
             let mut e = 0;
             self.array(ty, b, "CONNECTIVITY", |j, v| {
                 while offsets[e + 1] <= j {
@@ -382,9 +383,9 @@ impl Reader<'_> {
         } else {
             // Classic: per cell a vertex count, then the vertex ids.
             let ty = if self.binary { Scalar::I32 } else { Scalar::F64 };
-            let mut offsets = Vec::with_capacity(self.c.cap(a + 1, 2));
+            let mut offsets = Vec::with_capacity(self.c.reserve("CELLS", a + 1, 2, 8)?);
             offsets.push(0);
-            let mut conn = Vec::with_capacity(self.c.cap(b, 2));
+            let mut conn = Vec::with_capacity(self.c.reserve("CELLS", b, 2, 4)?);
             let mut left = 0usize;
             self.array(ty, b, "CELLS", |_, v| {
                 let e = offsets.len() - 1;
@@ -654,7 +655,7 @@ impl Reader<'_> {
     /// length prefix (binary: 1, 2, 4 or 8 big-endian bytes whose top two
     /// bits say which).
     fn strings(&mut self, n: usize, what: &str) -> Result<Vec<String>> {
-        let mut out = Vec::with_capacity(self.c.cap(n, 1));
+        let mut out = Vec::with_capacity(self.c.reserve(what, n, 1, 24)?);
         if !self.binary {
             for i in 0..n {
                 let s = self.c.raw_line().ok_or_else(|| {
@@ -731,16 +732,20 @@ fn encode_name(s: &str) -> String {
     out
 }
 
+/// Type names of the legacy format's version 3.0 that meshio (5.3) reads as
+/// well as VTK: meshio's table has no `signed_char` or `vtktypeint64` (a
+/// KeyError), and takes `char` and `long` as int8 and int64, as VTK does on
+/// 64-bit Linux and macOS.
 fn legacy_type(t: ValueType) -> &'static str {
     match t {
-        ValueType::I8 => "signed_char",
+        ValueType::I8 => "char",
         ValueType::U8 => "unsigned_char",
         ValueType::I16 => "short",
         ValueType::U16 => "unsigned_short",
         ValueType::I32 => "int",
         ValueType::U32 => "unsigned_int",
-        ValueType::I64 => "vtktypeint64",
-        ValueType::U64 => "vtktypeuint64",
+        ValueType::I64 => "long",
+        ValueType::U64 => "unsigned_long",
         ValueType::F32 => "float",
         ValueType::F64 => "double",
         ValueType::Str => "string",

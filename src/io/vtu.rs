@@ -23,6 +23,7 @@ use std::borrow::Cow;
 use super::batch::write_pieces;
 use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, b64_values, zlib_blocks};
 use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
+use super::limits::Budget;
 use super::vtk::{vtk_shape, vtk_type_name};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
 use crate::error::{Error, Location, Result};
@@ -120,6 +121,9 @@ struct Ctx<'a> {
     layout: Layout,
     appended: Option<Appended<'a>>,
     counts: Option<(usize, usize)>,
+    budget: &'a Budget,
+    /// The last offset, once the offsets are read: the connectivity's length.
+    conn_len: std::cell::Cell<Option<usize>>,
 }
 
 impl Ctx<'_> {
@@ -140,6 +144,7 @@ impl Ctx<'_> {
                 Some(nc)
             }
             (Section::Cells, Some((_, nc))) if s.name == "polyhedron_offsets" => Some(nc + 1),
+            (Section::Cells, _) if s.name == "connectivity" => self.conn_len.get(),
             _ => None,
         };
         let implied = implied.or(s.tuples.map(|t| t.saturating_mul(k)));
@@ -155,21 +160,43 @@ impl Ctx<'_> {
             return self.decode_ascii(s);
         }
         if let (Storage::Binary, Ty::Num(t)) = (s.storage, s.ty) {
-            let (text, e, max) = (s.text.as_bytes(), self.layout.endian, self.max_values(s, file_len));
+            // past the budget: the byte path, which says so
+            let max = self.max_values(s, file_len).min(self.budget.left() as usize / 8);
+            let (text, e) = (s.text.as_bytes(), self.layout.endian);
             let fused = if t.is_float() {
                 b64_values(&self.layout, text, max, t.size(), |c| t.get(e, c)).map(Values::Float)
             } else {
                 b64_values(&self.layout, text, max, t.size(), |c| t.get_i64(e, c)).map(Values::Int)
             };
             if let Some(v) = fused {
+                self.charge(s, v.len() as u64 * 8)?;
                 return Ok(Decoded::Num(t, v));
             }
         }
         let bytes = self.payload(s, file_len)?;
-        match s.ty {
-            Ty::Num(t) => Ok(Decoded::Num(t, t.decode_all(self.layout.endian, &bytes))),
+        let out = match s.ty {
+            Ty::Num(t) => {
+                // decoded to 8-byte values: a UInt8 array grows eightfold
+                self.charge(s, (bytes.len() / t.size()) as u64 * 8)?;
+                Ok(Decoded::Num(t, t.decode_all(self.layout.endian, &bytes)))
+            }
             Ty::Str => self.strings(s, &bytes),
-        }
+        };
+        self.budget.release(bytes.len() as u64);
+        out
+    }
+
+    /// Takes `bytes` for array `s` from the budget.
+    fn charge(&self, s: &Spec<'_>, bytes: u64) -> Result<()> {
+        self.budget
+            .charge(format_args!("{} '{}'", tag_name(s), clip(&s.name)), bytes)
+            .map_err(|_| {
+                self.err(
+                    s.at,
+                    self.budget
+                        .over_msg(format_args!("{} '{}'", tag_name(s), clip(&s.name)), bytes),
+                )
+            })
     }
 
     /// A binary integer array's bytes as stored, not decoded (the
@@ -181,11 +208,12 @@ impl Ctx<'_> {
                     // ids that fit u32 (all but a broken file's) decoded
                     // straight to u32; u32::MAX marks one that does not
                     let e = self.layout.endian;
-                    let max = self.max_values(s, file_len);
+                    let max = self.max_values(s, file_len).min(self.budget.left() as usize / 4);
                     let narrow = |c: &[u8]| u32::try_from(t.get_i64(e, c)).unwrap_or(u32::MAX);
                     if let Some(ids) = b64_values(&self.layout, s.text.as_bytes(), max, t.size(), narrow)
                         && ids.par_iter().all(|&v| v != u32::MAX)
                     {
+                        self.charge(s, ids.len() as u64 * 4)?;
                         return Ok(Some(Ints::U32(ids)));
                     }
                 }
@@ -203,7 +231,7 @@ impl Ctx<'_> {
             Storage::Binary => {
                 let max = self.max_values(s, file_len).saturating_mul(elem_size(s.ty));
                 let mut src = B64Source::new(s.text.as_bytes(), 0, s.text_at);
-                let b = self.layout.read(&mut src, max).map_err(at_err)?;
+                let b = self.layout.read(&mut src, max, self.budget).map_err(at_err)?;
                 // nothing but padding or whitespace may follow
                 b
             }
@@ -239,7 +267,7 @@ impl Ctx<'_> {
                 } else {
                     Box::new(B64Source::new(app.data, offset, app.base))
                 };
-                self.layout.read(src.as_mut(), max).map_err(at_err)?
+                self.layout.read(src.as_mut(), max, self.budget).map_err(at_err)?
             }
         };
         if let Ty::Num(t) = s.ty
@@ -260,6 +288,23 @@ impl Ctx<'_> {
 
     fn decode_ascii(&self, s: &Spec<'_>) -> Result<Decoded> {
         let text = s.text.as_bytes();
+        // a value takes a character and a separator
+        let room = text.len() / 2 + 1;
+        if let Some(n) = s.tuples
+            && n.saturating_mul(s.components) > room
+        {
+            return Err(self.err(
+                s.at,
+                format!(
+                    "{} '{}' declares {} values (NumberOfTuples {n} x {} components), its {} characters of text hold at most {room}",
+                    tag_name(s),
+                    clip(&s.name),
+                    n.saturating_mul(s.components),
+                    s.components,
+                    text.len()
+                ),
+            ));
+        }
         let mut i = 0;
         let mut tokens = std::iter::from_fn(|| {
             while i < text.len() && text[i].is_ascii_whitespace() {
@@ -290,6 +335,8 @@ impl Ctx<'_> {
                     })?;
                     push_val(&mut out, v);
                 }
+                // bounded by the text, which the file's bytes paid for
+                self.charge(s, out.len() as u64 * 8)?;
                 Ok(Decoded::Num(t, out))
             }
             Ty::Str => {
@@ -316,7 +363,26 @@ impl Ctx<'_> {
 
     /// VTK stores a string array as its strings, each followed by a NUL.
     fn strings(&self, s: &Spec<'_>, bytes: &[u8]) -> Result<Decoded> {
-        let mut out = Vec::new();
+        // a million NULs would be a million Strings of 24 bytes each:
+        // counted and checked before any is made
+        let count = memchr::memchr_iter(0, bytes).count() + usize::from(bytes.last().is_some_and(|&b| b != 0));
+        if let Some(n) = s.tuples {
+            let want = n.saturating_mul(s.components);
+            if count != want {
+                return Err(self.err(
+                    s.at,
+                    format!(
+                        "Array '{}' has {count} strings, NumberOfTuples says {want}",
+                        clip(&s.name)
+                    ),
+                ));
+            }
+        }
+        self.charge(
+            s,
+            count as u64 * std::mem::size_of::<String>() as u64 + bytes.len() as u64,
+        )?;
+        let mut out = Vec::with_capacity(count);
         let mut rest = bytes;
         while !rest.is_empty() {
             let end = rest.iter().position(|&b| b == 0).unwrap_or(rest.len());
@@ -438,7 +504,7 @@ fn split_appended<'a>(path: &Path, data: &'a [u8]) -> Result<(usize, Option<Appe
     ))
 }
 
-pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
+pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
     let (xml_len, appended) = split_appended(path, data)?;
     let text = std::str::from_utf8(&data[..xml_len]).map_err(|e| {
         Error::parse(
@@ -456,6 +522,8 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
         },
         appended,
         counts: None,
+        budget,
+        conn_len: std::cell::Cell::new(None),
     };
     let mut reader = Reader::from_str(text);
     let mut stack: Vec<String> = Vec::new();
@@ -492,7 +560,19 @@ pub(crate) fn read(path: &Path, data: &[u8]) -> Result<RawMesh> {
                                 ctx.err(tag_pos, format!("Piece: {k} must be a count, found '{}'", clip(&v)))
                             })
                         };
-                        ctx.counts = Some((num("NumberOfPoints")?, num("NumberOfCells")?));
+                        let (np, nc) = (num("NumberOfPoints")?, num("NumberOfCells")?);
+                        // coordinates, and an offset, a type and a vertex per cell
+                        let least = (np as u64)
+                            .saturating_mul(24)
+                            .saturating_add((nc as u64).saturating_mul(20));
+                        if least > ctx.budget.left() {
+                            return Err(ctx.err(
+                                tag_pos,
+                                ctx.budget
+                                    .over_msg(format_args!("Piece: {np} points and {nc} cells"), least),
+                            ));
+                        }
+                        ctx.counts = Some((np, nc));
                     }
                     "DataArray" | "Array" if pending.is_none() => {
                         let section = match parent {
@@ -697,7 +777,12 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
     let (mut pts, mut conn, mut offs, mut types) = (None, None, None, None);
     let mut fixed = None;
     let mut poly = PolyArrays::default();
-    for s in &specs {
+    // the offsets first: their last one is the connectivity's length, which
+    // then bounds what its header may declare
+    let offsets_first = |s: &&Spec<'_>| !(s.section == Section::Cells && s.name == "offsets");
+    let mut order: Vec<&Spec<'_>> = specs.iter().collect();
+    order.sort_by_key(offsets_first);
+    for s in order {
         if s.section == Section::Other {
             continue; // arrays outside the grid: not ours
         }
@@ -719,6 +804,12 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
                     _ => None,
                 };
                 if let Some(slot) = main {
+                    if s.name == "offsets"
+                        && let Decoded::Num(_, Values::Int(v)) = &d
+                        && let Some(n) = v.last().map_or(Some(0), |&o| usize::try_from(o).ok())
+                    {
+                        ctx.conn_len.set(Some(n));
+                    }
                     *slot = Some((
                         match d {
                             Decoded::Num(_, Values::Int(v)) => Ints::I(v),

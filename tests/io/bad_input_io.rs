@@ -407,6 +407,68 @@ fn no_panics_on_truncated_or_corrupted_files() {
     }
 }
 
+/// The hostile files of `bombs` and their mutants (cut short, bytes
+/// changed) read through the CLI within a 256 MiB budget: `Ok` or an error
+/// naming the file, never a signal, a panic or more than 1 GiB of RSS.
+#[test]
+fn bombs_and_their_mutants_stay_bounded() {
+    use crate::bombs;
+    let mut corpus: Vec<(String, Vec<u8>)> = bombs::declared_256m()
+        .into_iter()
+        .map(|(n, b, _)| (n.to_string(), b))
+        .collect();
+    corpus.push(("lzma_small.vtu".into(), bombs::lzma_bomb(1025, 1 << 20)));
+    corpus.push((
+        "lzma_huge.vtu".into(),
+        bombs::lzma_bomb(1025, 1025 * bombs::CHUNK_ZEROS),
+    ));
+    corpus.push(("zlib_1g.vtu".into(), bombs::zlib_conn_1g()));
+    let dir = tempfile::tempdir().unwrap();
+    let mut seed = 0x5851_f42d_4c95_7f2du64;
+    let mut rand = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    let mut worst = (0, String::new());
+    for (name, bytes) in &corpus {
+        let p = dir.path().join(name);
+        for k in 0..12 {
+            let mut b = bytes.clone();
+            if k % 3 == 0 {
+                b.truncate(rand() as usize % b.len());
+            } else {
+                let i = rand() as usize % b.len();
+                b[i] = rand() as u8;
+            }
+            std::fs::write(&p, &b).unwrap();
+            let run = bombs::run_cli(
+                &[
+                    "quality".as_ref(),
+                    p.as_os_str(),
+                    "--max-memory".as_ref(),
+                    "256M".as_ref(),
+                ],
+                std::time::Duration::from_secs(60),
+            );
+            let what = format!("{name} mutant {k}: {:?} {}", run.code, run.stderr.trim());
+            assert_eq!(run.signal, None, "{what}");
+            assert!(
+                matches!(run.code, Some(0 | 1)) && !run.stderr.contains("panicked"),
+                "{what}"
+            );
+            assert!(run.code == Some(0) || run.stderr.contains(name.as_str()), "{what}");
+            assert!(run.max_rss_kib < 1 << 20, "{what}: {} KiB", run.max_rss_kib);
+            assert!(run.secs < 5.0, "{what}: {:.1} s", run.secs);
+            if run.max_rss_kib > worst.0 {
+                worst = (run.max_rss_kib, what);
+            }
+        }
+    }
+    eprintln!("largest peak RSS: {} KiB ({})", worst.0, worst.1);
+}
+
 #[test]
 fn vtk_binary_51_layout_reads() {
     let mut b = b"# vtk DataFile Version 5.1\nt\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n".to_vec();

@@ -490,3 +490,66 @@ fn data_arrays_follow_a_reordering() {
         }
     }
 }
+
+/// A Python with meshio: `MESHSMOOTH_PYTHON`, else the checkout's `.venv`.
+fn meshio_python() -> Option<PathBuf> {
+    let p = std::env::var_os("MESHSMOOTH_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
+    let ok = Command::new(&p)
+        .args(["-c", "import meshio"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    ok.then_some(p)
+}
+
+/// meshio 5.3 reads the legacy VTK files meshsmooth writes, ASCII and
+/// binary, with every integer array type (it has no `vtktypeint64` or
+/// `signed_char`, which meshsmooth used to write), values and types kept.
+#[test]
+fn meshio_reads_our_legacy_vtk_arrays() {
+    let Some(python) = meshio_python() else {
+        eprintln!("skipped: no Python with meshio (set MESHSMOOTH_PYTHON)");
+        return;
+    };
+    let mut m = Mesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+    m.push_element(ElementKind::Tetrahedron, &[0, 1, 2, 3]);
+    let ints = |v: &[i64]| Values::Int(v.to_vec());
+    let arrays = [
+        ("i8", ValueType::I8, ints(&[-3, 0, 5, 127]), "int8"),
+        ("u8", ValueType::U8, ints(&[0, 1, 200, 255]), "uint8"),
+        ("i16", ValueType::I16, ints(&[-300, 0, 5, 32767]), "int16"),
+        ("i32", ValueType::I32, ints(&[-70000, 0, 5, 1 << 30]), "int32"),
+        ("i64", ValueType::I64, ints(&[-(1 << 40), 0, 5, 1 << 50]), "int64"),
+        ("u64", ValueType::U64, ints(&[0, 1, 1 << 40, 1 << 62]), "uint64"),
+        (
+            "f64",
+            ValueType::F64,
+            Values::Float(vec![0.5, -1.25, 3.0, 1e-7]),
+            "float64",
+        ),
+    ];
+    for (name, ty, values, _) in &arrays {
+        m.data.point.push(DataArray::new(*name, *ty, 1, values.clone()));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for format in [Format::VtkAscii, Format::VtkBinary] {
+        let p = dir.path().join(format!("{format}.vtk"));
+        io::write(&p, &m, format, &[]).unwrap();
+        let script = "import sys, json, meshio\n\
+                      m = meshio.read(sys.argv[1])\n\
+                      print(json.dumps({k: [str(v.dtype.newbyteorder('=')), v.ravel().tolist()] for k, v in m.point_data.items()}))";
+        let o = Command::new(&python).args(["-c", script]).arg(&p).output().unwrap();
+        assert!(o.status.success(), "{format}: {}", String::from_utf8_lossy(&o.stderr));
+        let got: HashMap<String, (String, Vec<f64>)> = serde_json::from_slice(&o.stdout).unwrap();
+        for (name, _, values, dtype) in &arrays {
+            let want: Vec<f64> = match values {
+                Values::Int(v) => v.iter().map(|&x| x as f64).collect(),
+                Values::Float(v) => v.clone(),
+                Values::Str(_) => unreachable!(),
+            };
+            let (t, v) = &got[*name];
+            assert_eq!((t.as_str(), v), (*dtype, &want), "{format}: array {name}");
+        }
+    }
+}

@@ -8,6 +8,7 @@
 mod common;
 
 mod bad_input_io;
+mod bombs;
 mod interop;
 mod io_roundtrip;
 mod pvtu;
