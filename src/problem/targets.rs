@@ -125,8 +125,10 @@ impl<'a> Target<'a> {
 /// they grow. An affine fit reproduces linear trends exactly, also at a wall
 /// where the neighbourhood is one-sided, so geometric grading (log-linear
 /// in the layer index) and smooth anisotropy stay while the noise of
-/// perturbed vertices averages out. 0 passes: the input's own (noisy)
-/// corners.
+/// perturbed vertices averages out. Layers of stretched simplices take
+/// instead the corners of the input with the layers' vertices regularised
+/// along their rows and columns, `25 * passes` rounds (see `split_layers`).
+/// 0 passes: the input's own (noisy) corners.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InputTargets {
     /// Regularisation passes (0: the input's own corners).
