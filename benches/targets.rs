@@ -23,6 +23,62 @@ fn first_layer(mesh: &Mesh) -> Vec<(f64, f64)> {
     (1..NX).map(|i| mesh.points[NX + 1 + i]).map(|p| (p[0], p[1])).collect()
 }
 
+/// A second table: every kind of layer `generate boundary-layer` builds,
+/// perturbed the same way, smoothed with the ideal target and the default.
+fn every_kind(md: &mut String) {
+    use meshsmooth::generate::LayerKind;
+    use meshsmooth::problem::targets::first_layer_change;
+    writeln!(
+        md,
+        "\n## Every kind of layer\n\n`meshsmooth generate boundary-layer --kind K` (first height 1e-3, 12 layers; 2D: 24 cells along the wall, growth 1.25; 3D: 8 x 8 cells, growth 1.5), perturbed as above (seed 5), Newton. First-layer height after over before on every wall vertex under a stretched cell (what `smooth` prints): median \\|h/h0 - 1\\| and the largest.\n\n| kind | cells | perturbed, median / max | ideal target, median | default, median / max | default resolved to |\n|---|---|---|---|---|---|"
+    )
+    .unwrap();
+    let worst =
+        |c: &meshsmooth::problem::targets::LayerChange| (c.min_ratio - 1.0).abs().max((c.max_ratio - 1.0).abs());
+    for kind in [
+        LayerKind::Quad,
+        LayerKind::Tri,
+        LayerKind::Hex,
+        LayerKind::Prism,
+        LayerKind::Tet,
+    ] {
+        let (n, growth) = if kind.dim() == 2 { (24, 1.25) } else { (8, 1.5) };
+        let base = generate::boundary_layer(kind, n, 1e-3, growth, 12).unwrap();
+        let mut start = base.clone();
+        let perturb = PerturbOptions {
+            perturbation: Perturbation::RandomShortest { alpha: 0.3 },
+            seed: 5,
+            ..Default::default()
+        };
+        generate::perturb(&mut start, &perturb).unwrap();
+        let params = Params::default();
+        let smoothed = |target: Target<'static>| {
+            let mut m = start.clone();
+            let mut opts = ProblemOptions::default();
+            opts.target = target;
+            solve::smooth_mesh(&mut m, &opts, &Options::cpu(Method::Newton, &params), &mut |_| true).unwrap();
+            assert!(metric::inverted_elements(&m, &m.points).is_empty());
+            first_layer_change(&base, &base.points, &m.points).unwrap()
+        };
+        let p = first_layer_change(&base, &base.points, &start.points).unwrap();
+        let (ideal, auto) = (smoothed(Target::Ideal), smoothed(Target::Auto));
+        let (resolved, _) = ProblemOptions::default().resolved(&start).unwrap();
+        writeln!(
+            md,
+            "| {kind} | {} | {:.3} / {:.3} | {:.1}x as thick | {:.3} / {:.3} | `{}`, `{}` |",
+            base.num_elements(),
+            p.median_change,
+            worst(&p),
+            ideal.median_ratio,
+            auto.median_change,
+            worst(&auto),
+            resolved.target.name(),
+            resolved.metric.name()
+        )
+        .unwrap();
+    }
+}
+
 fn main() {
     let base = generate::boundary_layer_2d(NX, 1e-3, 1.25, LAYERS).unwrap();
     let mut start = base.clone();
@@ -82,6 +138,7 @@ fn main() {
         )
         .unwrap();
     }
+    every_kind(&mut md);
     std::fs::create_dir_all("results").unwrap();
     std::fs::write("results/targets-boundary-layer.md", &md).unwrap();
     print!("{md}");
