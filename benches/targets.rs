@@ -23,6 +23,18 @@ fn first_layer(mesh: &Mesh) -> Vec<(f64, f64)> {
     (1..NX).map(|i| mesh.points[NX + 1 + i]).map(|p| (p[0], p[1])).collect()
 }
 
+/// `base` with its interior vertices moved by up to 0.3 of their shortest edge.
+fn perturbed(base: &Mesh, seed: u64) -> Mesh {
+    let mut start = base.clone();
+    let perturb = PerturbOptions {
+        perturbation: Perturbation::RandomShortest { alpha: 0.3 },
+        seed,
+        ..Default::default()
+    };
+    generate::perturb(&mut start, &perturb).unwrap();
+    start
+}
+
 /// A second table: every kind of layer `generate boundary-layer` builds,
 /// perturbed the same way, smoothed with the ideal target and the default.
 fn every_kind(md: &mut String) {
@@ -44,13 +56,7 @@ fn every_kind(md: &mut String) {
     ] {
         let (n, growth) = if kind.dim() == 2 { (24, 1.25) } else { (8, 1.5) };
         let base = generate::boundary_layer(kind, n, 1e-3, growth, 12).unwrap();
-        let mut start = base.clone();
-        let perturb = PerturbOptions {
-            perturbation: Perturbation::RandomShortest { alpha: 0.3 },
-            seed: 5,
-            ..Default::default()
-        };
-        generate::perturb(&mut start, &perturb).unwrap();
+        let start = perturbed(&base, 5);
         let params = Params::default();
         let smoothed = |target: Target<'static>| {
             let mut m = start.clone();
@@ -81,13 +87,7 @@ fn every_kind(md: &mut String) {
 
 fn main() {
     let base = generate::boundary_layer_2d(NX, 1e-3, 1.25, LAYERS).unwrap();
-    let mut start = base.clone();
-    let perturb = PerturbOptions {
-        perturbation: Perturbation::RandomShortest { alpha: 0.3 },
-        seed: 3,
-        ..Default::default()
-    };
-    generate::perturb(&mut start, &perturb).unwrap();
+    let start = perturbed(&base, 3);
     let params = Params::default();
     let run = |target: Target<'static>| {
         let mut m = start.clone();

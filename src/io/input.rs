@@ -138,13 +138,9 @@ mod tests {
         // text without end: read until the budget is spent
         let dir = tempfile::tempdir().unwrap();
         let fifo = dir.path().join("pipe.vtk");
-        assert!(
-            std::process::Command::new("mkfifo")
-                .arg(&fifo)
-                .status()
-                .unwrap()
-                .success()
-        );
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
         let writer = {
             let fifo = fifo.clone();
             std::thread::spawn(move || {

@@ -289,3 +289,17 @@ pub fn finding_line<'a>(md: &'a str, claim: &str) -> &'a str {
     );
     line
 }
+
+/// A named pipe at `path` (Unix).
+#[cfg(unix)]
+pub fn fifo(path: &std::path::Path) {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).unwrap();
+    // SAFETY: a valid NUL-terminated path
+    assert_eq!(
+        unsafe { libc::mkfifo(c.as_ptr(), 0o600) },
+        0,
+        "mkfifo {}",
+        path.display()
+    );
+}

@@ -791,13 +791,7 @@ fn outputs_respect_what_is_already_there() {
     assert!(e.contains("directory"), "{e}");
     // a FIFO is written directly (a reader drains it)
     let fifo = dir.path().join("pipe.vtk");
-    assert!(
-        std::process::Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .unwrap()
-            .success()
-    );
+    crate::common::fifo(&fifo);
     let reader = {
         let fifo = fifo.clone();
         std::thread::spawn(move || std::fs::read(&fifo).unwrap())

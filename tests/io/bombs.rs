@@ -347,13 +347,7 @@ fn devices_and_pipes_are_read_within_the_budget() {
     refused(&z, None, &["not a mesh file"]);
     // a pipe of endless text: read until the budget is spent
     let fifo = dir.path().join("endless.vtk");
-    assert!(
-        std::process::Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .unwrap()
-            .success()
-    );
+    crate::common::fifo(&fifo);
     let writer = {
         let fifo = fifo.clone();
         std::thread::spawn(move || {
