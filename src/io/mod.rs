@@ -290,9 +290,11 @@ pub fn in_file(path: &Path, e: Error) -> Error {
 /// VTK's wedge, as VTK 9.7's vtkCellValidator and vtkMeshQuality (and so
 /// ParaView) judge it, has its base triangle (0,1,2) ordered with its normal
 /// toward the top (3,4,5) — meshsmooth's and Gmsh's order, so VTK files need
-/// no permutation. meshio 5.3 reverses the base when it writes VTK. When every
-/// wedge of a VTK file is inverted in VTK's order but valid reversed, the file
-/// follows meshio's convention: say so.
+/// no permutation. Some writers reverse the base when they write VTK: Gmsh's
+/// VTK export (its `MPrism::getVertexVTK` maps 0,2,1,3,5,4) and meshio 5.3
+/// both do. When every wedge of a VTK file is inverted in VTK's order but
+/// valid reversed, the file's wedges have their base reversed: say so, and
+/// name those writers rather than guess which one it was.
 fn check_wedge_convention(path: &Path, mesh: &Mesh) -> Result<()> {
     let prisms = mesh.count_kind(ElementKind::Prism);
     if prisms == 0 {
@@ -321,8 +323,9 @@ fn check_wedge_convention(path: &Path, mesh: &Mesh) -> Result<()> {
         format!(
             "all {prisms} wedges are inverted in VTK's vertex order (base triangle 0,1,2 with its normal \
              toward the top 3,4,5, as VTK 9 and ParaView judge them) but valid with the base reversed: \
-             the file follows meshio's wedge convention (meshio 5.3 reverses the base triangle when it \
-             writes VTK). Reorder each wedge as (0,2,1,3,5,4), or write the file from Gmsh or VTK"
+             the file writes every wedge with its base triangle reversed, as Gmsh's VTK export and \
+             meshio 5.3 do. Reorder each wedge as (0,2,1,3,5,4), or export the mesh in a format that \
+             keeps the writer's own order (Gmsh .msh, or VTK written by VTK or ParaView)"
         ),
     ))
 }
