@@ -220,8 +220,11 @@ fn claim_stdout() -> Result<File> {
 /// before leaves no output behind.
 #[derive(Default)]
 pub(super) struct Writes<'a> {
-    jobs: Vec<(bool, Box<dyn FnOnce() -> Result<Staged> + 'a>)>,
+    /// Whether each job writes a stream, and the job.
+    jobs: Vec<(bool, Job<'a>)>,
 }
+
+type Job<'a> = Box<dyn FnOnce() -> Result<Staged> + 'a>;
 
 impl<'a> Writes<'a> {
     pub(super) fn add(&mut self, path: &Path, job: impl FnOnce() -> Result<Staged> + 'a) {
