@@ -126,12 +126,12 @@ fn check_file(flag: &str, path: &Path) -> Result<()> {
         })
 }
 
-/// The format of a mesh output: `--format` where given, else the
-/// extension; standard output has none, so there `--format` is required.
-pub(super) fn mesh_format(path: &Path, name: Option<&str>) -> Result<Format> {
+/// The format of the mesh output `flag path`: `--format` where given, else
+/// the extension; standard output has none, so there `--format` is required.
+pub(super) fn mesh_format(flag: &str, path: &Path, name: Option<&str>) -> Result<Format> {
     if name.is_none() && (path.as_os_str() == "-" || (path.extension().is_none() && is_stdout(path))) {
         return Err(refuse(format!(
-            "-o {} writes the mesh to standard output, which has no extension to tell its format: \
+            "{flag} {} names standard output, which has no extension to tell the mesh format: \
              give --format (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary or medit)",
             path.display()
         )));
