@@ -1,6 +1,7 @@
 //! The subcommands.
 
 use super::device;
+use super::outputs;
 use super::progress::Progress;
 use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, UntangleArgs};
 use meshsmooth::Smoother;
@@ -49,16 +50,6 @@ fn write_partial(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     } else {
         io::write(path, mesh, format, &[])
     }
-}
-
-pub(super) fn refuse_overwrite(input: &Path, output: &Path) -> Result<()> {
-    if io::same_file(input, output) {
-        return Err(Error::InvalidArgument(format!(
-            "output {} is the input file; meshsmooth never overwrites its input",
-            output.display()
-        )));
-    }
-    Ok(())
 }
 
 fn params_strategy(o: &ObjectiveArgs) -> String {
@@ -249,9 +240,15 @@ fn run_smoother(mesh: &mut Mesh, s: &Smoother, objective: &ObjectiveArgs, quiet:
 
 /// `meshsmooth untangle`: the untangling phase alone.
 pub fn untangle(a: &UntangleArgs) -> Result<()> {
-    let format = output_format(&a.output, a.format.as_deref())?;
-    refuse_overwrite(&a.input, &a.output)?;
+    outputs::check(Some(&a.input), &[("-o", &a.output)])?;
+    let format = outputs::mesh_format("-o", &a.output, a.format.as_deref())?;
     let settings = a.solver.smoother(true, a.save_partial)?;
+    if a.save_partial && outputs::is_stdout(&a.output) {
+        return Err(Error::InvalidArgument(
+            "--save-partial writes NAME.partial.EXT beside the output: give -o a file, not standard output".into(),
+        ));
+    }
+    let mut sink = outputs::MeshSink::open(&a.output)?;
     let mut mesh = io::read(&a.input)?;
     if a.drop_data {
         mesh.data = Default::default();
@@ -279,41 +276,40 @@ pub fn untangle(a: &UntangleArgs) -> Result<()> {
             return Err(e);
         }
     }
-    io::write_mesh(&a.output, &mesh, format)?;
+    sink.stage(&mesh, format, true)?.commit()?;
     if !a.quiet {
-        println!("wrote {}", a.output.display());
+        println!("wrote {}", sink.name());
     }
     Ok(())
 }
 
 pub fn smooth(a: &SmoothArgs) -> Result<()> {
     let settings = a.solver.smoother(!a.no_untangle, a.save_partial)?;
+    let mut checked = vec![("-o", a.output.as_path())];
+    if let Some(h) = &a.history {
+        checked.push(("--history", h.as_path()));
+    }
+    outputs::check(Some(&a.input), &checked)?;
     let pieces = pieces_wanted(&a.output, a.pieces)?;
     let format = match pieces {
         Some(_) => piece_format(a.format.as_deref())?,
-        None => output_format(&a.output, a.format.as_deref())?,
+        None => outputs::mesh_format("-o", &a.output, a.format.as_deref())?,
     };
-    refuse_overwrite(&a.input, &a.output)?;
     if let Some(count) = pieces {
         refuse_overwriting_pieces(&a.input, &a.output, count)?;
     }
+    if a.save_partial && outputs::is_stdout(&a.output) {
+        return Err(Error::InvalidArgument(
+            "--save-partial writes NAME.partial.EXT beside the output: give -o a file, not standard output".into(),
+        ));
+    }
     #[cfg(feature = "mpi")]
     super::ranks::set_partitioner(a.partitioner);
-    if let Some(h) = &a.history {
-        refuse_overwrite(&a.input, h)?;
-        for (other, what) in [(&a.output, "the output mesh (-o)"), (&a.input, "the input mesh")] {
-            if io::same_target(h, other) {
-                return Err(Error::InvalidArgument(format!(
-                    "--history {} is {what}; give the history its own file",
-                    h.display()
-                )));
-            }
-        }
-    }
     #[cfg(feature = "mpi")]
     if a.partitioner == Partitioner::Pieces {
         return smooth_pieces(a, &settings, pieces, format);
     }
+    let mut sink = outputs::MeshSink::open(&a.output)?;
     #[cfg(feature = "mpi")]
     let mut mesh = read_on_ranks(&a.input, a.quiet)?;
     #[cfg(not(feature = "mpi"))]
@@ -339,40 +335,45 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
             return Err(e);
         }
     };
-    match pieces {
-        Some(count) => {
-            let (owner, count) = piece_owners(&mesh, count, a.partitioner)?;
-            #[cfg(feature = "mpi")]
-            let (written, by) = match super::ranks::cluster().filter(|c| c.size() > 1) {
-                Some(c) => {
-                    let mut writer = c.piece_writer();
-                    let written = io::write_mesh_pieces_with(&a.output, &mesh, &owner, count, format, &mut writer)?;
-                    (written, Some(writer.ranks))
-                }
-                None => (io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?, None),
-            };
-            #[cfg(not(feature = "mpi"))]
-            let (written, by): (_, Option<Vec<usize>>) =
-                (io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?, None);
-            if !a.quiet {
-                println!(
-                    "wrote {} pieces ({} to {})",
-                    written.len(),
-                    written[0].display(),
-                    written[written.len() - 1].display()
-                );
-                if let Some(by) = by {
-                    println!("pieces written by ranks {}; the index by rank 0", list(&by));
-                }
+    // every output staged before any is put in place: all of them or none
+    let mut writes = outputs::Writes::default();
+    if let Some(h) = &a.history {
+        let csv = info.history.to_csv();
+        writes.add(h, move || outputs::stage_text(h, csv));
+    }
+    if pieces.is_none() {
+        writes.add(&a.output, || sink.stage(&mesh, format, true));
+    }
+    let staged = writes.stage()?;
+    if let Some(count) = pieces {
+        let (owner, count) = piece_owners(&mesh, count, a.partitioner)?;
+        #[cfg(feature = "mpi")]
+        let (written, by) = match super::ranks::cluster().filter(|c| c.size() > 1) {
+            Some(c) => {
+                let mut writer = c.piece_writer();
+                let written = io::write_mesh_pieces_with(&a.output, &mesh, &owner, count, format, &mut writer)?;
+                (written, Some(writer.ranks))
+            }
+            None => (io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?, None),
+        };
+        #[cfg(not(feature = "mpi"))]
+        let (written, by): (_, Option<Vec<usize>>) =
+            (io::write_mesh_pieces(&a.output, &mesh, &owner, count, format)?, None);
+        if !a.quiet {
+            println!(
+                "wrote {} pieces ({} to {})",
+                written.len(),
+                written[0].display(),
+                written[written.len() - 1].display()
+            );
+            if let Some(by) = by {
+                println!("pieces written by ranks {}; the index by rank 0", list(&by));
             }
         }
-        None => io::write_mesh(&a.output, &mesh, format)?,
     }
-    if let Some(h) = &a.history {
-        io::write_atomic(h, |w| Ok(w.write_all(info.history.to_csv().as_bytes())?))?;
-    }
+    staged.commit()?;
     if !a.quiet {
-        println!("wrote {}", a.output.display());
+        println!("wrote {}", sink.name());
     }
     Ok(())
 }
@@ -635,9 +636,16 @@ pub fn demo(a: &DemoArgs) -> Result<()> {
         mesh.num_elements()
     );
     let settings = a.solver.smoother(true, false)?;
+    let format = match &a.output {
+        Some(out) => {
+            outputs::check(None, &[("-o", out)])?;
+            Some(Format::from_path(out)?)
+        }
+        None => None,
+    };
     run_smoother(&mut mesh, &settings, &a.solver.objective, false)?;
-    if let Some(out) = &a.output {
-        io::write_mesh(out, &mesh, Format::from_path(out)?)?;
+    if let (Some(out), Some(format)) = (&a.output, format) {
+        io::write_mesh(out, &mesh, format)?;
         println!("wrote {}", out.display());
     }
     Ok(())

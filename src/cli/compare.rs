@@ -2,8 +2,8 @@
 //! comparison figures.
 
 use super::CompareArgs;
-use super::commands::refuse_overwrite;
 use super::device;
+use super::outputs;
 use meshsmooth::solve::Options;
 use meshsmooth::{Error, Result, io};
 
@@ -20,9 +20,11 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     if methods.is_empty() {
         return Err(Error::InvalidArgument("--methods needs at least one method".into()));
     }
-    for out in [&a.csv, &a.plot].into_iter().flatten() {
-        refuse_overwrite(&a.input, out)?;
-    }
+    let checked: Vec<(&str, &std::path::Path)> = [("--csv", &a.csv), ("--plot", &a.plot)]
+        .into_iter()
+        .filter_map(|(flag, p)| p.as_deref().map(|p| (flag, p)))
+        .collect();
+    outputs::check(Some(&a.input), &checked)?;
     let mut settings = device::settings(a.device, &a.gpu, &a.stop, Some(&a.objective))?;
     settings.preconditioner = a.preconditioner;
     let params = settings.params()?;
@@ -109,17 +111,18 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             );
         }
     }
+    // both or neither
+    let mut writes = outputs::Writes::default();
     if let Some(csv) = &a.csv {
-        io::write_atomic(csv, |w| {
-            Ok(w.write_all(meshsmooth::compare::histories_csv(&infos).as_bytes())?)
-        })?;
+        let text = meshsmooth::compare::histories_csv(&infos);
+        writes.add(csv, move || outputs::stage_text(csv, text));
     }
     if let Some(plot) = &a.plot {
         let series: Vec<(String, &meshsmooth::solve::History)> =
             infos.iter().map(|i| (i.method.to_string(), &i.history)).collect();
-        io::write_atomic(plot, |w| {
-            Ok(w.write_all(meshsmooth::plot::histories_svg(&series).as_bytes())?)
-        })?;
+        let svg = meshsmooth::plot::histories_svg(&series);
+        writes.add(plot, move || outputs::stage_text(plot, svg));
     }
+    writes.run()?;
     Ok(())
 }

@@ -1,10 +1,10 @@
 //! `meshsmooth generate`: the test meshes of the papers, written to a file.
 
-use super::commands::output_format;
+use super::outputs;
 use super::{BoxType, GenerateCommand, GridType, OutputArgs, PerturbArgs};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};
-use meshsmooth::io::write_mesh;
 use meshsmooth::{ElementKind, Error, Mesh, Result};
+use std::path::Path;
 
 pub(super) fn perturb(mesh: &mut Mesh, a: &PerturbArgs) -> Result<()> {
     let Some(spec) = &a.perturb else { return Ok(()) };
@@ -47,14 +47,23 @@ fn positive(counts: &[usize], what: &str) -> Result<()> {
     Ok(())
 }
 
-fn save(out: &OutputArgs, mesh: &Mesh) -> Result<()> {
-    let format = output_format(&out.output, out.format.as_deref())?;
-    if meshsmooth::metric::inverted_elements(mesh, &mesh.points).is_empty() {
-        write_mesh(&out.output, mesh, format)?;
-    } else {
-        // asked for with --tangle: written without the quality field inverted elements lack
-        meshsmooth::io::write(&out.output, mesh, format, &[])?;
+/// Where the command's meshes go: the mesh, and the horseshoe's reference.
+fn destinations(g: &GenerateCommand) -> (&OutputArgs, Option<&Path>) {
+    match g {
+        GenerateCommand::Box(a) => (&a.out, None),
+        GenerateCommand::Grid(a) => (&a.out, None),
+        GenerateCommand::Duct(a) => (&a.out, None),
+        GenerateCommand::Horseshoe(a) => (&a.out, a.reference_output.as_deref()),
+        GenerateCommand::Prism(a) => (&a.out, None),
+        GenerateCommand::Graded(a) => (&a.out, None),
+        GenerateCommand::BoundaryLayer(a) => (&a.out, None),
+        GenerateCommand::Hetero(a) => (&a.out, None),
+        GenerateCommand::Mixed(a) => (&a.out, None),
+        GenerateCommand::Voronoi(a) => (&a.out, None),
     }
+}
+
+fn wrote(name: &str, mesh: &Mesh) {
     let kinds: Vec<String> = ElementKind::ALL
         .iter()
         .filter_map(|&k| match mesh.count_kind(k) {
@@ -62,16 +71,43 @@ fn save(out: &OutputArgs, mesh: &Mesh) -> Result<()> {
             n => Some(format!("{n} {k}")),
         })
         .collect();
-    println!(
-        "wrote {} ({} vertices; {})",
-        out.output.display(),
-        mesh.num_points(),
-        kinds.join(", ")
-    );
+    println!("wrote {name} ({} vertices; {})", mesh.num_points(), kinds.join(", "));
+}
+
+/// The outputs are checked before the mesh is made, and written together.
+pub fn generate(g: &GenerateCommand) -> Result<()> {
+    let (out, reference) = destinations(g);
+    let mut checked = vec![("-o", out.output.as_path())];
+    checked.extend(reference.map(|r| ("--reference-output", r)));
+    outputs::check(None, &checked)?;
+    let format = outputs::mesh_format("-o", &out.output, out.format.as_deref())?;
+    let reference_format = reference
+        .map(|r| outputs::mesh_format("--reference-output", r, out.format.as_deref()))
+        .transpose()?;
+    let mut sink = outputs::MeshSink::open(&out.output)?;
+    let mut reference_sink = reference.map(outputs::MeshSink::open).transpose()?;
+    let (mesh, reference_mesh) = make(g)?;
+    // asked for with --tangle: written without the quality field inverted elements lack
+    let valid = |m: &Mesh| meshsmooth::metric::inverted_elements(m, &m.points).is_empty();
+    let mut writes = outputs::Writes::default();
+    writes.add(&out.output, || sink.stage(&mesh, format, valid(&mesh)));
+    if let (Some(path), Some(rs), Some(rm), Some(rf)) = (
+        reference,
+        reference_sink.as_mut(),
+        reference_mesh.as_ref(),
+        reference_format,
+    ) {
+        writes.add(path, move || rs.stage(rm, rf, valid(rm)));
+    }
+    writes.run()?;
+    wrote(&sink.name(), &mesh);
+    if let (Some(rs), Some(rm)) = (&reference_sink, &reference_mesh) {
+        wrote(&rs.name(), rm);
+    }
     Ok(())
 }
 
-pub fn generate(g: &GenerateCommand) -> Result<()> {
+fn make(g: &GenerateCommand) -> Result<(Mesh, Option<Mesh>)> {
     match g {
         GenerateCommand::Box(a) => {
             positive(&a.cells, "--cells")?;
@@ -83,7 +119,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
                 generate::tet_box(nx, ny, nz, lengths)
             };
             perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
+            Ok((mesh, None))
         }
         GenerateCommand::Grid(a) => {
             positive(&a.cells, "--cells")?;
@@ -95,29 +131,19 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
                 generate::quad_grid(nx, ny, lengths)
             };
             perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
+            Ok((mesh, None))
         }
         GenerateCommand::Duct(a) => {
             positive(&[a.cells_across], "--cells-across")?;
             let mut mesh = generate::duct(a.cells_across);
             perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
+            Ok((mesh, None))
         }
         GenerateCommand::Horseshoe(a) => {
             let (mesh, reference) = generate::horseshoe(a.kind, a.free.max(1));
-            save(&a.out, &mesh)?;
-            if let Some(r) = &a.reference_output {
-                save(
-                    &OutputArgs {
-                        output: r.clone(),
-                        format: a.out.format.clone(),
-                    },
-                    &reference,
-                )?;
-            }
-            Ok(())
+            Ok((mesh, a.reference_output.is_some().then_some(reference)))
         }
-        GenerateCommand::Prism(a) => save(&a.out, &generate::prism_mesh(a.distorted, a.seed)),
+        GenerateCommand::Prism(a) => Ok((generate::prism_mesh(a.distorted, a.seed), None)),
         GenerateCommand::Voronoi(a) => {
             let cells = [a.cells[0], a.cells[1], a.cells[2]];
             let opts = generate::VoronoiOptions {
@@ -131,18 +157,18 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
                 noise: a.noise,
                 seed: a.seed,
             };
-            save(&a.out, &generate::voronoi_mesh(&opts)?)
+            Ok((generate::voronoi_mesh(&opts)?, None))
         }
         GenerateCommand::Mixed(a) => {
             positive(&[a.cells, a.layers], "--cells and --layers")?;
             let mut mesh = generate::mixed_block(a.cells, a.layers);
             perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
+            Ok((mesh, None))
         }
         GenerateCommand::Hetero(a) => {
             positive(&[a.tets], "--tets")?;
             let opts = generate::HeteroOptions::paper(a.paper as usize, a.tets);
-            save(&a.out, &generate::hetero_tet_box(&opts))
+            Ok((generate::hetero_tet_box(&opts), None))
         }
         GenerateCommand::Graded(a) => {
             positive(&[a.cells], "--cells")?;
@@ -158,7 +184,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
                 generate::graded_tet_box(a.cells, a.ratio)
             };
             perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
+            Ok((mesh, None))
         }
         GenerateCommand::BoundaryLayer(a) => {
             positive(&[a.cells], "--cells")?;
@@ -175,7 +201,7 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
             }
             let mut mesh = generate::boundary_layer(kind, a.cells, a.first, a.growth, a.layers)?;
             perturb(&mut mesh, &a.perturb)?;
-            save(&a.out, &mesh)
+            Ok((mesh, None))
         }
     }
 }

@@ -6,6 +6,7 @@ mod commands;
 mod compare;
 mod device;
 mod generate;
+mod outputs;
 mod progress;
 #[cfg(feature = "mpi")]
 pub(crate) mod ranks;

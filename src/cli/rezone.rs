@@ -2,32 +2,23 @@
 //! paper's CN optimisation from the same start, with section 6's tables.
 
 use super::RezoneArgs;
-use super::commands::{output_format, refuse_overwrite};
 use super::device;
+use super::outputs;
 use super::progress::Progress;
 use meshsmooth::io::{self, Format};
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report::{SideBySide, displacement_percent, metric_summary};
 use meshsmooth::solve::rezone::{RezoneOptions, cn_optimise_mesh, rezone_mesh};
 use meshsmooth::solve::{self, Info};
-use meshsmooth::{Error, Mesh, Result, metric};
+use meshsmooth::{Mesh, Result, metric};
 
 pub fn rezone(a: &RezoneArgs) -> Result<()> {
-    let format = output_format(&a.output, a.format.as_deref())?;
-    refuse_overwrite(&a.input, &a.output)?;
-    let cn_format = match &a.compare_cn {
-        Some(cn) => {
-            refuse_overwrite(&a.input, cn)?;
-            if io::same_target(cn, &a.output) {
-                return Err(Error::InvalidArgument(format!(
-                    "--compare-cn {} is the output mesh (-o); give the CN mesh its own file",
-                    cn.display()
-                )));
-            }
-            Some(Format::from_path(cn)?)
-        }
-        None => None,
-    };
+    let mut checked = vec![("-o", a.output.as_path())];
+    checked.extend(a.compare_cn.as_deref().map(|cn| ("--compare-cn", cn)));
+    outputs::check(Some(&a.input), &checked)?;
+    let format = outputs::mesh_format("-o", &a.output, a.format.as_deref())?;
+    let cn_format = a.compare_cn.as_deref().map(Format::from_path).transpose()?;
+    let mut sink = outputs::MeshSink::open(&a.output)?;
     let mesh = io::read(&a.input)?;
     metric::refuse_inverted(&mesh).map_err(|e| io::in_file(&a.input, e))?;
     let settings = device::settings(a.device, &a.gpu, &a.stop, None)?;
@@ -55,7 +46,8 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
     let result = rezone_mesh(&mut rj, &opts, &mut |r| progress.update(r));
     progress.finish(result.as_ref().ok().and_then(|i| i.info.history.last()));
     let rj_info = result.map_err(|e| io::in_file(&a.input, e))?;
-    io::write_mesh(&a.output, &rj, format)?;
+    // both meshes are put in place together, once both are written
+    let mut staged = vec![sink.stage(&rj, format, true)?];
     println!(
         "step 1 (reference positions): {:.3} s; step 2 (F_RJ): {}",
         rj_info.reference_seconds,
@@ -69,13 +61,16 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
             let result = cn_optimise_mesh(&mut cn, &opts.solve, &mut |r| progress.update(r));
             progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
             let info = result.map_err(|e| io::in_file(&a.input, e))?;
-            io::write_mesh(path, &cn, fmt)?;
+            staged.push(io::stage_mesh(path, &cn, fmt)?);
             println!("CN optimisation (cn-paper): {}", line(&info));
             Some(cn)
         }
         _ => None,
     };
 
+    for s in staged {
+        s.commit()?;
+    }
     let rj_quality = measure(&rj)?;
     let cn_quality = cn.as_ref().map(measure).transpose()?;
     let mut table = SideBySide {
@@ -89,7 +84,7 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
             .push(("CN", displacement_percent(&mesh, &mesh.points, &cn.points)));
     }
     println!("\n{table}");
-    println!("wrote {}", a.output.display());
+    println!("wrote {}", sink.name());
     if let Some(path) = &a.compare_cn {
         println!("wrote {}", path.display());
     }

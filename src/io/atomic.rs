@@ -7,8 +7,12 @@
 //! - a symbolic link is followed: its final target is replaced that way, the
 //!   link stays;
 //! - a character device, FIFO or socket (`/dev/null`, `/dev/stdout`, a pipe)
-//!   is written directly;
+//!   is written directly, whatever links lead to it (never a temporary file
+//!   beside it, never a rename over it);
 //! - a directory is refused.
+//!
+//! [`stage`] and [`Staged::commit`] split a write in two, so that several
+//! outputs can be written all or nothing.
 
 use std::fs::{self, OpenOptions};
 use std::io::{BufWriter, Write};
@@ -55,8 +59,58 @@ fn finish(path: &Path, filled: WriteResult) -> Result<()> {
 /// complete file replaces `path`, or `path` is left as it was. On any error
 /// the temporary file is deleted.
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResult) -> Result<()> {
-    let target = resolve_links(path)?;
-    let existing = match fs::metadata(&target) {
+    stage(path, fill)?.commit()
+}
+
+/// An output written but not yet in place: a complete temporary file beside
+/// its target, renamed over it by [`Staged::commit`] and deleted if dropped
+/// uncommitted. Several outputs are written all or nothing by staging each
+/// (streams last: what goes to a device or pipe is gone once written) and
+/// committing them only once every one is staged.
+#[must_use = "a staged output is deleted unless committed"]
+pub struct Staged {
+    path: PathBuf,
+    pending: Option<(tempfile::NamedTempFile, PathBuf)>,
+}
+
+impl Staged {
+    /// An output already written (to a stream): nothing left to commit.
+    pub fn written(path: &Path) -> Staged {
+        Staged {
+            path: path.to_path_buf(),
+            pending: None,
+        }
+    }
+
+    /// The path given for this output.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Puts the output in place (renames the temporary file over its target).
+    pub fn commit(self) -> Result<()> {
+        if let Some((tmp, target)) = self.pending {
+            tmp.persist(&target).map_err(|e| Error::io(&self.path, e.error))?;
+        }
+        Ok(())
+    }
+}
+
+/// Whether `path` is written through rather than replaced: it exists
+/// (links followed, `/dev/stdout` and `/proc/self/fd/N` included) and is a
+/// device, FIFO or socket.
+pub fn is_stream(path: &Path) -> bool {
+    fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// The first half of [`write_atomic`]: `fill` writes the complete output to a
+/// temporary file beside the target, synced to the disk; [`Staged::commit`]
+/// puts it in place. A device, FIFO or socket is written through at once.
+pub fn stage(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResult) -> Result<Staged> {
+    // what the path names, every link followed: the kernel's own view, right
+    // for the magic links of /proc (/dev/stdout -> /proc/self/fd/1 ->
+    // "pipe:[…]" names no file that could be replaced)
+    let existing = match fs::metadata(path) {
         Ok(m) => Some(m),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(Error::io(path, e)),
@@ -70,13 +124,17 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResul
         }
         if !m.is_file() {
             // a device, FIFO or socket: write through, never replace
-            let f = OpenOptions::new()
-                .write(true)
-                .open(&target)
-                .map_err(|e| Error::io(path, e))?;
-            let mut w = BufWriter::new(f);
-            let filled = fill(&mut w).and_then(|()| w.flush().map_err(WriteError::Io));
-            return finish(path, filled);
+            write_through(path, fill)?;
+            return Ok(Staged::written(path));
+        }
+    }
+    let target = resolve_links(path)?;
+    if let Some(m) = &existing {
+        // the link resolved by hand must lead to the file the kernel opens,
+        // else (a /proc link to a deleted file, say) nothing may be renamed
+        if !same_inode(m, &target) {
+            write_through(path, fill)?;
+            return Ok(Staged::written(path));
         }
     }
     let dir = match target.parent() {
@@ -110,8 +168,32 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResul
             .map_err(|e| Error::io(path, e))?;
     }
     tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    tmp.persist(&target).map_err(|e| Error::io(path, e.error))?;
-    Ok(())
+    Ok(Staged {
+        path: path.to_path_buf(),
+        pending: Some((tmp, target)),
+    })
+}
+
+/// Opens `path` (links followed by the kernel) and writes `fill` into it.
+fn write_through(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResult) -> Result<()> {
+    let f = OpenOptions::new()
+        .write(true)
+        .open(path)
+        .map_err(|e| Error::io(path, e))?;
+    let mut w = BufWriter::new(f);
+    let filled = fill(&mut w).and_then(|()| w.flush().map_err(WriteError::Io));
+    finish(path, filled)
+}
+
+#[cfg(unix)]
+fn same_inode(m: &fs::Metadata, other: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    fs::metadata(other).is_ok_and(|o| o.dev() == m.dev() && o.ino() == m.ino())
+}
+
+#[cfg(not(unix))]
+fn same_inode(_: &fs::Metadata, other: &Path) -> bool {
+    other.is_file()
 }
 
 /// The temporary file, its pages sent to the disk as it grows. Left to

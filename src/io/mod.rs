@@ -32,13 +32,13 @@ mod smoothed;
 mod vtk;
 mod vtu;
 
-pub use atomic::{same_file, same_target, write_atomic};
+pub use atomic::{Staged, is_stream, same_file, same_target, stage, write_atomic};
 pub use limits::ReadLimits;
 pub use pvtu::{
     GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, merge_pieces, merge_share, piece_error, piece_path,
     piece_paths, point_ids, write_index, write_pieces, write_pieces_with,
 };
-pub use smoothed::{eta_field, write_mesh, write_mesh_pieces, write_mesh_pieces_with};
+pub use smoothed::{eta_field, stage_mesh, write_mesh, write_mesh_pieces, write_mesh_pieces_with, write_mesh_to};
 
 use std::fmt;
 use std::path::Path;
@@ -290,9 +290,11 @@ pub fn in_file(path: &Path, e: Error) -> Error {
 /// VTK's wedge, as VTK 9.7's vtkCellValidator and vtkMeshQuality (and so
 /// ParaView) judge it, has its base triangle (0,1,2) ordered with its normal
 /// toward the top (3,4,5) — meshsmooth's and Gmsh's order, so VTK files need
-/// no permutation. meshio 5.3 reverses the base when it writes VTK. When every
-/// wedge of a VTK file is inverted in VTK's order but valid reversed, the file
-/// follows meshio's convention: say so.
+/// no permutation. Some writers reverse the base when they write VTK: Gmsh's
+/// VTK export (its `MPrism::getVertexVTK` maps 0,2,1,3,5,4) and meshio 5.3
+/// both do. When every wedge of a VTK file is inverted in VTK's order but
+/// valid reversed, the file's wedges have their base reversed: say so, and
+/// name those writers rather than guess which one it was.
 fn check_wedge_convention(path: &Path, mesh: &Mesh) -> Result<()> {
     let prisms = mesh.count_kind(ElementKind::Prism);
     if prisms == 0 {
@@ -321,8 +323,9 @@ fn check_wedge_convention(path: &Path, mesh: &Mesh) -> Result<()> {
         format!(
             "all {prisms} wedges are inverted in VTK's vertex order (base triangle 0,1,2 with its normal \
              toward the top 3,4,5, as VTK 9 and ParaView judge them) but valid with the base reversed: \
-             the file follows meshio's wedge convention (meshio 5.3 reverses the base triangle when it \
-             writes VTK). Reorder each wedge as (0,2,1,3,5,4), or write the file from Gmsh or VTK"
+             the file writes every wedge with its base triangle reversed, as Gmsh's VTK export and \
+             meshio 5.3 do. Reorder each wedge as (0,2,1,3,5,4), or export the mesh in a format that \
+             keeps the writer's own order (Gmsh .msh, or VTK written by VTK or ParaView)"
         ),
     ))
 }
@@ -330,6 +333,35 @@ fn check_wedge_convention(path: &Path, mesh: &Mesh) -> Result<()> {
 /// Write `mesh` atomically: either the complete file replaces `path`, or
 /// `path` is left as it was.
 pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -> Result<()> {
+    stage_write(path, mesh, format, cell_data)?.commit()
+}
+
+/// [`write`] up to the rename: the complete file waits beside `path` until
+/// [`Staged::commit`] (see [`stage`]).
+pub fn stage_write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -> Result<Staged> {
+    check_writable(path, mesh, format)?;
+    stage(path, |w| encode(w, mesh, format, cell_data))
+}
+
+/// Writes `mesh` to `w` (standard output, say) in `format`; `name` is what
+/// errors call the destination. Nothing is written if the mesh cannot be.
+pub fn write_to(
+    w: &mut dyn std::io::Write,
+    name: &Path,
+    mesh: &Mesh,
+    format: Format,
+    cell_data: &[CellData],
+) -> Result<()> {
+    check_writable(name, mesh, format)?;
+    let mut buffered = std::io::BufWriter::with_capacity(1 << 20, w);
+    match encode(&mut buffered, mesh, format, cell_data).and_then(|()| Ok(std::io::Write::flush(&mut buffered)?)) {
+        Ok(()) => Ok(()),
+        Err(WriteError::Io(e)) => Err(Error::io(name, e)),
+        Err(WriteError::Other(e)) => Err(e),
+    }
+}
+
+fn check_writable(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     check_structure(mesh)?;
     check_kinds_fit(path, mesh, format)?;
     mesh.data
@@ -337,8 +369,11 @@ pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -
         .map_err(|e| match e {
             Error::InvalidMesh(m) => Error::InvalidMesh(format!("cannot write: {m}")),
             other => other,
-        })?;
-    write_atomic(path, |w| match format {
+        })
+}
+
+fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[CellData]) -> WriteResult {
+    match format {
         Format::VtkAscii => vtk::write(w, mesh, cell_data, false),
         Format::VtkBinary => vtk::write(w, mesh, cell_data, true),
         Format::VtuAscii => vtu::write(w, mesh, cell_data, vtu::Encoding::Ascii),
@@ -349,7 +384,7 @@ pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -
         Format::Msh41Ascii => gmsh::write41(w, mesh, cell_data, false),
         Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
         Format::Medit => medit::write(w, mesh, cell_data),
-    })
+    }
 }
 
 /// Gmsh and Medit files have no polyhedral cells: refuse before writing anything.

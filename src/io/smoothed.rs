@@ -2,7 +2,7 @@
 //! element, and the per-element quality as cell data for ParaView. The CLI
 //! and Rust callers share it.
 
-use super::{CellData, Format, LocalPieces, PieceWriter, write, write_pieces_with};
+use super::{CellData, Format, LocalPieces, PieceWriter, Staged, stage_write, write_pieces_with, write_to};
 use crate::error::Result;
 use crate::{Mesh, metric};
 use std::path::Path;
@@ -18,17 +18,29 @@ pub fn eta_field(mesh: &Mesh) -> Vec<f64> {
 /// Writes `mesh` with its `inverse_mean_ratio` cell data, refusing (and
 /// writing nothing) if any element is inverted.
 pub fn write_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
+    stage_mesh(path, mesh, format)?.commit()
+}
+
+/// [`write_mesh`] up to the rename (see [`super::stage`]).
+pub fn stage_mesh(path: &Path, mesh: &Mesh, format: Format) -> Result<Staged> {
     metric::refuse_inverted(mesh)?;
     let eta = eta_field(mesh);
-    write(
-        path,
-        mesh,
-        format,
-        &[CellData {
-            name: "inverse_mean_ratio",
-            values: &eta,
-        }],
-    )
+    stage_write(path, mesh, format, &[quality(&eta)])
+}
+
+/// [`write_mesh`] to a stream (standard output, say); `name` is what errors
+/// call it.
+pub fn write_mesh_to(w: &mut dyn std::io::Write, name: &Path, mesh: &Mesh, format: Format) -> Result<()> {
+    metric::refuse_inverted(mesh)?;
+    let eta = eta_field(mesh);
+    write_to(w, name, mesh, format, &[quality(&eta)])
+}
+
+fn quality(eta: &[f64]) -> CellData<'_> {
+    CellData {
+        name: "inverse_mean_ratio",
+        values: eta,
+    }
 }
 
 /// [`write_mesh`] as a `.pvtu` index at `path` and `parts` pieces, split by

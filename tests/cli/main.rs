@@ -9,4 +9,5 @@ mod common;
 mod cli;
 mod cli_rezone;
 mod front_ends;
+mod outputs;
 mod untangle_cli;

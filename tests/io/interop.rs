@@ -269,6 +269,30 @@ fn local_copies_of_other_tools_files_round_trip_with_their_data() {
     assert_eq!(check_folder(&local_dir()), 7);
 }
 
+/// Wedges with their base reversed, as Gmsh's VTK export writes them (its
+/// `MPrism::getVertexVTK` maps 0,2,1,3,5,4) and meshio 5.3 too: the refusal
+/// names both writers and the fix, not meshio alone.
+#[test]
+fn reversed_wedges_are_refused_naming_the_writers_that_reverse_them() {
+    let mut mesh = meshsmooth::generate::prism::prism_mesh(false, 1);
+    for e in 0..mesh.num_elements() {
+        assert_eq!(mesh.kinds[e], ElementKind::Prism);
+        let vs = &mut mesh.conn[mesh.offsets[e]..mesh.offsets[e + 1]];
+        vs.swap(1, 2);
+        vs.swap(4, 5);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("gmsh-export.vtk");
+    io::write(&path, &mesh, Format::VtkAscii, &[]).unwrap();
+    let e = io::read(&path).expect_err("reversed wedges").to_string();
+    assert!(
+        e.contains("gmsh-export.vtk") && e.contains("base triangle reversed"),
+        "{e}"
+    );
+    assert!(e.contains("Gmsh's VTK export") && e.contains("meshio"), "{e}");
+    assert!(e.contains("(0,2,1,3,5,4)"), "{e}");
+}
+
 #[test]
 fn every_shared_interop_file_round_trips_with_its_data() {
     if let Some(dir) = shared_dir() {

@@ -1,0 +1,211 @@
+//! The command line's outputs: checked before any work, written all or
+//! nothing, and the mesh on standard output with `-o -` or `-o /dev/stdout`.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::common;
+use common::cli::{meshsmooth, s, text};
+
+fn input(dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("in.vtk");
+    let o = meshsmooth(&[
+        "generate",
+        "box",
+        "--cells",
+        "4",
+        "4",
+        "4",
+        "--perturb",
+        "random:0.3",
+        "-o",
+        s(&path),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    path
+}
+
+/// The names in `dir`, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn directory_output_is_refused_before_solving() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = input(dir.path());
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let history = dir.path().join("h.csv");
+    let before = listing(dir.path());
+    let t = Instant::now();
+    let o = meshsmooth(&[
+        "smooth",
+        s(&input),
+        "-o",
+        s(&out_dir),
+        "--history",
+        s(&history),
+        "--max-iter",
+        "100000",
+    ]);
+    let (elapsed, all) = (t.elapsed(), text(&o));
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    assert!(
+        all.contains(&format!("-o {} is a directory", out_dir.display())),
+        "{all}"
+    );
+    // nothing was solved, nothing written
+    assert!(!all.contains("initial mesh") && !all.contains("converged"), "{all}");
+    assert!(elapsed < Duration::from_secs(10), "{elapsed:?}");
+    assert_eq!(listing(dir.path()), before);
+    assert!(listing(&out_dir).is_empty());
+
+    // the same for compare's --csv, with its --plot given a good name
+    let plot = dir.path().join("p.svg");
+    let o = meshsmooth(&["compare", s(&input), "--csv", s(&out_dir), "--plot", s(&plot)]);
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    assert!(
+        all.contains(&format!("--csv {} is a directory", out_dir.display())),
+        "{all}"
+    );
+    assert!(!plot.exists());
+    assert_eq!(listing(dir.path()), before);
+}
+
+#[test]
+fn history_in_a_missing_directory_leaves_no_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = input(dir.path());
+    let output = dir.path().join("out.vtu");
+    let history = dir.path().join("missing").join("h.csv");
+    let before = listing(dir.path());
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&output), "--history", s(&history)]);
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    assert!(all.contains("--history") && all.contains(s(&history)), "{all}");
+    assert!(all.contains("does not exist"), "{all}");
+    assert!(!output.exists());
+    assert_eq!(listing(dir.path()), before);
+}
+
+#[test]
+fn history_equal_to_the_input_is_refused_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = input(dir.path());
+    let original = std::fs::read(&input).unwrap();
+    let output = dir.path().join("out.vtk");
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&output), "--history", s(&input)]);
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    assert!(
+        all.contains(&format!("--history {} is the input mesh", input.display())),
+        "{all}"
+    );
+    assert!(!all.contains("output "), "{all}");
+    assert_eq!(std::fs::read(&input).unwrap(), original);
+    assert!(!output.exists());
+
+    // and two outputs on one file
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&output), "--history", s(&output)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o).contains("is also the file of -o"), "{}", text(&o));
+    assert!(!output.exists());
+}
+
+/// Runs the binary with its standard output a pipe, returning what came
+/// through the pipe and what went to standard error.
+fn piped(args: &[&str]) -> (bool, Vec<u8>, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .output()
+        .expect("runs");
+    (
+        o.status.success(),
+        o.stdout,
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn mesh_to_stdout_with_dash() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = input(dir.path());
+    let points = meshsmooth::io::read(&input).unwrap().num_points();
+    let (ok, mesh, err) = piped(&["smooth", s(&input), "-o", "-", "--format", "vtu"]);
+    assert!(ok, "{err}");
+    // the mesh alone on stdout, the reports on stderr
+    assert!(
+        mesh.starts_with(b"<?xml"),
+        "{}",
+        String::from_utf8_lossy(&mesh[..mesh.len().min(200)])
+    );
+    assert!(
+        err.contains("initial mesh") && err.contains("wrote the mesh to standard output"),
+        "{err}"
+    );
+    let back = dir.path().join("back.vtu");
+    std::fs::write(&back, &mesh).unwrap();
+    let read = meshsmooth::io::read(&back).unwrap();
+    assert_eq!(read.num_points(), points);
+    let o = meshsmooth(&["quality", s(&back)]);
+    assert!(o.status.success(), "{}", text(&o));
+    // only the input and the copy read back: nothing named "-"
+    assert_eq!(listing(dir.path()), ["back.vtu", "in.vtk"]);
+
+    // without --format, standard output has no extension to go by
+    let (ok, mesh, err) = piped(&["smooth", s(&input), "-o", "-"]);
+    assert!(!ok && mesh.is_empty());
+    assert!(err.contains("--format"), "{err}");
+}
+
+#[test]
+fn mesh_to_dev_stdout_into_a_pipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = input(dir.path());
+    let points = meshsmooth::io::read(&input).unwrap().num_points();
+    let history = dir.path().join("h.csv");
+    let (ok, mesh, err) = piped(&[
+        "smooth",
+        s(&input),
+        "-o",
+        "/dev/stdout",
+        "--format",
+        "vtk",
+        "--history",
+        s(&history),
+    ]);
+    assert!(ok, "{err}");
+    assert!(mesh.starts_with(b"# vtk DataFile"), "{err}");
+    assert!(err.contains("optimised mesh"), "{err}");
+    let back = dir.path().join("back.vtk");
+    std::fs::write(&back, &mesh).unwrap();
+    assert_eq!(meshsmooth::io::read(&back).unwrap().num_points(), points);
+    assert!(std::fs::read_to_string(&history).unwrap().starts_with("iteration,"));
+
+    // generate too
+    let (ok, mesh, err) = piped(&[
+        "generate",
+        "box",
+        "--cells",
+        "2",
+        "2",
+        "2",
+        "-o",
+        "/dev/stdout",
+        "--format",
+        "msh4",
+    ]);
+    assert!(ok, "{err}");
+    assert!(mesh.starts_with(b"$MeshFormat"), "{err}");
+    assert!(err.contains("wrote the mesh to standard output"), "{err}");
+}
