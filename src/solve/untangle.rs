@@ -333,7 +333,7 @@ fn untangle_mesh_with(
 
 /// A node-ordering convention problem rather than a tangle: every element of
 /// one kind (two or more of them) inverted with every corner mirrored, as a
-/// file written with another program's node order (meshio's wedges in a VTK
+/// file written with another program's node order (wedges with reversed bases in a VTK
 /// file) reads. Untangling would "fix" it by turning every such element inside
 /// out; the message says so instead.
 pub fn convention_problem(mesh: &Mesh) -> Option<String> {
@@ -354,8 +354,8 @@ pub fn convention_problem(mesh: &Mesh) -> Option<String> {
             return Some(format!(
                 "every one of the {} {} elements is inverted, each with all its corners mirrored: this is a \
                  node-ordering convention problem, not a tangle (the file orders the nodes of a {} differently \
-                 from the convention of its format, as meshio's wedge order does in a VTK file); reorder their \
-                 nodes instead of untangling",
+                 from the convention of its format, as a writer that reverses each wedge's base does); reorder \
+                 their nodes instead of untangling",
                 of_kind.len(),
                 kind.name(),
                 kind.name()
