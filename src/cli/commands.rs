@@ -241,7 +241,7 @@ fn run_smoother(mesh: &mut Mesh, s: &Smoother, objective: &ObjectiveArgs, quiet:
 /// `meshsmooth untangle`: the untangling phase alone.
 pub fn untangle(a: &UntangleArgs) -> Result<()> {
     outputs::check(Some(&a.input), &[("-o", &a.output)])?;
-    let format = outputs::mesh_format("-o", &a.output, a.format.as_deref())?;
+    let format = outputs::mesh_format("-o", &a.output, a.format.as_deref(), Some(&a.input))?;
     let settings = a.solver.smoother(true, a.save_partial)?;
     if a.save_partial && outputs::is_stdout(&a.output) {
         return Err(Error::InvalidArgument(
@@ -293,7 +293,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     let pieces = pieces_wanted(&a.output, a.pieces)?;
     let format = match pieces {
         Some(_) => piece_format(a.format.as_deref())?,
-        None => outputs::mesh_format("-o", &a.output, a.format.as_deref())?,
+        None => outputs::mesh_format("-o", &a.output, a.format.as_deref(), Some(&a.input))?,
     };
     if let Some(count) = pieces {
         refuse_overwriting_pieces(&a.input, &a.output, count)?;

@@ -80,9 +80,9 @@ pub fn generate(g: &GenerateCommand) -> Result<()> {
     let mut checked = vec![("-o", out.output.as_path())];
     checked.extend(reference.map(|r| ("--reference-output", r)));
     outputs::check(None, &checked)?;
-    let format = outputs::mesh_format("-o", &out.output, out.format.as_deref())?;
+    let format = outputs::mesh_format("-o", &out.output, out.format.as_deref(), None)?;
     let reference_format = reference
-        .map(|r| outputs::mesh_format("--reference-output", r, out.format.as_deref()))
+        .map(|r| outputs::mesh_format("--reference-output", r, out.format.as_deref(), None))
         .transpose()?;
     let mut sink = outputs::MeshSink::open(&out.output)?;
     let mut reference_sink = reference.map(outputs::MeshSink::open).transpose()?;

@@ -128,7 +128,7 @@ fn check_file(flag: &str, path: &Path) -> Result<()> {
 
 /// The format of the mesh output `flag path`: `--format` where given, else
 /// the extension; standard output has none, so there `--format` is required.
-pub(super) fn mesh_format(flag: &str, path: &Path, name: Option<&str>) -> Result<Format> {
+pub(super) fn mesh_format(flag: &str, path: &Path, name: Option<&str>, input: Option<&Path>) -> Result<Format> {
     if name.is_none() && (path.as_os_str() == "-" || (path.extension().is_none() && is_stdout(path))) {
         return Err(refuse(format!(
             "{flag} {} names standard output, which has no extension to tell the mesh format: \
@@ -136,7 +136,10 @@ pub(super) fn mesh_format(flag: &str, path: &Path, name: Option<&str>) -> Result
             path.display()
         )));
     }
-    super::commands::output_format(path, name)
+    match (name, input) {
+        (None, Some(input)) => Format::following(path, input),
+        _ => super::commands::output_format(path, name),
+    }
 }
 
 /// Where a mesh goes: a file, or standard output. Opened for standard

@@ -16,7 +16,7 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
     let mut checked = vec![("-o", a.output.as_path())];
     checked.extend(a.compare_cn.as_deref().map(|cn| ("--compare-cn", cn)));
     outputs::check(Some(&a.input), &checked)?;
-    let format = outputs::mesh_format("-o", &a.output, a.format.as_deref())?;
+    let format = outputs::mesh_format("-o", &a.output, a.format.as_deref(), Some(&a.input))?;
     let cn_format = a.compare_cn.as_deref().map(Format::from_path).transpose()?;
     let mut sink = outputs::MeshSink::open(&a.output)?;
     let mesh = io::read(&a.input)?;

@@ -73,6 +73,10 @@ pub enum Format {
     Medit,
 }
 
+/// How much of a file [`Format::of_file`] reads: a VTU file's first array
+/// (and its compressor attribute) sits within the header.
+const HEAD_BYTES: u64 = 64 << 10;
+
 const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
 
 impl Format {
@@ -106,6 +110,86 @@ impl Format {
                 "{}: unknown mesh file extension; supported: {EXTENSIONS}",
                 path.display()
             ))),
+        }
+    }
+
+    /// The format to write `path` in when none is named, for a mesh read
+    /// from `input`: the extension's family in the input's encoding (a
+    /// binary or compressed input stays binary or compressed, and a Gmsh
+    /// file keeps its version); the extension's default ([`Format::from_path`])
+    /// where the input's encoding is unknown (a `.pvtu` index, a file that
+    /// cannot be read).
+    pub fn following(path: &Path, input: &Path) -> Result<Format> {
+        let default = Format::from_path(path)?;
+        let Some(from) = Format::of_file(input) else {
+            return Ok(default);
+        };
+        let (binary, compressed) = (from.is_binary(), from == Format::VtuZlib);
+        Ok(match default {
+            Format::VtkAscii if binary => Format::VtkBinary,
+            Format::VtuAscii if compressed => Format::VtuZlib,
+            Format::VtuAscii if binary => Format::VtuBinary,
+            Format::Msh41Ascii if matches!(from, Format::Msh22Ascii | Format::Msh22Binary) => from,
+            Format::Msh41Ascii if binary => Format::Msh41Binary,
+            other => other,
+        })
+    }
+
+    /// Whether the format stores its numbers in binary.
+    pub fn is_binary(self) -> bool {
+        matches!(
+            self,
+            Format::VtkBinary | Format::VtuBinary | Format::VtuZlib | Format::Msh22Binary | Format::Msh41Binary
+        )
+    }
+
+    /// The format a mesh file is in, from its first bytes (`None` for a
+    /// `.pvtu` index, an unknown or unreadable file). A VTU file whose
+    /// arrays are compressed by any compressor counts as [`Format::VtuZlib`],
+    /// the compressed VTU meshsmooth writes; raw appended data as
+    /// [`Format::VtuBinary`].
+    pub fn of_file(path: &Path) -> Option<Format> {
+        use std::io::Read;
+        let mut head = Vec::new();
+        std::fs::File::open(path)
+            .ok()?
+            .take(HEAD_BYTES)
+            .read_to_end(&mut head)
+            .ok()?;
+        let text = String::from_utf8_lossy(&head);
+        let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+        match sniff(&head)? {
+            Family::Vtk => {
+                let kind = lines.nth(2)?;
+                Some(if kind.eq_ignore_ascii_case("binary") {
+                    Format::VtkBinary
+                } else {
+                    Format::VtkAscii
+                })
+            }
+            Family::Vtu => {
+                if text.contains("PUnstructuredGrid") {
+                    return None;
+                }
+                Some(if text.contains("compressor=") {
+                    Format::VtuZlib
+                } else if text.contains("format=\"binary\"") || text.contains("format=\"appended\"") {
+                    Format::VtuBinary
+                } else {
+                    Format::VtuAscii
+                })
+            }
+            Family::Gmsh => {
+                let t: Vec<&str> = lines.nth(1)?.split_whitespace().collect();
+                let binary = t.get(1) == Some(&"1");
+                Some(match (t.first()?.starts_with('2'), binary) {
+                    (true, false) => Format::Msh22Ascii,
+                    (true, true) => Format::Msh22Binary,
+                    (false, false) => Format::Msh41Ascii,
+                    (false, true) => Format::Msh41Binary,
+                })
+            }
+            Family::Medit => Some(Format::Medit),
         }
     }
 

@@ -209,3 +209,62 @@ fn mesh_to_dev_stdout_into_a_pipe() {
     assert!(mesh.starts_with(b"$MeshFormat"), "{err}");
     assert!(err.contains("wrote the mesh to standard output"), "{err}");
 }
+
+#[test]
+fn an_output_keeps_the_encoding_of_its_input() {
+    use meshsmooth::io::{self, Format};
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = io::read(input(dir.path())).unwrap();
+    // every format is recognised in the file it was written as
+    for f in Format::ALL {
+        let ext = match f {
+            Format::VtkAscii | Format::VtkBinary => "vtk",
+            Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
+            Format::Medit => "mesh",
+            _ => "msh",
+        };
+        let path = dir.path().join(format!("as-{}.{ext}", f.name()));
+        io::write(&path, &mesh, f, &[]).unwrap();
+        assert_eq!(Format::of_file(&path), Some(f), "{}", f.name());
+    }
+    // smooth without --format: the output's family from its name, the
+    // encoding (and Gmsh version) from the input
+    let cases = [
+        (Format::VtuBinary, "vtu", Format::VtuBinary),
+        (Format::VtuZlib, "vtu", Format::VtuZlib),
+        (Format::VtuAscii, "vtu", Format::VtuAscii),
+        (Format::VtkBinary, "vtu", Format::VtuBinary),
+        (Format::VtuZlib, "vtk", Format::VtkBinary),
+        (Format::VtkAscii, "vtk", Format::VtkAscii),
+        (Format::Msh22Binary, "msh", Format::Msh22Binary),
+        (Format::Msh22Ascii, "msh", Format::Msh22Ascii),
+        (Format::Msh41Binary, "msh", Format::Msh41Binary),
+        (Format::VtuBinary, "msh", Format::Msh41Binary),
+        (Format::VtuAscii, "msh", Format::Msh41Ascii),
+        (Format::Msh41Binary, "mesh", Format::Medit),
+    ];
+    for (k, (from, ext, expected)) in cases.into_iter().enumerate() {
+        let inp = dir.path().join(format!(
+            "in{k}.{}",
+            if from.name().starts_with("msh") {
+                "msh"
+            } else if from.name().starts_with("vtu") {
+                "vtu"
+            } else {
+                "vtk"
+            }
+        ));
+        io::write(&inp, &mesh, from, &[]).unwrap();
+        let out = dir.path().join(format!("out{k}.{ext}"));
+        let o = meshsmooth(&["smooth", s(&inp), "-o", s(&out), "--max-iter", "2"]);
+        assert!(o.status.success(), "{}", text(&o));
+        assert_eq!(Format::of_file(&out), Some(expected), "{} -> .{ext}", from.name());
+    }
+    // --format still decides
+    let inp = dir.path().join("in-binary.vtu");
+    io::write(&inp, &mesh, Format::VtuBinary, &[]).unwrap();
+    let out = dir.path().join("asked.vtu");
+    let o = meshsmooth(&["smooth", s(&inp), "-o", s(&out), "--max-iter", "2", "--format", "vtu"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(Format::of_file(&out), Some(Format::VtuAscii));
+}
