@@ -310,10 +310,12 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         return smooth_pieces(a, &settings, pieces, format);
     }
     let mut sink = outputs::MeshSink::open(&a.output)?;
+    let began = std::time::Instant::now();
     #[cfg(feature = "mpi")]
     let mut mesh = read_on_ranks(&a.input, a.quiet)?;
     #[cfg(not(feature = "mpi"))]
     let mut mesh = io::read(&a.input)?;
+    let read_s = began.elapsed().as_secs_f64();
     if a.drop_data {
         mesh.data = Default::default();
     }
@@ -336,6 +338,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         }
     };
     // every output staged before any is put in place: all of them or none
+    let writing = std::time::Instant::now();
     let mut writes = outputs::Writes::default();
     if let Some(h) = &a.history {
         let csv = info.history.to_csv();
@@ -374,8 +377,26 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     staged.commit()?;
     if !a.quiet {
         println!("wrote {}", sink.name());
+        println!(
+            "{}",
+            timings(
+                read_s,
+                &info,
+                writing.elapsed().as_secs_f64(),
+                began.elapsed().as_secs_f64()
+            )
+        );
     }
     Ok(())
+}
+
+/// Where a command's time went: the file, the problem's setup, the solve,
+/// the output, and the whole (which adds the checks, targets and reports).
+fn timings(read: f64, info: &Info, write: f64, total: f64) -> String {
+    format!(
+        "time: read {read:.3} s, setup {:.3} s, solve {:.3} s, write {write:.3} s; {total:.3} s in all",
+        info.setup_seconds, info.seconds
+    )
 }
 
 fn is_pvtu(path: &Path) -> bool {

@@ -422,3 +422,36 @@ fn quality_measures_a_smoothed_layer_against_the_targets_it_was_smoothed_toward(
     assert!(!o.status.success());
     assert!(text(&o).contains("does not have the connectivity"), "{}", text(&o));
 }
+
+#[test]
+fn smooth_says_where_its_time_went() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.vtu");
+    generate_box(&input, [5, 5, 5], "random:0.3", 1);
+    let out = dir.path().join("out.vtu");
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&out)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let all = text(&o);
+    let line = all
+        .lines()
+        .find(|l| l.starts_with("time: "))
+        .unwrap_or_else(|| panic!("{all}"));
+    // "time: read R s, setup S s, solve T s, write W s; A s in all"
+    let numbers: Vec<f64> = line
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .filter(|t| !t.is_empty() && t.contains('.'))
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert_eq!(numbers.len(), 5, "{line}");
+    let (parts, total) = (&numbers[..4], numbers[4]);
+    assert!(parts.iter().all(|&x| x >= 0.0), "{line}");
+    // the parts are disjoint pieces of the whole (to the printed rounding)
+    assert!(parts.iter().sum::<f64>() <= total + 0.004, "{line}");
+    assert!(numbers[2] > 0.0 && total > 0.0, "{line}");
+    // and the solve's own line reports the same solve time
+    let solve = all.lines().find(|l| l.contains(" s (setup ")).unwrap();
+    assert!(
+        solve.contains(&format!("in {:.3} s (setup {:.3} s)", numbers[2], numbers[1])),
+        "{solve}\n{line}"
+    );
+}
