@@ -14,6 +14,7 @@
 // metric over ALL elements after the solve (Mesquite's internal F only counts
 // elements that touch a free vertex).  -v prints details to stderr.
 
+#include <cstdlib>
 #include "Mesquite.hpp"
 #include "Mesquite_MeshImpl.hpp"
 #include "Mesquite_MsqError.hpp"
@@ -66,12 +67,17 @@ int main(int argc, char** argv)
   const char* in = 0;
   const char* out = 0;
   bool verbose = false;
+  int max_iter = 100;
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "-v")) verbose = true;
     else if (!strcmp(argv[i], "-o") && i + 1 < argc) out = argv[++i];
+    else if (!strcmp(argv[i], "-n") && i + 1 < argc) max_iter = atoi(argv[++i]);
     else in = argv[i];
   }
-  if (!in) { std::cerr << "usage: " << argv[0] << " MESH.vtk [-v] [-o OUT.vtk]\n"; return 2; }
+  if (!in || max_iter < 1) {
+    std::cerr << "usage: " << argv[0] << " MESH.vtk [-v] [-o OUT.vtk] [-n MAX_ITERATIONS (100)]\n";
+    return 2;
+  }
 
   MsqPrintError err(std::cerr);
   MeshImpl mesh;
@@ -163,7 +169,8 @@ int main(int argc, char** argv)
   fn.use_global_patch();
   TerminationCriterion tc_inner, tc_outer;
   tc_inner.add_absolute_gradient_L2_norm(1e-6);
-  tc_inner.add_iteration_limit(100);
+  // -n caps the run: the timing of a run stopped at a given iteration
+  tc_inner.add_iteration_limit(max_iter);
   tc_outer.add_iteration_limit(1);
   fn.set_inner_termination_criterion(&tc_inner);
   fn.set_outer_termination_criterion(&tc_outer);
