@@ -600,7 +600,10 @@ impl Smoother {
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<Report> {
         let input = mesh.points.clone();
-        let result = self.with_rules(mesh, |s, mesh, rules| s.smooth_ruled(mesh, rules, cluster, observer));
+        let input_points = mesh.num_points();
+        let result = self.with_rules(mesh, |s, mesh, ruled| {
+            s.smooth_ruled(mesh, ruled, input_points, cluster, observer)
+        });
         if result.is_err() && !self.keep_partial {
             mesh.points = input;
         }
@@ -621,12 +624,19 @@ impl Smoother {
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<UntangleReport> {
         let input = mesh.points.clone();
-        let result = self.with_rules(mesh, |s, mesh, rules| {
-            let reference = s.reference_mesh()?;
+        let input_points = mesh.num_points();
+        let result = self.with_rules(mesh, |s, mesh, ruled| {
+            let reference = s.reference_for(ruled.used.as_deref(), input_points)?;
             let options = s.problem_options(reference.as_ref())?;
             options.check(mesh)?;
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
-            let start = s.start(mesh, &options, rules, None, note);
+            let start = s.start(
+                mesh,
+                &options,
+                ruled.counts,
+                None,
+                ruled.notes.into_iter().chain(note).collect(),
+            );
             observer(Event::Start(&start));
             let inverted = metric::inverted_elements(mesh, &mesh.points);
             let untangled = s.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
@@ -643,18 +653,61 @@ impl Smoother {
     }
 
     /// Runs `run` with the fixed-vertex rules applied to `mesh` for its
-    /// duration: the mesh keeps the file's own flags afterwards.
-    fn with_rules<T>(
-        &self,
-        mesh: &mut Mesh,
-        run: impl FnOnce(&Smoother, &mut Mesh, Vec<RuleCount>) -> Result<T>,
-    ) -> Result<T> {
+    /// duration: the mesh keeps the file's own flags afterwards. Vertices no
+    /// element uses take no part: `run` gets the mesh without them (and a
+    /// note saying so), and they keep their coordinates bit for bit.
+    fn with_rules<T>(&self, mesh: &mut Mesh, run: impl FnOnce(&Smoother, &mut Mesh, Ruled) -> Result<T>) -> Result<T> {
         self.validate()?;
         let rules = self.rules()?;
         let file_fixed = mesh.fixed.clone();
-        let result = rules.apply(mesh).and_then(|counts| run(self, mesh, counts));
+        let result = rules.apply(mesh).and_then(|counts| {
+            let unused = mesh.unused_vertices();
+            if unused.is_empty() {
+                return run(
+                    self,
+                    mesh,
+                    Ruled {
+                        counts,
+                        used: None,
+                        notes: Vec::new(),
+                    },
+                );
+            }
+            let mut is_used = vec![true; mesh.num_points()];
+            for &v in &unused {
+                is_used[v] = false;
+            }
+            let used: Vec<usize> = (0..mesh.num_points()).filter(|&v| is_used[v]).collect();
+            let mut elements = mesh.keep_vertices(&used);
+            let note = unused_note(unused.len());
+            let result = run(
+                self,
+                &mut elements,
+                Ruled {
+                    counts,
+                    used: Some(used.clone()),
+                    notes: vec![note],
+                },
+            );
+            // the positions `run` left (the caller restores the input on an error)
+            for (l, &v) in used.iter().enumerate() {
+                mesh.points[v] = elements.points[l];
+            }
+            result
+        });
         mesh.fixed = file_fixed;
         result
+    }
+
+    /// The reference mesh for a run on the mesh without its unused vertices
+    /// (`used`: the vertices kept, in the input's numbering): a reference
+    /// numbered like the input loses the same vertices.
+    fn reference_for(&self, used: Option<&[usize]>, input_points: usize) -> Result<Option<Mesh>> {
+        let reference = self.reference_mesh()?;
+        Ok(match (reference, used) {
+            (Some(r), Some(used)) if r.num_points() == input_points => Some(r.keep_vertices(used)),
+            (r, _) => r,
+        })
     }
 
     fn start(
@@ -663,7 +716,7 @@ impl Smoother {
         options: &ProblemOptions,
         rules: Vec<RuleCount>,
         targets: Option<String>,
-        note: Option<String>,
+        notes: Vec<String>,
     ) -> Start {
         let sliding = (options.boundary.mode == BoundaryMode::Slide).then(|| {
             let skin = classify(mesh, &mesh.points, options.boundary.feature_angle);
@@ -684,7 +737,7 @@ impl Smoother {
             rules,
             targets,
             sliding,
-            notes: note.into_iter().collect(),
+            notes,
         }
     }
 
@@ -729,13 +782,14 @@ impl Smoother {
     fn smooth_ruled(
         &self,
         mesh: &mut Mesh,
-        rules: Vec<RuleCount>,
+        ruled: Ruled,
+        input_points: usize,
         #[cfg(feature = "mpi")] cluster: Option<&solve::distributed::Cluster>,
         #[cfg(not(feature = "mpi"))] cluster: Option<&()>,
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<Report> {
         let params = self.params()?;
-        let reference = self.reference_mesh()?;
+        let reference = self.reference_for(ruled.used.as_deref(), input_points)?;
         let options = self.problem_options(reference.as_ref())?;
         // refuse what cannot be smoothed before anything moves
         options.check(mesh)?;
@@ -751,7 +805,13 @@ impl Smoother {
             return Err(Error::InvalidMesh(msg));
         }
         let (backend, note) = self.backend(&[self.method, untangle_method(self.method)])?;
-        let start = self.start(mesh, &options, rules, targets, note);
+        let start = self.start(
+            mesh,
+            &options,
+            ruled.counts,
+            targets,
+            ruled.notes.into_iter().chain(note).collect(),
+        );
         if !observer(Event::Start(&start)) {
             return Err(Error::InvalidArgument("cancelled before the run began".into()));
         }
@@ -814,6 +874,24 @@ impl Smoother {
                 precision: self.precision,
             }),
         }
+    }
+}
+
+/// What [`Smoother::with_rules`] hands a run: the rules' counts, the
+/// vertices the run's mesh keeps when the input has vertices no element
+/// uses (in the input's numbering), and notes for the start report.
+struct Ruled {
+    counts: Vec<RuleCount>,
+    used: Option<Vec<usize>>,
+    notes: Vec<String>,
+}
+
+/// The note on vertices no element uses.
+pub fn unused_note(count: usize) -> String {
+    if count == 1 {
+        "1 point is used by no element: kept where it is".into()
+    } else {
+        format!("{count} points are used by no element: kept where they are")
     }
 }
 
