@@ -630,18 +630,13 @@ impl Smoother {
             let options = s.problem_options(reference.as_ref())?;
             options.check(mesh)?;
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
-            let start = s.start(
-                mesh,
-                &options,
-                ruled.counts,
-                None,
-                ruled.notes.into_iter().chain(note).collect(),
-            );
+            let unused = ruled.unused;
+            let start = s.start(mesh, &options, ruled, None, note);
             observer(Event::Start(&start));
             let inverted = metric::inverted_elements(mesh, &mesh.points);
             let untangled = s.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
             Ok(UntangleReport {
-                quality: quality_report(mesh, &mesh.points),
+                quality: with_unused(quality_report(mesh, &mesh.points), unused),
                 start,
                 untangled,
             })
@@ -668,6 +663,7 @@ impl Smoother {
                     mesh,
                     Ruled {
                         counts,
+                        unused: 0,
                         used: None,
                         notes: Vec::new(),
                     },
@@ -685,6 +681,7 @@ impl Smoother {
                 &mut elements,
                 Ruled {
                     counts,
+                    unused: unused.len(),
                     used: Some(used.clone()),
                     notes: vec![note],
                 },
@@ -714,9 +711,9 @@ impl Smoother {
         &self,
         mesh: &Mesh,
         options: &ProblemOptions,
-        rules: Vec<RuleCount>,
+        ruled: Ruled,
         targets: Option<String>,
-        notes: Vec<String>,
+        note: Option<String>,
     ) -> Start {
         let sliding = (options.boundary.mode == BoundaryMode::Slide).then(|| {
             let skin = classify(mesh, &mesh.points, options.boundary.feature_angle);
@@ -733,11 +730,11 @@ impl Smoother {
             }
         });
         Start {
-            quality: quality_report(mesh, &mesh.points),
-            rules,
+            quality: with_unused(quality_report(mesh, &mesh.points), ruled.unused),
+            rules: ruled.counts,
             targets,
             sliding,
-            notes,
+            notes: ruled.notes.into_iter().chain(note).collect(),
         }
     }
 
@@ -805,13 +802,8 @@ impl Smoother {
             return Err(Error::InvalidMesh(msg));
         }
         let (backend, note) = self.backend(&[self.method, untangle_method(self.method)])?;
-        let start = self.start(
-            mesh,
-            &options,
-            ruled.counts,
-            targets,
-            ruled.notes.into_iter().chain(note).collect(),
-        );
+        let unused = ruled.unused;
+        let start = self.start(mesh, &options, ruled, targets, note);
         if !observer(Event::Start(&start)) {
             return Err(Error::InvalidArgument("cancelled before the run began".into()));
         }
@@ -850,7 +842,7 @@ impl Smoother {
         };
         Ok(Report {
             untangled,
-            quality: quality_report(mesh, &mesh.points),
+            quality: with_unused(quality_report(mesh, &mesh.points), unused),
             displacement: metric_report::displacement_percent(mesh, &begin, &mesh.points),
             metric,
             first_layer: first_layer_change(mesh, &begin, &mesh.points),
@@ -882,8 +874,18 @@ impl Smoother {
 /// uses (in the input's numbering), and notes for the start report.
 struct Ruled {
     counts: Vec<RuleCount>,
+    /// How many vertices no element uses (left out of the run's mesh).
+    unused: usize,
     used: Option<Vec<usize>>,
     notes: Vec<String>,
+}
+
+/// A report on the mesh without its `unused` vertices counted as one on
+/// the whole mesh: they are vertices, and fixed ones.
+fn with_unused(mut q: QualityReport, unused: usize) -> QualityReport {
+    q.vertices += unused;
+    q.fixed_vertices += unused;
+    q
 }
 
 /// The note on vertices no element uses.

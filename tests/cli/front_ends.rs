@@ -201,6 +201,7 @@ fn points_used_by_no_element_are_written_back_untouched() {
     assert!(o.status.success(), "{}", text(&o));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(json["vertices"], read.num_points());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("3 points are used by no element"));
     let mut tangled = read.clone();
     let v = (0..unused[0])
         .find(|&v| tangled.points[v].iter().all(|&c| c > 0.4 && c < 0.6))
