@@ -600,7 +600,10 @@ impl Smoother {
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<Report> {
         let input = mesh.points.clone();
-        let result = self.with_rules(mesh, |s, mesh, rules| s.smooth_ruled(mesh, rules, cluster, observer));
+        let input_points = mesh.num_points();
+        let result = self.with_rules(mesh, |s, mesh, ruled| {
+            s.smooth_ruled(mesh, ruled, input_points, cluster, observer)
+        });
         if result.is_err() && !self.keep_partial {
             mesh.points = input;
         }
@@ -621,17 +624,19 @@ impl Smoother {
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<UntangleReport> {
         let input = mesh.points.clone();
-        let result = self.with_rules(mesh, |s, mesh, rules| {
-            let reference = s.reference_mesh()?;
+        let input_points = mesh.num_points();
+        let result = self.with_rules(mesh, |s, mesh, ruled| {
+            let reference = s.reference_for(ruled.used.as_deref(), input_points)?;
             let options = s.problem_options(reference.as_ref())?;
             options.check(mesh)?;
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
-            let start = s.start(mesh, &options, rules, None, note);
+            let unused = ruled.unused;
+            let start = s.start(mesh, &options, ruled, None, note);
             observer(Event::Start(&start));
             let inverted = metric::inverted_elements(mesh, &mesh.points);
             let untangled = s.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
             Ok(UntangleReport {
-                quality: quality_report(mesh, &mesh.points),
+                quality: with_unused(quality_report(mesh, &mesh.points), unused),
                 start,
                 untangled,
             })
@@ -643,25 +648,70 @@ impl Smoother {
     }
 
     /// Runs `run` with the fixed-vertex rules applied to `mesh` for its
-    /// duration: the mesh keeps the file's own flags afterwards.
-    fn with_rules<T>(
-        &self,
-        mesh: &mut Mesh,
-        run: impl FnOnce(&Smoother, &mut Mesh, Vec<RuleCount>) -> Result<T>,
-    ) -> Result<T> {
+    /// duration: the mesh keeps the file's own flags afterwards. Vertices no
+    /// element uses take no part: `run` gets the mesh without them (and a
+    /// note saying so), and they keep their coordinates bit for bit.
+    fn with_rules<T>(&self, mesh: &mut Mesh, run: impl FnOnce(&Smoother, &mut Mesh, Ruled) -> Result<T>) -> Result<T> {
         self.validate()?;
         let rules = self.rules()?;
         let file_fixed = mesh.fixed.clone();
-        let result = rules.apply(mesh).and_then(|counts| run(self, mesh, counts));
+        let result = rules.apply(mesh).and_then(|counts| {
+            let unused = mesh.unused_vertices();
+            if unused.is_empty() {
+                return run(
+                    self,
+                    mesh,
+                    Ruled {
+                        counts,
+                        unused: 0,
+                        used: None,
+                        notes: Vec::new(),
+                    },
+                );
+            }
+            let mut is_used = vec![true; mesh.num_points()];
+            for &v in &unused {
+                is_used[v] = false;
+            }
+            let used: Vec<usize> = (0..mesh.num_points()).filter(|&v| is_used[v]).collect();
+            let mut elements = mesh.keep_vertices(&used);
+            let note = unused_note(unused.len());
+            let result = run(
+                self,
+                &mut elements,
+                Ruled {
+                    counts,
+                    unused: unused.len(),
+                    used: Some(used.clone()),
+                    notes: vec![note],
+                },
+            );
+            // the positions `run` left (the caller restores the input on an error)
+            for (l, &v) in used.iter().enumerate() {
+                mesh.points[v] = elements.points[l];
+            }
+            result
+        });
         mesh.fixed = file_fixed;
         result
+    }
+
+    /// The reference mesh for a run on the mesh without its unused vertices
+    /// (`used`: the vertices kept, in the input's numbering): a reference
+    /// numbered like the input loses the same vertices.
+    fn reference_for(&self, used: Option<&[usize]>, input_points: usize) -> Result<Option<Mesh>> {
+        let reference = self.reference_mesh()?;
+        Ok(match (reference, used) {
+            (Some(r), Some(used)) if r.num_points() == input_points => Some(r.keep_vertices(used)),
+            (r, _) => r,
+        })
     }
 
     fn start(
         &self,
         mesh: &Mesh,
         options: &ProblemOptions,
-        rules: Vec<RuleCount>,
+        ruled: Ruled,
         targets: Option<String>,
         note: Option<String>,
     ) -> Start {
@@ -680,11 +730,11 @@ impl Smoother {
             }
         });
         Start {
-            quality: quality_report(mesh, &mesh.points),
-            rules,
+            quality: with_unused(quality_report(mesh, &mesh.points), ruled.unused),
+            rules: ruled.counts,
             targets,
             sliding,
-            notes: note.into_iter().collect(),
+            notes: ruled.notes.into_iter().chain(note).collect(),
         }
     }
 
@@ -729,13 +779,14 @@ impl Smoother {
     fn smooth_ruled(
         &self,
         mesh: &mut Mesh,
-        rules: Vec<RuleCount>,
+        ruled: Ruled,
+        input_points: usize,
         #[cfg(feature = "mpi")] cluster: Option<&solve::distributed::Cluster>,
         #[cfg(not(feature = "mpi"))] cluster: Option<&()>,
         observer: &mut dyn FnMut(Event<'_>) -> bool,
     ) -> Result<Report> {
         let params = self.params()?;
-        let reference = self.reference_mesh()?;
+        let reference = self.reference_for(ruled.used.as_deref(), input_points)?;
         let options = self.problem_options(reference.as_ref())?;
         // refuse what cannot be smoothed before anything moves
         options.check(mesh)?;
@@ -751,7 +802,8 @@ impl Smoother {
             return Err(Error::InvalidMesh(msg));
         }
         let (backend, note) = self.backend(&[self.method, untangle_method(self.method)])?;
-        let start = self.start(mesh, &options, rules, targets, note);
+        let unused = ruled.unused;
+        let start = self.start(mesh, &options, ruled, targets, note);
         if !observer(Event::Start(&start)) {
             return Err(Error::InvalidArgument("cancelled before the run began".into()));
         }
@@ -790,7 +842,7 @@ impl Smoother {
         };
         Ok(Report {
             untangled,
-            quality: quality_report(mesh, &mesh.points),
+            quality: with_unused(quality_report(mesh, &mesh.points), unused),
             displacement: metric_report::displacement_percent(mesh, &begin, &mesh.points),
             metric,
             first_layer: first_layer_change(mesh, &begin, &mesh.points),
@@ -814,6 +866,34 @@ impl Smoother {
                 precision: self.precision,
             }),
         }
+    }
+}
+
+/// What [`Smoother::with_rules`] hands a run: the rules' counts, the
+/// vertices the run's mesh keeps when the input has vertices no element
+/// uses (in the input's numbering), and notes for the start report.
+struct Ruled {
+    counts: Vec<RuleCount>,
+    /// How many vertices no element uses (left out of the run's mesh).
+    unused: usize,
+    used: Option<Vec<usize>>,
+    notes: Vec<String>,
+}
+
+/// A report on the mesh without its `unused` vertices counted as one on
+/// the whole mesh: they are vertices, and fixed ones.
+fn with_unused(mut q: QualityReport, unused: usize) -> QualityReport {
+    q.vertices += unused;
+    q.fixed_vertices += unused;
+    q
+}
+
+/// The note on vertices no element uses.
+pub fn unused_note(count: usize) -> String {
+    if count == 1 {
+        "1 point is used by no element: kept where it is".into()
+    } else {
+        format!("{count} points are used by no element: kept where they are")
     }
 }
 

@@ -397,14 +397,17 @@ def smooth(
             try this fraction (0 <= f < 1) of the distance at which the first
             corner inverts; 0 halves the step as the paper's Armijo search does.
 
+    Points no cell uses (a Gmsh mesh exported with its volume cells only)
+    are kept where they are, bit for bit; ``Result.info["notes"]`` says how many.
+
     Returns:
         A :class:`Result`; ``Result.points`` is a new float64 array.
 
     Raises:
         TypeError: wrong dtype of points, cells or fixed, or a callback that is not callable.
         ValueError: wrong shapes, out-of-range ids, a mesh the library refuses
-            (non-finite coordinates, inverted or degenerate elements, unused
-            or duplicate vertices), unknown option names.
+            (non-finite coordinates, inverted or degenerate elements,
+            duplicate vertices), unknown option names.
         RuntimeError: the GPU failed (no adapter, device lost).
         KeyboardInterrupt: Ctrl-C during the solve.
     """
@@ -632,19 +635,13 @@ def _smooth_parts(
     fixed = arrays.fixed
     if user_fixed is not None:
         fixed = user_fixed if fixed is None else (fixed | user_fixed)
-    # points no optimised cell uses (gmsh geometry points, say) are left out of the solve
-    used = np.unique(np.concatenate([a.reshape(-1) for _, a in arrays.cells]))
-    new_id = np.full(n, -1, dtype=np.int64)
-    new_id[used] = np.arange(len(used))
-    cells = [(t, new_id[a]) for t, a in arrays.cells]
+    # points no optimised cell uses (gmsh geometry points, say) the library keeps where they are
     fields = kwargs.pop("fields", None)
     if fields is None and point_data and str(kwargs.get("target", "")).startswith(("size:", "metric:")):
         fields = {k: v for k, v in point_data.items() if np.asarray(v).dtype.kind in "fiu" and len(v) == n}
-    if fields is not None:
-        fields = {str(k): np.asarray(v, dtype=np.float64)[used] for k, v in fields.items()}
-    result = smooth(arrays.points[used], cells, fixed=None if fixed is None else fixed[used], fields=fields, **kwargs)
+    result = smooth(arrays.points, arrays.cells, fixed=fixed, fields=fields, **kwargs)
     new_points = np.array(points, dtype=np.float64, copy=True)
-    new_points[used, : result.points.shape[1]] = result.points
+    new_points[:, : result.points.shape[1]] = result.points
     return new_points, result
 
 

@@ -205,8 +205,6 @@ def test_bad_inputs_raise_documented_errors(tet_box):
         ms.smooth(points, tets, fixed=np.zeros(3, dtype=bool))
     with pytest.raises(ValueError, match="newtn"):
         ms.smooth(points, tets, method="newtn")
-    with pytest.raises(ValueError, match="used by no element"):
-        ms.smooth(np.r_[points, [[5.0, 5.0, 5.0]]], tets)
     with pytest.raises(ValueError, match="unsupported cell type"):
         ms.smooth(points, [("pyramid", tets)])
     with pytest.raises(TypeError, match="callback"):
@@ -364,3 +362,18 @@ def test_newton_defaults_follow_the_cli_and_bad_options_are_refused(quad_grid):
         ms.smooth(points, quads, negative_curvature="none")
     with pytest.raises(ValueError, match="inversion fraction 1 must be at least 0 and below 1"):
         ms.smooth(points, quads, inversion_fraction=1.0)
+
+
+def test_points_used_by_no_cell_are_kept_bit_for_bit(tet_box):
+    points, tets, interior = tet_box
+    n = len(points)
+    extra = np.array([[0.51, 0.49, 0.5], [0.3, 0.7, 0.1 + 1e-17], [9.0, -3.0, 1e-300]])
+    r = ms.smooth(np.r_[points, extra], tets, device="cpu")
+    assert r.points.shape == (n + 3, 3)
+    assert r.points[n:].tobytes() == extra.tobytes()
+    np.testing.assert_array_equal(r.points[:n][~interior], points[~interior])
+    assert np.any(r.points[:n][interior] != points[interior])
+    assert r.objective < ms.quality(points, tets)["objective"]
+    assert "3 points are used by no element: kept where they are" in r.info["notes"]
+    q = ms.quality(np.r_[points, extra], tets)
+    assert q["vertices"] == n + 3 and q["elements"] == len(tets)

@@ -77,6 +77,23 @@ def test_all_names_the_public_api():
     star: dict = {}
     exec("from meshsmooth import *", star)
     assert set(star) - {"__builtins__"} == set(ms.__all__)
+    # the helpers the module imports stay its own
+    assert all(not name.startswith("_") for name in ms.__all__)
+    assert not {"np", "npt", "os", "importlib", "annotations", "Any", "Dict", "List", "Optional"} & set(star)
+
+
+def test_the_adapter_list_prints_nothing_to_stderr_on_a_headless_machine(tmp_path):
+    """Mesa's Vulkan loader layers probe the display server; without one they
+    complain ("XDG_RUNTIME_DIR is invalid") unless meshsmooth keeps them quiet."""
+    code = (
+        "import os\n"
+        "os.environ.pop('XDG_RUNTIME_DIR', None); os.environ.pop('WAYLAND_DISPLAY', None)\n"
+        "os.environ.pop('DISPLAY', None); os.environ.pop('NODEVICE_SELECT', None)\n"
+        "import meshsmooth as ms\n"
+        "assert isinstance(ms.devices(), list)\n"
+    )
+    out = fresh_python(code, tmp_path)
+    assert out.stdout == "" and out.stderr == "", out.stderr
 
 
 def test_the_stubs_ship_and_match_the_compiled_module():

@@ -594,6 +594,11 @@ fn read_on_ranks(input: &Path, quiet: bool) -> Result<Mesh> {
 
 pub fn quality(a: &QualityArgs) -> Result<()> {
     let mesh = io::read(&a.input)?;
+    match mesh.unused_vertices().len() {
+        0 => {}
+        1 => eprintln!("note: 1 point is used by no element: it takes no part in the measures"),
+        n => eprintln!("note: {n} points are used by no element: they take no part in the measures"),
+    }
     let report = quality_report(&mesh, &mesh.points);
     let target = meshsmooth::problem::Target::parse(&a.target)?;
     let before = match &a.before {

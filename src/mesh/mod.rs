@@ -189,6 +189,66 @@ impl Mesh {
         piece
     }
 
+    /// Per vertex, whether an element uses it.
+    pub fn used_vertices(&self) -> Vec<bool> {
+        let mut used = vec![false; self.points.len()];
+        for &v in &self.conn {
+            if let Some(u) = used.get_mut(v as usize) {
+                *u = true;
+            }
+        }
+        used
+    }
+
+    /// The vertices no element uses (ascending). They are part of the mesh
+    /// (a file keeps them, with their point data) but not of any problem:
+    /// smoothing and untangling leave them where they are.
+    pub fn unused_vertices(&self) -> Vec<usize> {
+        let used = self.used_vertices();
+        (0..used.len()).filter(|&v| !used[v]).collect()
+    }
+
+    /// The mesh restricted to the vertices `keep` (ascending), renumbered in
+    /// that order: every element, the fixed flags, the point arrays of
+    /// those vertices, the boundary cells (and their arrays) whose vertices
+    /// are all kept, the cell and field arrays and group names. An element
+    /// vertex not in `keep` becomes `u32::MAX` (which no check accepts).
+    pub fn keep_vertices(&self, keep: &[usize]) -> Mesh {
+        let mut local = vec![u32::MAX; self.points.len()];
+        for (l, &v) in keep.iter().enumerate() {
+            local[v] = l as u32;
+        }
+        let map = |v: &u32| local.get(*v as usize).copied().unwrap_or(u32::MAX);
+        let lower: Vec<usize> = (0..self.lower.len())
+            .filter(|&c| self.lower[c].1.iter().all(|v| map(v) != u32::MAX))
+            .collect();
+        let mut data = self.data.clone();
+        data.point = data.point.iter().map(|a| a.select(keep)).collect();
+        if lower.len() != self.lower.len() {
+            data.lower = data.lower.iter().map(|a| a.select(&lower)).collect();
+        }
+        Mesh {
+            points: keep.iter().map(|&v| self.points[v]).collect(),
+            kinds: self.kinds.clone(),
+            offsets: self.offsets.clone(),
+            conn: self.conn.iter().map(map).collect(),
+            faces: Faces {
+                conn: self.faces.conn.iter().map(map).collect(),
+                ..self.faces.clone()
+            },
+            lower: lower
+                .iter()
+                .map(|&c| (self.lower[c].0, self.lower[c].1.iter().map(map).collect()))
+                .collect(),
+            fixed: if self.fixed.is_empty() {
+                Vec::new()
+            } else {
+                keep.iter().map(|&v| self.fixed[v]).collect()
+            },
+            data,
+        }
+    }
+
     /// Did the user mark vertex `v` fixed?
     pub fn is_fixed(&self, v: usize) -> bool {
         self.fixed.get(v).copied().unwrap_or(false)
@@ -201,7 +261,8 @@ impl Mesh {
 
     /// Structural checks every reader and generator runs: non-empty, one
     /// dimension, finite coordinates, indices in range, no repeated vertex in an
-    /// element, no unused vertices, no coincident vertices unless both are fixed.
+    /// element, no coincident vertices unless both are fixed (vertices no
+    /// element uses are allowed and take no part in that check).
     pub fn validate(&self) -> Result<()> {
         self.validate_structure()?;
         self.validate_vertices()
@@ -319,27 +380,16 @@ impl Mesh {
         self.data.check(n, self.num_elements(), self.lower.len())
     }
 
-    /// No duplicate elements, no vertex used by no element, no free vertex
-    /// on top of another.
+    /// No duplicate elements, no free vertex on top of another (vertices used
+    /// by no element are allowed: they never move, see
+    /// [`unused_vertices`](Self::unused_vertices)).
     fn validate_vertices(&self) -> Result<()> {
-        let n = self.points.len();
-        let mut used = vec![false; n];
-        for &v in &self.conn {
-            used[v as usize] = true;
-        }
+        let used = self.used_vertices();
         if let Some((a, b)) = self.duplicate_elements() {
             let mut vs = self.element(b).to_vec();
             vs.sort_unstable();
             return Err(Error::InvalidMesh(format!(
                 "elements {a} and {b} are duplicates: both have the vertices {vs:?}"
-            )));
-        }
-        let unused: Vec<usize> = (0..n).filter(|&v| !used[v]).collect();
-        if !unused.is_empty() {
-            return Err(Error::InvalidMesh(format!(
-                "{} vertices are used by no element (first ids: {:?})",
-                unused.len(),
-                &unused[..unused.len().min(5)]
             )));
         }
         let sorted: Vec<usize> = {
@@ -356,6 +406,8 @@ impl Mesh {
                 .points
                 .par_iter()
                 .enumerate()
+                // a vertex no element uses never moves: it may sit anywhere
+                .filter(|&(i, _)| used[i])
                 .map(|(i, p)| ([key(p[0]), key(p[1]), key(p[2])], i as u32))
                 .collect();
             keys.par_sort_unstable();

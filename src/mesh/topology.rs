@@ -378,7 +378,8 @@ fn skin_vertices_hashed(mesh: &Mesh) -> Vec<bool> {
     skin
 }
 
-/// Vertices that must not move: the skin plus everything the user fixed.
+/// Vertices that must not move: the skin plus everything the user fixed
+/// (and any vertex no element uses).
 pub fn fixed_vertices(mesh: &Mesh) -> Vec<bool> {
     with_user_fixed(mesh, skin_vertices(mesh))
 }
@@ -396,9 +397,14 @@ pub fn vertex_graph(mesh: &Mesh) -> (Vec<bool>, Csr, Csr) {
     (with_user_fixed(mesh, skin), nb, ve)
 }
 
+/// `fixed` plus the vertices the user fixed and those no element uses
+/// (nothing could move them).
 fn with_user_fixed(mesh: &Mesh, mut fixed: Vec<bool>) -> Vec<bool> {
     for (f, &u) in fixed.iter_mut().zip(&mesh.fixed) {
         *f |= u;
+    }
+    for (f, used) in fixed.iter_mut().zip(mesh.used_vertices()) {
+        *f |= !used;
     }
     fixed
 }

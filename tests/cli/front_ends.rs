@@ -169,3 +169,54 @@ fn bad_options_name_their_flag_on_the_command_line_and_their_key_in_the_library(
         "{e}"
     );
 }
+
+#[test]
+fn points_used_by_no_element_are_written_back_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("unused.vtu");
+    let (mesh, unused) = crate::common::box_with_unused();
+    io::write(&input, &mesh, Format::VtuBinary, &[]).unwrap();
+    let read = io::read(&input).unwrap();
+    let bits = crate::common::bits;
+    let out = dir.path().join("smooth.vtu");
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--device", "cpu"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("note: 3 points are used by no element: kept where they are"),
+        "{stderr}"
+    );
+    let after = io::read(&out).unwrap();
+    assert_eq!(after.num_points(), read.num_points());
+    for &v in &unused {
+        assert_eq!(bits(&after.points[v]), bits(&read.points[v]), "unused point {v} moved");
+    }
+    assert_eq!(after.data.point, read.data.point, "point data changed");
+    assert!((0..unused[0]).filter(|&v| after.points[v] != read.points[v]).count() > 10);
+    let eta = |m: &meshsmooth::Mesh| meshsmooth::report::quality_report(m, &m.points).eta.avg;
+    assert!(eta(&after) < eta(&read));
+
+    // quality reads it as it is; untangle leaves the points too
+    let o = meshsmooth(&["quality", s(&input), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["vertices"], read.num_points());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("3 points are used by no element"));
+    let mut tangled = read.clone();
+    let v = (0..unused[0])
+        .find(|&v| tangled.points[v].iter().all(|&c| c > 0.4 && c < 0.6))
+        .unwrap();
+    tangled.points[v][0] += 0.45;
+    let tangled_path = dir.path().join("tangled.vtu");
+    io::write(&tangled_path, &tangled, Format::VtuBinary, &[]).unwrap();
+    let untangled = dir.path().join("untangled.vtu");
+    let o = meshsmooth(&["untangle", s(&tangled_path), "-o", s(&untangled), "--device", "cpu"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("used by no element"), "{}", text(&o));
+    let after = io::read(&untangled).unwrap();
+    assert!(metric::inverted_elements(&after, &after.points).is_empty());
+    for &v in &unused {
+        assert_eq!(bits(&after.points[v]), bits(&read.points[v]));
+    }
+    assert_eq!(after.data.point, read.data.point);
+}

@@ -303,3 +303,31 @@ pub fn fifo(path: &std::path::Path) {
         path.display()
     );
 }
+
+/// A perturbed tetrahedral box (4×4×4 cells) with three extra points no
+/// element uses (two inside the domain, one far away) and a point array
+/// "temperature" over all points; with the ids of the unused points.
+pub fn box_with_unused() -> (Mesh, Vec<usize>) {
+    use meshsmooth::mesh::{DataArray, ValueType, Values};
+    let mut mesh = generate::tet_box(4, 4, 4, [1.0, 1.0, 1.0]);
+    let opts = PerturbOptions {
+        perturbation: Perturbation::Random { alpha: 0.3 },
+        fraction: 1.0,
+        seed: 7,
+    };
+    generate::perturb(&mut mesh, &opts).unwrap();
+    let n = mesh.num_points();
+    mesh.points
+        .extend([[0.51, 0.49, 0.5], [0.3, 0.7, 0.1 + 1e-17], [9.0, -3.0, 1e-300]]);
+    let values: Vec<f64> = (0..mesh.num_points()).map(|v| v as f64 * 0.1 + 1e-13).collect();
+    mesh.data
+        .point
+        .push(DataArray::new("temperature", ValueType::F64, 1, Values::Float(values)));
+    mesh.validate().unwrap();
+    (mesh, vec![n, n + 1, n + 2])
+}
+
+/// A point's coordinates as bits, to compare them exactly (-0.0 and NaN included).
+pub fn bits(p: &[f64; 3]) -> [u64; 3] {
+    p.map(f64::to_bits)
+}

@@ -31,3 +31,4 @@ mod rezone;
 mod targets;
 mod units;
 mod untangle;
+mod unused;
