@@ -4,28 +4,7 @@
 use std::path::Path;
 
 use crate::common;
-use common::cli::{meshsmooth, s, text};
-
-/// `meshsmooth generate box` with a random perturbation, asserting success.
-fn generate_box(out: &Path, cells: [usize; 3], perturb: &str, seed: u64) {
-    let (c, seed) = (cells.map(|n| n.to_string()), seed.to_string());
-    let args = [
-        "generate",
-        "box",
-        "--cells",
-        &c[0],
-        &c[1],
-        &c[2],
-        "--perturb",
-        perturb,
-        "--seed",
-        &seed,
-        "-o",
-        s(out),
-    ];
-    let o = meshsmooth(&args);
-    assert!(o.status.success(), "{}", text(&o));
-}
+use common::cli::{generate_box, meshsmooth, s, text};
 
 /// The rows of a `--history` CSV.
 fn history_rows(path: &Path) -> Vec<Vec<f64>> {

@@ -6,23 +6,11 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::common;
-use common::cli::{meshsmooth, s, text};
+use common::cli::{generate_box, meshsmooth, s, text};
 
 fn input(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("in.vtk");
-    let o = meshsmooth(&[
-        "generate",
-        "box",
-        "--cells",
-        "4",
-        "4",
-        "4",
-        "--perturb",
-        "random:0.3",
-        "-o",
-        s(&path),
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
+    generate_box(&path, [4, 4, 4], "random:0.3", 1);
     path
 }
 

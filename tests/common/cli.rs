@@ -22,3 +22,24 @@ pub fn text(o: &Output) -> String {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+/// `meshsmooth generate box` with a random perturbation, asserting success.
+pub fn generate_box(out: &Path, cells: [usize; 3], perturb: &str, seed: u64) {
+    let (c, seed) = (cells.map(|n| n.to_string()), seed.to_string());
+    let args = [
+        "generate",
+        "box",
+        "--cells",
+        &c[0],
+        &c[1],
+        &c[2],
+        "--perturb",
+        perturb,
+        "--seed",
+        &seed,
+        "-o",
+        s(out),
+    ];
+    let o = meshsmooth(&args);
+    assert!(o.status.success(), "{}", text(&o));
+}
