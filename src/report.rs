@@ -139,12 +139,14 @@ pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
     let ne = mesh.num_elements();
     // clockwise planar meshes are measured mirrored (centroids below use the real points)
     let measured = crate::metric::oriented(mesh, points);
+    // shapes at a size whose determinants neither underflow nor overflow
+    let shaped = crate::metric::near_unit(&measured);
     // (eta, volume); eta None when any corner determinant is not positive
     let per_element: Vec<(Option<f64>, f64)> = (0..ne)
         .into_par_iter()
         .map(|e| {
-            let min_det = element_min_det(mesh, &measured, e);
-            let eta = element_eta(mesh, &measured, e).filter(|_| min_det > 0.0);
+            let min_det = element_min_det(mesh, &shaped, e);
+            let eta = element_eta(mesh, &shaped, e).filter(|_| min_det > 0.0);
             (eta, mesh_element_volume(mesh, &measured, e))
         })
         .collect();

@@ -102,6 +102,26 @@ pub fn oriented<'a>(mesh: &Mesh, points: &'a [Vec3]) -> std::borrow::Cow<'a, [Ve
     }
 }
 
+/// `points` scaled by a power of two (exactly, so no determinant changes
+/// sign) to a unit-sized box where they span less than 1e-30 or more than
+/// 1e30 (unchanged otherwise): a determinant of cubed lengths would
+/// underflow or overflow there and read as degenerate.
+pub fn near_unit(points: &[Vec3]) -> std::borrow::Cow<'_, [Vec3]> {
+    let extent = (0..3)
+        .map(|k| {
+            let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[k]), hi.max(p[k]))
+            });
+            hi - lo
+        })
+        .fold(0.0, f64::max);
+    if !(extent > 0.0 && extent.is_finite()) || (1e-30..=1e30).contains(&extent) {
+        return std::borrow::Cow::Borrowed(points);
+    }
+    let scale = (-extent.log2().round()).exp2();
+    std::borrow::Cow::Owned(points.iter().map(|p| p.map(|x| x * scale)).collect())
+}
+
 /// `Error::Inverted` when `mesh` has an inverted element at its own points.
 pub fn refuse_inverted(mesh: &Mesh) -> crate::error::Result<()> {
     let bad = inverted_elements(mesh, &mesh.points);
@@ -116,6 +136,7 @@ pub fn refuse_inverted(mesh: &Mesh) -> crate::error::Result<()> {
 /// mesh's own orientation for planar meshes).
 pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {
     let points = oriented(mesh, points);
+    let points = near_unit(&points);
     (0..mesh.num_elements())
         .filter(|&e| !(element_min_det(mesh, &points, e) > 0.0))
         .collect()

@@ -94,3 +94,38 @@ fn scaling_and_shifting_change_nothing_but_the_coordinates_on_the_gpu() {
     };
     check(Device::Gpu(&ctx), "gpu");
 }
+
+#[test]
+fn extreme_units_smooth_to_the_same_mesh_and_report_the_same_quality() {
+    // lengths of 1e-150 or 1e150: the solve's frame takes them to unit size,
+    // and the checks for inverted elements and the quality report must not
+    // read the underflowing or overflowing determinants as degenerate
+    let mesh = start();
+    let smoother = meshsmooth::Smoother::default();
+    let mut base = mesh.clone();
+    let unit = smoother.smooth(&mut base).unwrap();
+    let f = unit.quality.objective.unwrap();
+    for scale in [1e-150, 1e150] {
+        let mut m = mesh.clone();
+        for p in &mut m.points {
+            *p = p.map(|c| c * scale);
+        }
+        assert!(
+            meshsmooth::metric::inverted_elements(&m, &m.points).is_empty(),
+            "x{scale:e}"
+        );
+        let report = smoother.smooth(&mut m).unwrap_or_else(|e| panic!("x{scale:e}: {e}"));
+        let g = report
+            .quality
+            .objective
+            .unwrap_or_else(|| panic!("x{scale:e}: no objective"));
+        assert!((g - f).abs() <= 1e-9 * f, "x{scale:e}: {g} vs {f}");
+        let worst = m
+            .points
+            .iter()
+            .zip(&base.points)
+            .map(|(a, b)| (0..3).map(|k| (a[k] / scale - b[k]).abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "x{scale:e}: vertices differ by {worst:e} of the unit");
+    }
+}
