@@ -628,7 +628,7 @@ impl Smoother {
         let result = self.with_rules(mesh, |s, mesh, ruled| {
             let reference = s.reference_for(ruled.used.as_deref(), input_points)?;
             let options = s.problem_options(reference.as_ref())?;
-            options.check(mesh)?;
+            crate::problem::check(mesh, &mesh.points, &options)?;
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
             let unused = ruled.unused;
             let start = s.start(mesh, &options, ruled, None, note);
@@ -788,8 +788,10 @@ impl Smoother {
         let params = self.params()?;
         let reference = self.reference_for(ruled.used.as_deref(), input_points)?;
         let options = self.problem_options(reference.as_ref())?;
-        // refuse what cannot be smoothed before anything moves
-        options.check(mesh)?;
+        // refuse what cannot be smoothed before anything moves or is
+        // reported (a planar mesh that is not flat included: its "inverted"
+        // elements would be those of a projection)
+        crate::problem::check(mesh, &mesh.points, &options)?;
         // once for the run: nothing moves before untangling, which is handed it
         let inverted = metric::inverted_elements(mesh, &mesh.points);
         // the default target is decided on the input, before any untangling

@@ -434,3 +434,33 @@ fn smooth_says_where_its_time_went() {
         "{solve}\n{line}"
     );
 }
+
+#[test]
+fn a_surface_that_is_not_flat_is_refused_before_any_report() {
+    // a triangle mesh folded out of its plane: smooth, untangle and quality
+    // have no orientation for it and must not count its elements as inverted
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("folded.vtk");
+    let mut mesh = meshsmooth::generate::tri_grid(6, 6, [1.0, 1.0]);
+    for p in &mut mesh.points {
+        p[2] = 0.3 * (3.0 * p[0]).sin() * p[1];
+    }
+    meshsmooth::io::write(&path, &mesh, meshsmooth::io::Format::VtkAscii, &[]).unwrap();
+    let out = dir.path().join("out.vtk");
+    for args in [
+        vec!["quality", s(&path)],
+        vec!["smooth", s(&path), "-o", s(&out)],
+        vec!["untangle", s(&path), "-o", s(&out)],
+    ] {
+        let o = meshsmooth(&args);
+        assert!(!o.status.success(), "{args:?}: {}", text(&o));
+        let t = text(&o);
+        assert!(
+            t.contains("not flat") && t.contains("folded.vtk") && t.contains("vertex"),
+            "{args:?}: {t}"
+        );
+        // refused before any report of the (projected) mesh
+        assert!(!t.contains("inverted") && !t.contains("initial mesh"), "{args:?}: {t}");
+    }
+    assert!(!out.exists());
+}
