@@ -528,33 +528,31 @@ impl Smoother {
             }
             #[cfg(feature = "gpu")]
             DeviceChoice::Auto => {
-                if let Some(m) = methods.iter().find(|&&m| gpu_allowed(m).is_err()) {
-                    return Ok((
-                        Backend::Cpu,
-                        Some(format!("{m} runs on the CPU only; running on the CPU")),
-                    ));
+                // nobody asked for a GPU: the CPU needs no note, unless it
+                // cannot give the f32 that was asked for
+                if methods.iter().any(|&m| gpu_allowed(m).is_err()) {
+                    return Ok((Backend::Cpu, None));
                 }
                 let adapters = gpu::list_adapters();
                 let hardware = adapters.iter().any(|a| a.compute && a.device_type != "Cpu");
                 if hardware || self.adapter.is_some() {
                     return Ok((Backend::Gpu(Box::new(GpuContext::new(&self.gpu_options())?)), None));
                 }
+                if self.precision != Precision::F32 {
+                    return Ok((Backend::Cpu, None));
+                }
                 let found: Vec<String> = adapters
                     .iter()
                     .map(|a| format!("{} ({})", a.name, a.device_type))
                     .collect();
                 let note = format!(
-                    "no hardware GPU found{}; running on the CPU{} (the gpu device uses a software adapter)",
+                    "no hardware GPU found{}; running on the CPU in f64, not the f32 asked for \
+                     (the gpu device uses a software adapter)",
                     if found.is_empty() {
                         String::new()
                     } else {
                         format!(" (adapters: {})", found.join(", "))
                     },
-                    if self.precision == Precision::F32 {
-                        " in f64, not the f32 asked for"
-                    } else {
-                        ""
-                    }
                 );
                 Ok((Backend::Cpu, Some(note)))
             }

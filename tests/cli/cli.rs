@@ -464,3 +464,22 @@ fn a_surface_that_is_not_flat_is_refused_before_any_report() {
     }
     assert!(!out.exists());
 }
+
+#[test]
+fn a_default_run_names_no_device_nobody_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.vtk");
+    generate_box(&input, [3, 3, 3], "random:0.3", 2);
+    let out = dir.path().join("out.vtk");
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&out)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    // the device is in the summary line; a CPU run says nothing more of GPUs
+    if t.contains(" on cpu") {
+        assert!(!t.contains("GPU") && !t.contains("adapter"), "{t}");
+        // asking for f32 that the CPU does not give is worth a line
+        let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--precision", "f32"]);
+        assert!(o.status.success(), "{}", text(&o));
+        assert!(text(&o).contains("f64, not the f32 asked for"), "{}", text(&o));
+    }
+}
