@@ -38,6 +38,7 @@ fn perturbed(base: &Mesh, seed: u64) -> Mesh {
 /// A second table: every kind of layer `generate boundary-layer` builds,
 /// perturbed the same way, smoothed with the ideal target and the default.
 fn every_kind(md: &mut String) {
+    use meshsmooth::error::Named;
     use meshsmooth::generate::LayerKind;
     use meshsmooth::problem::targets::first_layer_change;
     writeln!(
@@ -47,13 +48,7 @@ fn every_kind(md: &mut String) {
     .unwrap();
     let worst =
         |c: &meshsmooth::problem::targets::LayerChange| (c.min_ratio - 1.0).abs().max((c.max_ratio - 1.0).abs());
-    for kind in [
-        LayerKind::Quad,
-        LayerKind::Tri,
-        LayerKind::Hex,
-        LayerKind::Prism,
-        LayerKind::Tet,
-    ] {
+    for kind in LayerKind::NAMES.iter().map(|&(_, k)| k) {
         let (n, growth) = if kind.dim() == 2 { (24, 1.25) } else { (8, 1.5) };
         let base = generate::boundary_layer(kind, n, 1e-3, growth, 12).unwrap();
         let start = perturbed(&base, 5);

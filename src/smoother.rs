@@ -654,8 +654,7 @@ impl Smoother {
         let rules = self.rules()?;
         let file_fixed = mesh.fixed.clone();
         let result = rules.apply(mesh).and_then(|counts| {
-            let unused = mesh.unused_vertices();
-            if unused.is_empty() {
+            let Some((used, mut elements)) = mesh.without_unused() else {
                 return run(
                     self,
                     mesh,
@@ -666,20 +665,15 @@ impl Smoother {
                         notes: Vec::new(),
                     },
                 );
-            }
-            let mut is_used = vec![true; mesh.num_points()];
-            for &v in &unused {
-                is_used[v] = false;
-            }
-            let used: Vec<usize> = (0..mesh.num_points()).filter(|&v| is_used[v]).collect();
-            let mut elements = mesh.keep_vertices(&used);
-            let note = unused_note(unused.len());
+            };
+            let unused = mesh.num_points() - used.len();
+            let note = unused_note(unused);
             let result = run(
                 self,
                 &mut elements,
                 Ruled {
                     counts,
-                    unused: unused.len(),
+                    unused,
                     used: Some(used.clone()),
                     notes: vec![note],
                 },

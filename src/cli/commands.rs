@@ -601,14 +601,8 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
     }
     // what smooth refuses is not measured either: a planar mesh that is not
     // flat has no orientation to tell inverted elements by
-    let used = mesh.used_vertices();
-    let kept: Vec<usize> = (0..used.len()).filter(|&v| used[v]).collect();
-    let in_use = if kept.len() == used.len() {
-        None
-    } else {
-        Some(mesh.keep_vertices(&kept))
-    };
-    let measured = in_use.as_ref().unwrap_or(&mesh);
+    let in_use = mesh.without_unused();
+    let measured = in_use.as_ref().map_or(&mesh, |(_, m)| m);
     meshsmooth::mesh::plane::Plane::fit(measured, &measured.points).map_err(|e| io::in_file(&a.input, e))?;
     let report = quality_report(&mesh, &mesh.points);
     let target = meshsmooth::problem::Target::parse(&a.target)?;

@@ -209,13 +209,8 @@ mod tests {
 
     #[test]
     fn every_layer_kind_is_conforming_and_positive() {
-        for kind in [
-            LayerKind::Quad,
-            LayerKind::Tri,
-            LayerKind::Hex,
-            LayerKind::Prism,
-            LayerKind::Tet,
-        ] {
+        use crate::error::Named;
+        for kind in LayerKind::NAMES.iter().map(|&(_, k)| k) {
             let m = boundary_layer(kind, 5, 1e-3, 1.5, 6).unwrap();
             assert_eq!(m.dim(), kind.dim(), "{kind:?}");
             assert!(crate::metric::inverted_elements(&m, &m.points).is_empty(), "{kind:?}");

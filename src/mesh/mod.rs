@@ -208,6 +208,18 @@ impl Mesh {
         (0..used.len()).filter(|&v| !used[v]).collect()
     }
 
+    /// The vertices elements use (ascending) and the mesh restricted to
+    /// them ([`Mesh::keep_vertices`]); `None` when every vertex is used.
+    pub fn without_unused(&self) -> Option<(Vec<usize>, Mesh)> {
+        let used = self.used_vertices();
+        if used.iter().all(|&u| u) {
+            return None;
+        }
+        let keep: Vec<usize> = (0..used.len()).filter(|&v| used[v]).collect();
+        let mesh = self.keep_vertices(&keep);
+        Some((keep, mesh))
+    }
+
     /// The mesh restricted to the vertices `keep` (ascending), renumbered in
     /// that order: every element, the fixed flags, the point arrays of
     /// those vertices, the boundary cells (and their arrays) whose vertices

@@ -542,14 +542,9 @@ fn a_hex_box_graded_toward_a_wall_keeps_its_first_layer() {
 
 #[test]
 fn every_kind_of_boundary_layer_keeps_its_first_layer_by_default() {
+    use meshsmooth::error::Named;
     use meshsmooth::generate::LayerKind;
-    for kind in [
-        LayerKind::Quad,
-        LayerKind::Hex,
-        LayerKind::Prism,
-        LayerKind::Tri,
-        LayerKind::Tet,
-    ] {
+    for kind in LayerKind::NAMES.iter().map(|&(_, k)| k) {
         let (n, growth) = if kind.dim() == 2 { (24, 1.25) } else { (6, 1.5) };
         let base = generate::boundary_layer(kind, n, 1e-3, growth, 12).unwrap();
         let axis = kind.dim() - 1;
