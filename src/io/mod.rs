@@ -144,12 +144,17 @@ impl Format {
     }
 
     /// The format a mesh file is in, from its first bytes (`None` for a
-    /// `.pvtu` index, an unknown or unreadable file). A VTU file whose
+    /// `.pvtu` index, an unknown or unreadable file, and anything but a
+    /// regular file: a pipe's first bytes are the reader's, not ours to
+    /// take). A VTU file whose
     /// arrays are compressed by any compressor counts as [`Format::VtuZlib`],
     /// the compressed VTU meshsmooth writes; raw appended data as
     /// [`Format::VtuBinary`].
     pub fn of_file(path: &Path) -> Option<Format> {
         use std::io::Read;
+        if !std::fs::metadata(path).ok()?.is_file() {
+            return None;
+        }
         let mut head = Vec::new();
         std::fs::File::open(path)
             .ok()?

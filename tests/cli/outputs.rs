@@ -256,3 +256,50 @@ fn an_output_keeps_the_encoding_of_its_input() {
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(Format::of_file(&out), Some(Format::VtuAscii));
 }
+
+#[cfg(unix)]
+#[test]
+fn a_mesh_read_from_a_pipe_is_read_once() {
+    use meshsmooth::io::{self, Format};
+    // the output's encoding is not looked for in a pipe: its bytes are the
+    // reader's, and a second open would wait for a writer that is gone
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = io::read(input(dir.path())).unwrap();
+    let file = dir.path().join("binary.vtu");
+    io::write(&file, &mesh, Format::VtuBinary, &[]).unwrap();
+    let bytes = std::fs::read(&file).unwrap();
+    let fifo = dir.path().join("pipe.vtu");
+    common::fifo(&fifo);
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            use std::io::Write;
+            let mut f = std::fs::OpenOptions::new().write(true).open(&fifo).unwrap();
+            let _ = f.write_all(&bytes);
+        })
+    };
+    let out = dir.path().join("out.vtu");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_meshsmooth"))
+        .args(["smooth", s(&fifo), "-o", s(&out), "--max-iter", "2"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap();
+            panic!("smooth of a pipe did not finish");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    writer.join().unwrap();
+    assert!(status.success());
+    assert_eq!(io::read(&out).unwrap().num_points(), mesh.num_points());
+    // its encoding unknown, the output takes the extension's default
+    assert_eq!(Format::of_file(&out), Some(Format::VtuAscii));
+    assert_eq!(Format::of_file(&fifo), None);
+}
