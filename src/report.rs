@@ -6,7 +6,7 @@ use std::fmt;
 
 use rayon::prelude::*;
 
-use crate::mesh::topology::fixed_vertices;
+use crate::mesh::topology::{skin_vertices, with_user_fixed};
 use crate::mesh::{ElementKind, Mesh};
 use crate::metric::{element_eta, element_min_det};
 
@@ -135,6 +135,11 @@ const INVERTED_IDS: usize = 10;
 /// # Panics
 /// If `points` does not have one entry per mesh vertex.
 pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
+    quality_report_on_skin(mesh, points, &skin_vertices(mesh))
+}
+
+/// [`quality_report`] with the mesh's [`skin_vertices`] already at hand.
+pub fn quality_report_on_skin(mesh: &Mesh, points: &[[f64; 3]], skin: &[bool]) -> QualityReport {
     assert_eq!(points.len(), mesh.num_points(), "one position per mesh vertex");
     let ne = mesh.num_elements();
     // clockwise planar meshes are measured mirrored (centroids below use the real points)
@@ -170,8 +175,7 @@ pub fn quality_report(mesh: &Mesh, points: &[[f64; 3]]) -> QualityReport {
         histogram[bin].count += 1;
     }
 
-    let fixed = fixed_vertices(mesh);
-    let nfixed = fixed.iter().filter(|&&f| f).count();
+    let nfixed = with_user_fixed(mesh, skin.to_vec()).iter().filter(|&&f| f).count();
     QualityReport {
         vertices: mesh.num_points(),
         elements: ne,
@@ -365,7 +369,7 @@ pub fn displacement_stats(before: &[[f64; 3]], after: &[[f64; 3]]) -> Displaceme
 }
 
 /// Numbers in a table column: fixed point near 1, scientific otherwise.
-fn num(x: f64) -> String {
+pub fn num(x: f64) -> String {
     if x.is_nan() {
         "-".into()
     } else if x.is_infinite() {
@@ -412,6 +416,10 @@ impl fmt::Display for QualityReport {
                 ratio
             )?;
         }
+        writeln!(
+            f,
+            "(eta, the inverse mean ratio: 1 for the ideal shape, higher is worse; sigma_n: standard deviation / mean)"
+        )?;
         match self.objective {
             // the count is shown when zero too, so reports before and after untangling compare
             Some(obj) => writeln!(f, "objective F (mean eta): {} (inverted elements: 0)", num(obj))?,

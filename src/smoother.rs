@@ -32,7 +32,7 @@ use crate::metric_report::{self, MetricSummary, SpacingDisplacement};
 use crate::problem::boundary::{VertexClass, classify};
 use crate::problem::targets::{LayerChange, first_layer_change};
 use crate::problem::{Boundary, BoundaryMode, Ordering, ProblemOptions, Target};
-use crate::report::{QualityReport, quality_report};
+use crate::report::{QualityReport, quality_report, quality_report_on_skin};
 use crate::solve::newton::NewtonParams;
 use crate::solve::pcg::{NegativeCurvature, Preconditioner};
 use crate::solve::{self, Device, Info, Method, Params, Record, UntangleInfo, UntangleParams};
@@ -208,12 +208,57 @@ pub struct Start {
     pub quality: QualityReport,
     /// What each fixed-vertex rule did.
     pub rules: Vec<RuleCount>,
+    /// Why the fixed vertices are fixed, each counted once.
+    pub fixed: Fixed,
     /// The default targets' decision, where it keeps the input's stretching.
     pub targets: Option<String>,
     /// With a sliding boundary: how the skin was classified.
     pub sliding: Option<Sliding>,
     /// Other things the caller should know (e.g. why the CPU was chosen).
     pub notes: Vec<String>,
+}
+
+/// Why vertices are fixed: each fixed vertex counted once, under the first
+/// reason that holds in this order (skin, file, rules, unused).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct Fixed {
+    /// Skin vertices that stay: all of them with `boundary = fixed` (the
+    /// default), the corners and any flagged ones with `slide`.
+    pub skin: usize,
+    /// Vertices inside the mesh that the file marks fixed (VTK point data
+    /// `fixed`, lower cells, Medit required vertices, Gmsh point elements).
+    pub file: usize,
+    /// Vertices inside the mesh that the rules (groups, arrays, id files)
+    /// fixed beyond the file's own.
+    pub rules: usize,
+    /// Vertices no element uses (kept where they are).
+    pub unused: usize,
+}
+
+impl Fixed {
+    /// All fixed vertices.
+    pub fn total(&self) -> usize {
+        self.skin + self.file + self.rules + self.unused
+    }
+
+    /// `held`: whether a skin vertex stays (the boundary rule's answer).
+    fn count(skin: &[bool], mesh: &Mesh, file_fixed: &[bool], held: impl Fn(usize) -> bool, unused: usize) -> Fixed {
+        let mut fixed = Fixed {
+            unused,
+            ..Fixed::default()
+        };
+        for (v, &on_skin) in skin.iter().enumerate() {
+            if on_skin {
+                fixed.skin += usize::from(held(v));
+            } else if file_fixed.get(v).copied().unwrap_or(false) {
+                fixed.file += 1;
+            } else if mesh.is_fixed(v) {
+                fixed.rules += 1;
+            }
+        }
+        fixed
+    }
 }
 
 /// How a sliding boundary's skin was classified.
@@ -660,6 +705,7 @@ impl Smoother {
                     mesh,
                     Ruled {
                         counts,
+                        file_fixed: file_fixed.clone(),
                         unused: 0,
                         used: None,
                         notes: Vec::new(),
@@ -673,6 +719,11 @@ impl Smoother {
                 &mut elements,
                 Ruled {
                     counts,
+                    file_fixed: if file_fixed.is_empty() {
+                        Vec::new()
+                    } else {
+                        used.iter().map(|&v| file_fixed[v]).collect()
+                    },
                     unused,
                     used: Some(used.clone()),
                     notes: vec![note],
@@ -707,11 +758,12 @@ impl Smoother {
         targets: Option<String>,
         note: Option<String>,
     ) -> Start {
-        let sliding = (options.boundary.mode == BoundaryMode::Slide).then(|| {
-            let skin = classify(mesh, &mesh.points, options.boundary.feature_angle);
+        let class = (options.boundary.mode == BoundaryMode::Slide)
+            .then(|| classify(mesh, &mesh.points, options.boundary.feature_angle).class);
+        let sliding = class.as_ref().map(|class| {
             let count = |k: VertexClass| {
                 (0..mesh.num_points())
-                    .filter(|&v| skin.class[v] == k && (k == VertexClass::Corner || !mesh.is_fixed(v)))
+                    .filter(|&v| class[v] == k && (k == VertexClass::Corner || !mesh.is_fixed(v)))
                     .count()
             };
             Sliding {
@@ -721,8 +773,15 @@ impl Smoother {
                 corners: count(VertexClass::Corner),
             }
         });
+        let skin = crate::mesh::topology::skin_vertices(mesh);
+        let held = |v: usize| {
+            class
+                .as_ref()
+                .is_none_or(|c| c[v] == VertexClass::Corner || mesh.is_fixed(v))
+        };
         Start {
-            quality: with_unused(quality_report(mesh, &mesh.points), ruled.unused),
+            quality: with_unused(quality_report_on_skin(mesh, &mesh.points, &skin), ruled.unused),
+            fixed: Fixed::count(&skin, mesh, &ruled.file_fixed, held, ruled.unused),
             rules: ruled.counts,
             targets,
             sliding,
@@ -868,6 +927,8 @@ impl Smoother {
 /// uses (in the input's numbering), and notes for the start report.
 struct Ruled {
     counts: Vec<RuleCount>,
+    /// The file's own fixed flags in the run's numbering (empty: none).
+    file_fixed: Vec<bool>,
     /// How many vertices no element uses (left out of the run's mesh).
     unused: usize,
     used: Option<Vec<usize>>,

@@ -1,8 +1,9 @@
 //! The subcommands.
 
+use super::brief;
 use super::device;
 use super::outputs;
-use super::progress::Progress;
+use super::progress::{Log, Progress};
 use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, UntangleArgs};
 use meshsmooth::Smoother;
 use meshsmooth::backend::gpu::list_adapters;
@@ -63,7 +64,8 @@ fn params_strategy(o: &ObjectiveArgs) -> String {
     }
 }
 
-fn summary(info: &Info, f0: f64) -> String {
+/// The run in a line; `full` adds Newton's inner counts.
+fn summary(info: &Info, f0: f64, full: bool) -> String {
     let change = if f0 != 0.0 {
         100.0 * (info.objective - f0) / f0
     } else {
@@ -86,7 +88,7 @@ fn summary(info: &Info, f0: f64) -> String {
         info.objective,
         change,
         info.grad_norm
-    ) + &newton_counts(info)
+    ) + &if full { newton_counts(info) } else { String::new() }
 }
 
 /// Where a Newton run's time went, for users tuning it: CG iterations, line
@@ -104,18 +106,36 @@ fn newton_counts(info: &Info) -> String {
     }
 }
 
+/// How much a command prints: the summary alone, a screenful, or every report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) enum Verbosity {
+    Quiet,
+    Brief,
+    Full,
+}
+
+impl Verbosity {
+    pub(super) fn of(quiet: bool, verbose: bool) -> Verbosity {
+        match (quiet, verbose) {
+            (true, _) => Verbosity::Quiet,
+            (false, false) => Verbosity::Brief,
+            (false, true) => Verbosity::Full,
+        }
+    }
+}
+
 /// What the command line prints as a run goes: the reports before, the
-/// untangling lines, the iterations (a bar on a terminal, a sparse log).
+/// untangling lines, the iterations (a bar on a terminal, a log otherwise).
 struct Printer {
-    quiet: bool,
+    say: Verbosity,
     max_iter: usize,
     progress: Option<Progress>,
 }
 
 impl Printer {
-    fn new(quiet: bool, max_iter: usize) -> Printer {
+    fn new(say: Verbosity, max_iter: usize) -> Printer {
         Printer {
-            quiet,
+            say,
             max_iter,
             progress: None,
         }
@@ -127,23 +147,31 @@ impl Printer {
                 for note in &start.notes {
                     eprintln!("note: {note}");
                 }
-                if !self.quiet {
-                    println!("== initial mesh ==\n{}", start.quality);
-                    for c in &start.rules {
-                        println!("{} {}: {} vertices", device::flag(c.option), c.value, c.vertices);
-                    }
-                    if let Some(note) = &start.targets {
-                        println!("{note}\n");
-                    }
-                    if let Some(s) = &start.sliding {
+                match self.say {
+                    Verbosity::Quiet => {}
+                    Verbosity::Brief => println!("{}", brief::start(start)),
+                    Verbosity::Full => {
+                        println!("== initial mesh ==\n{}", start.quality);
                         println!(
-                            "--boundary slide (feature angle {}°): {} vertices slide on boundary faces, {} along feature edges; {} corners fixed\n",
-                            s.feature_angle, s.surface, s.edge, s.corners
+                            "{}",
+                            brief::fixed_line(&start.fixed, start.quality.vertices, start.sliding.is_some())
                         );
+                        for c in &start.rules {
+                            println!("{} {}: {} vertices", device::flag(c.option), c.value, c.vertices);
+                        }
+                        if let Some(note) = &start.targets {
+                            println!("{note}\n");
+                        }
+                        if let Some(s) = &start.sliding {
+                            println!(
+                                "--boundary slide (feature angle {}°): {} vertices slide on boundary faces, {} along feature edges; {} corners fixed\n",
+                                s.feature_angle, s.surface, s.edge, s.corners
+                            );
+                        }
                     }
                 }
             }
-            Event::Untangling { inverted } if !self.quiet => println!(
+            Event::Untangling { inverted } if self.say > Verbosity::Quiet => println!(
                 "the input is tangled ({inverted} inverted element(s)): untangling first (--no-untangle refuses instead)"
             ),
             Event::Untangled(info) => println!(
@@ -156,7 +184,12 @@ impl Printer {
                 info.seconds
             ),
             Event::Iteration(r) => {
-                let (max_iter, log) = (self.max_iter, !self.quiet);
+                let log = match self.say {
+                    Verbosity::Quiet => Log::None,
+                    Verbosity::Brief => Log::Slow,
+                    Verbosity::Full => Log::Sparse,
+                };
+                let max_iter = self.max_iter;
                 return self
                     .progress
                     .get_or_insert_with(|| Progress::new(max_iter, log))
@@ -174,9 +207,9 @@ impl Printer {
     }
 }
 
-/// Smooths `mesh` in place with `s`, printing reports and iterations unless `quiet`.
-fn run_smoother(mesh: &mut Mesh, s: &Smoother, objective: &ObjectiveArgs, quiet: bool) -> Result<Info> {
-    let mut printer = Printer::new(quiet, s.max_iter);
+/// Smooths `mesh` in place with `s`, printing as much as `say` asks.
+fn run_smoother(mesh: &mut Mesh, s: &Smoother, objective: &ObjectiveArgs, say: Verbosity) -> Result<Info> {
+    let mut printer = Printer::new(say, s.max_iter);
     let mut observer = |e: Event<'_>| printer.event(e);
     // under mpirun the smoothing is partitioned over the ranks (untangling stays on one)
     #[cfg(feature = "mpi")]
@@ -189,33 +222,46 @@ fn run_smoother(mesh: &mut Mesh, s: &Smoother, objective: &ObjectiveArgs, quiet:
     printer.finish(result.as_ref().ok().and_then(|r| r.info.history.last()));
     let report = result?;
     #[cfg(feature = "mpi")]
-    if let Some(ranks) = report.ranks.as_ref().filter(|_| !quiet) {
+    if let Some(ranks) = report.ranks.as_ref().filter(|_| say > Verbosity::Quiet) {
         println!("\n{ranks}");
     }
     let info = &report.info;
-    if !quiet {
-        println!("\n== optimised mesh ==\n{}", report.quality);
-        let d = report.displacement;
-        match &report.metric {
-            Some((before, after)) => {
-                let table = metric_report::Comparison {
-                    before,
-                    after,
-                    displacement: Some(d),
-                };
-                println!("{table}");
+    match say {
+        Verbosity::Quiet => {}
+        Verbosity::Brief => {
+            println!("{}", brief::after(&report.quality));
+            if let Some((before, after)) = &report.metric {
+                println!("{}", brief::metric(before, after));
             }
-            None => println!(
-                "node displacement, % of the average local spacing: min {:.1}, avg {:.1}, max {:.1}\n",
-                d.min, d.avg, d.max
-            ),
+            println!("{}", brief::moved(&report.displacement));
+            if let Some(change) = &report.first_layer {
+                println!("{change}");
+            }
         }
-        if let Some(change) = &report.first_layer {
-            println!("{change}\n");
+        Verbosity::Full => {
+            println!("\n== optimised mesh ==\n{}", report.quality);
+            let d = report.displacement;
+            match &report.metric {
+                Some((before, after)) => {
+                    let table = metric_report::Comparison {
+                        before,
+                        after,
+                        displacement: Some(d),
+                    };
+                    println!("{table}");
+                }
+                None => println!(
+                    "node displacement, % of the average local spacing: min {:.1}, avg {:.1}, max {:.1}\n",
+                    d.min, d.avg, d.max
+                ),
+            }
+            if let Some(change) = &report.first_layer {
+                println!("{change}\n");
+            }
         }
     }
     let f0 = info.history.first().map_or(info.objective, |r| r.objective);
-    println!("{}", summary(info, f0));
+    println!("{}", summary(info, f0, say == Verbosity::Full));
     if let Some(order) = s.order.sweep() {
         if info.reorderings > 0 {
             println!(
@@ -227,7 +273,7 @@ fn run_smoother(mesh: &mut Mesh, s: &Smoother, objective: &ObjectiveArgs, quiet:
                 info.seconds,
                 info.reorderings
             );
-        } else if !quiet && order != SweepOrder::N {
+        } else if say > Verbosity::Quiet && order != SweepOrder::N {
             println!(
                 "note: --order {} orders the sequential sweep (--method bcd on the CPU); {} ran in the input numbering",
                 order.name(),
@@ -255,10 +301,13 @@ pub fn untangle(a: &UntangleArgs) -> Result<()> {
     }
     let start = mesh.points.clone();
     let run = |mesh: &mut Mesh| -> Result<Option<solve::UntangleInfo>> {
-        let mut printer = Printer::new(a.quiet, settings.max_iter);
+        let mut printer = Printer::new(Verbosity::of(a.quiet, a.verbose), settings.max_iter);
         let report = settings.untangle_observed(mesh, &mut |e| printer.event(e))?;
-        if !a.quiet && report.untangled.is_some() {
-            println!("\n== untangled mesh ==\n{}", report.quality);
+        match Verbosity::of(a.quiet, a.verbose) {
+            _ if report.untangled.is_none() => {}
+            Verbosity::Quiet => {}
+            Verbosity::Brief => println!("{}", brief::after(&report.quality)),
+            Verbosity::Full => println!("\n== untangled mesh ==\n{}", report.quality),
         }
         Ok(report.untangled)
     };
@@ -320,7 +369,8 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
         mesh.data = Default::default();
     }
     let start = mesh.points.clone();
-    let solved = run_smoother(&mut mesh, &settings, &a.solver.objective, a.quiet).map_err(|e| io::in_file(&a.input, e));
+    let say = Verbosity::of(a.quiet, a.verbose);
+    let solved = run_smoother(&mut mesh, &settings, &a.solver.objective, say).map_err(|e| io::in_file(&a.input, e));
     let info = match solved {
         Ok(info) => info,
         Err(e) => {
@@ -391,10 +441,12 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
 }
 
 /// Where a command's time went: the file, the problem's setup, the solve,
-/// the output, and the whole (which adds the checks, targets and reports).
+/// the output, the rest (checks, the default targets' tests, reports), and
+/// the whole.
 fn timings(read: f64, info: &Info, write: f64, total: f64) -> String {
+    let rest = (total - read - info.setup_seconds - info.seconds - write).max(0.0);
     format!(
-        "time: read {read:.3} s, setup {:.3} s, solve {:.3} s, write {write:.3} s; {total:.3} s in all",
+        "time: read {read:.3} s, setup {:.3} s, solve {:.3} s, write {write:.3} s, checks and reports {rest:.3} s; {total:.3} s in all",
         info.setup_seconds, info.seconds
     )
 }
@@ -533,7 +585,7 @@ fn smooth_pieces(a: &SmoothArgs, settings: &Smoother, pieces: Option<Option<usiz
         pieces: pieces.is_some(),
         gpu: settings.rank_gpu(&backend),
     };
-    let mut progress = Progress::new(params.max_iter, !a.quiet);
+    let mut progress = Progress::new(params.max_iter, if a.quiet { Log::None } else { Log::Sparse });
     let result = cluster.smooth_pieces(&job, &mut |r| progress.update(r));
     progress.finish(result.as_ref().ok().and_then(|o| o.info.history.last()));
     let out = result.map_err(|e| io::in_file(&a.input, e))?;
@@ -545,7 +597,7 @@ fn smooth_pieces(a: &SmoothArgs, settings: &Smoother, pieces: Option<Option<usiz
             a.input.display(),
             list(&out.readers)
         );
-        println!("{}", summary(&out.info, f0));
+        println!("{}", summary(&out.info, f0, true));
         println!("\n{}", out.report);
         if pieces.is_some() {
             println!(
@@ -674,7 +726,12 @@ pub fn demo(a: &DemoArgs) -> Result<()> {
         }
         None => None,
     };
-    run_smoother(&mut mesh, &settings, &a.solver.objective, false)?;
+    run_smoother(
+        &mut mesh,
+        &settings,
+        &a.solver.objective,
+        Verbosity::of(false, a.verbose),
+    )?;
     if let (Some(out), Some(format)) = (&a.output, format) {
         io::write_mesh(out, &mesh, format)?;
         println!("wrote {}", out.display());

@@ -2,6 +2,7 @@
 //! command calls the library and prints what it returns.
 
 mod boundary;
+mod brief;
 mod commands;
 mod compare;
 mod device;
@@ -199,8 +200,12 @@ pub struct SmoothArgs {
     #[arg(long)]
     pub drop_data: bool,
     /// Print only the final summary line.
-    #[arg(short, long)]
+    #[arg(short, long, conflicts_with = "verbose")]
     pub quiet: bool,
+    /// Print the full reports: statistics, histograms and worst elements before and after,
+    /// every iteration logged, Newton's inner counts.
+    #[arg(short, long)]
+    pub verbose: bool,
     /// If the run fails midway (e.g. the GPU is lost), save the last feasible positions
     /// next to the output as NAME.partial.EXT.
     #[arg(long)]
@@ -240,8 +245,11 @@ pub struct UntangleArgs {
     #[arg(long)]
     pub drop_data: bool,
     /// Print only the untangling line.
-    #[arg(short, long)]
+    #[arg(short, long, conflicts_with = "verbose")]
     pub quiet: bool,
+    /// Print the full reports (as for smooth).
+    #[arg(short, long)]
+    pub verbose: bool,
     /// If elements stay inverted, write the last positions anyway as NAME.partial.EXT.
     #[arg(long)]
     pub save_partial: bool,
@@ -663,6 +671,9 @@ pub struct DemoArgs {
     /// Cells per side of the demo box.
     #[arg(long, default_value_t = 16)]
     pub cells: usize,
+    /// Print the full reports (as for smooth).
+    #[arg(short, long)]
+    pub verbose: bool,
     #[command(flatten)]
     pub solver: SolverArgs,
 }

@@ -4,7 +4,7 @@
 use super::RezoneArgs;
 use super::device;
 use super::outputs;
-use super::progress::Progress;
+use super::progress::{Log, Progress};
 use meshsmooth::io::{self, Format};
 use meshsmooth::metric::smetric::MetricKind;
 use meshsmooth::metric_report::{SideBySide, displacement_percent, metric_summary};
@@ -42,7 +42,7 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
     let original = measure(&mesh).map_err(|e| io::in_file(&a.input, e))?;
 
     let mut rj = mesh.clone();
-    let mut progress = Progress::new(opts.solve.params.max_iter, show);
+    let mut progress = Progress::new(opts.solve.params.max_iter, if show { Log::Sparse } else { Log::None });
     let result = rezone_mesh(&mut rj, &opts, &mut |r| progress.update(r));
     progress.finish(result.as_ref().ok().and_then(|i| i.info.history.last()));
     let rj_info = result.map_err(|e| io::in_file(&a.input, e))?;
@@ -57,7 +57,7 @@ pub fn rezone(a: &RezoneArgs) -> Result<()> {
     let cn = match (&a.compare_cn, cn_format) {
         (Some(path), Some(fmt)) => {
             let mut cn = mesh.clone();
-            let mut progress = Progress::new(opts.solve.params.max_iter, show);
+            let mut progress = Progress::new(opts.solve.params.max_iter, if show { Log::Sparse } else { Log::None });
             let result = cn_optimise_mesh(&mut cn, &opts.solve, &mut |r| progress.update(r));
             progress.finish(result.as_ref().ok().and_then(|i| i.history.last()));
             let info = result.map_err(|e| io::in_file(&a.input, e))?;

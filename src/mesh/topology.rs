@@ -399,7 +399,7 @@ pub fn vertex_graph(mesh: &Mesh) -> (Vec<bool>, Csr, Csr) {
 
 /// `fixed` plus the vertices the user fixed and those no element uses
 /// (nothing could move them).
-fn with_user_fixed(mesh: &Mesh, mut fixed: Vec<bool>) -> Vec<bool> {
+pub(crate) fn with_user_fixed(mesh: &Mesh, mut fixed: Vec<bool>) -> Vec<bool> {
     for (f, &u) in fixed.iter_mut().zip(&mesh.fixed) {
         *f |= u;
     }

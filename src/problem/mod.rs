@@ -112,10 +112,11 @@ impl<'a> ProblemOptions<'a> {
         {
             return Ok((ideal, None));
         }
-        if targets::raw_anisotropic_share(mesh, &mesh.points)? < targets::ANISOTROPIC_SHARE {
+        let shapes = targets::Shapes::of(mesh, &mesh.points)?;
+        if shapes.raw_share(mesh.dim()) < targets::ANISOTROPIC_SHARE {
             return Ok((ideal, None));
         }
-        let intent = targets::intent(mesh, &mesh.points)?;
+        let intent = targets::intent_of(mesh, &shapes);
         if !intent.keeps_input() {
             return Ok((ideal, None));
         }

@@ -215,13 +215,19 @@ pub fn sym_eigen(m: &Mat3) -> (Vec3, Mat3) {
             let t = if theta == 0.0 { 1.0 } else { t };
             let c = 1.0 / (t * t + 1.0).sqrt();
             let s = t * c;
-            let mut r = IDENTITY;
-            r[p][p] = c;
-            r[q][q] = c;
-            r[p][q] = s;
-            r[q][p] = -s;
-            a = mul(&transpose(&r), &mul(&a, &r));
-            v = mul(&v, &r);
+            // A <- R^T A R and V <- V R for the rotation R in the (p, q)
+            // plane, touching only the rows and columns it changes: this runs
+            // for every element of every mesh the default targets look at
+            for row in a.iter_mut().chain(v.iter_mut()) {
+                let (x, y) = (row[p], row[q]);
+                row[p] = c * x - s * y;
+                row[q] = s * x + c * y;
+            }
+            for j in 0..3 {
+                let (x, y) = (a[p][j], a[q][j]);
+                a[p][j] = c * x - s * y;
+                a[q][j] = s * x + c * y;
+            }
         }
     }
     ([a[0][0], a[1][1], a[2][2]], v)
@@ -660,8 +666,7 @@ fn quarters(eigen: &[(Vec3, Mat3)]) -> Vec<Mat3> {
 /// neighbours, and every smoothing run with the default target pays for
 /// the detection); the thresholds of [`Intent::keeps_input`] were measured
 /// with it.
-fn mean_regularise(mesh: &Mesh, mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
-    let nb = element_neighbours(mesh, &vertex_elements(mesh));
+fn mean_regularise(mesh: &Mesh, nb: &Csr, mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
     for _ in 0..passes {
         vals = (0..mesh.num_elements())
             .into_par_iter()
@@ -684,7 +689,16 @@ fn mean_regularise(mesh: &Mesh, mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3>
 
 /// Each element's centroid, and the elements sharing a vertex with it.
 fn neighbourhoods(mesh: &Mesh, points: &[Vec3]) -> (Vec<Vec3>, Csr) {
-    let centroid: Vec<Vec3> = (0..mesh.num_elements())
+    (
+        centroids(mesh, points),
+        element_neighbours(mesh, &vertex_elements(mesh)),
+    )
+}
+
+/// Each element's centroid.
+fn centroids(mesh: &Mesh, points: &[Vec3]) -> Vec<Vec3> {
+    (0..mesh.num_elements())
+        .into_par_iter()
         .map(|e| {
             let vs = mesh.element(e);
             let mut c = [0.0; 3];
@@ -695,19 +709,17 @@ fn neighbourhoods(mesh: &Mesh, points: &[Vec3]) -> (Vec<Vec3>, Csr) {
             }
             c
         })
-        .collect();
-    (centroid, element_neighbours(mesh, &vertex_elements(mesh)))
+        .collect()
 }
 
 /// Per stretched element (aspect [`ANISOTROPIC_ASPECT`] or more), the ratio
 /// of thicknesses between it and its neighbours one cell away along its
 /// thin axis (1 or more; the geometric mean over those neighbours): a
-/// boundary layer's growth rate. Read from log G `logs`.
-fn layer_growths(mesh: &Mesh, points: &[Vec3], logs: &[Mat3]) -> Vec<f64> {
+/// boundary layer's growth rate. Read from the eigen-decompositions of log G.
+fn layer_growths(mesh: &Mesh, points: &[Vec3], nb: &Csr, eigen: &[(Vec3, Mat3)]) -> Vec<f64> {
     let n = mesh.dim();
-    let (centroid, nb) = neighbourhoods(mesh, points);
-    let eigen: Vec<(Vec3, Mat3)> = logs.par_iter().map(sym_eigen).collect();
-    let quarter = quarters(&eigen);
+    let centroid = centroids(mesh, points);
+    let quarter = quarters(eigen);
     let dot = |a: &Vec3, b: &Vec3| (0..3).map(|i| a[i] * b[i]).sum::<f64>();
     (0..mesh.num_elements())
         .into_par_iter()
@@ -728,7 +740,7 @@ fn layer_growths(mesh: &Mesh, points: &[Vec3], logs: &[Mat3]) -> Vec<f64> {
                 return None;
             }
             let nbs = nb.of(e);
-            let local = logical_offsets(e, nbs, &centroid, &quarter, &eigen, n);
+            let local = logical_offsets(e, nbs, &centroid, &quarter, eigen, n);
             let ratios: Vec<f64> = nbs
                 .iter()
                 .zip(&local)
@@ -983,26 +995,25 @@ fn affine_fit(local: &[Vec3], n: usize, value: impl Fn(usize) -> Mat3) -> Mat3 {
 /// (sqrt of the eigenvalue ratio): 1 for an ideal element's affine image
 /// under a scaled rotation.
 pub fn element_aspects(g: &[Mat3], n: usize) -> Vec<f64> {
-    g.iter()
-        .map(|m| {
-            let (l, _) = sym_eigen(m);
-            let l = &l[..];
-            let lead: Vec<f64> = if n == 2 {
-                // the z eigenvalue is the 1 set by element_metrics
-                let mut v = l.to_vec();
-                let z = (0..3)
-                    .min_by(|&a, &b| (v[a] - 1.0).abs().total_cmp(&(v[b] - 1.0).abs()))
-                    .unwrap();
-                v.remove(z);
-                v
-            } else {
-                l.to_vec()
-            };
-            let hi = lead.iter().cloned().fold(f64::MIN, f64::max);
-            let lo = lead.iter().cloned().fold(f64::MAX, f64::min);
-            if lo > 0.0 { (hi / lo).sqrt() } else { f64::INFINITY }
-        })
-        .collect()
+    g.par_iter().map(|m| aspect(&sym_eigen(m).0, n)).collect()
+}
+
+/// The aspect of [`element_aspects`] from G's eigenvalues `l`.
+fn aspect(l: &Vec3, n: usize) -> f64 {
+    let (hi, lo) = in_plane(l, n).fold((f64::MIN, f64::MAX), |(hi, lo), x| (hi.max(x), lo.min(x)));
+    if lo > 0.0 { (hi / lo).sqrt() } else { f64::INFINITY }
+}
+
+/// The eigenvalues `l` of a G that measure the element: all three in 3D; in
+/// 2D the two left when the one nearest 1 (the z axis that
+/// [`element_metrics`] sets to 1) is dropped.
+fn in_plane(l: &Vec3, n: usize) -> impl Iterator<Item = f64> + '_ {
+    let z = (n == 2).then(|| {
+        (0..3)
+            .min_by(|&a, &b| (l[a] - 1.0).abs().total_cmp(&(l[b] - 1.0).abs()))
+            .unwrap()
+    });
+    (0..3).filter(move |&k| Some(k) != z).map(move |k| l[k])
 }
 
 /// How the first cells on the walls changed between `before` and `after`:
@@ -1012,15 +1023,14 @@ pub fn element_aspects(g: &[Mat3], n: usize) -> Vec<f64> {
 /// thickness away) is its first-layer vertex, and the height is the
 /// distance between the two. `None` where no wall has a stretched layer.
 pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Option<LayerChange> {
-    let pts = crate::metric::oriented(mesh, before);
-    let g = element_metrics(mesh, &pts, false).ok()?;
+    let shapes = Shapes::of(mesh, before).ok()?;
     let n = mesh.dim();
-    let aspects = element_aspects(&g, n);
+    let aspects: Vec<f64> = shapes.eigen.par_iter().map(|(l, _)| aspect(l, n)).collect();
     // an element's thickness: its smallest principal length (in 2D among the in-plane axes)
-    let thickness: Vec<f64> = g
-        .iter()
-        .map(|m| {
-            let (l, v) = sym_eigen(m);
+    let thickness: Vec<f64> = shapes
+        .eigen
+        .par_iter()
+        .map(|(l, v)| {
             (0..3)
                 .filter(|&k| n == 3 || v[2][k].abs() < 0.5)
                 .map(|k| l[k])
@@ -1033,6 +1043,7 @@ pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Optio
     let ve = vertex_elements(mesh);
     let dist = |p: &[Vec3], a: usize, b: usize| sub(&p[a], &p[b]).iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut ratios: Vec<f64> = (0..mesh.num_points())
+        .into_par_iter()
         .filter(|&w| skin[w])
         .filter_map(|w| {
             // across the layer from the wall: an edge about as long as the
@@ -1052,9 +1063,9 @@ pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Optio
     if ratios.is_empty() {
         return None;
     }
-    ratios.sort_unstable_by(f64::total_cmp);
-    let mut changes: Vec<f64> = ratios.iter().map(|r| (r - 1.0).abs()).collect();
-    changes.sort_unstable_by(f64::total_cmp);
+    ratios.par_sort_unstable_by(f64::total_cmp);
+    let mut changes: Vec<f64> = ratios.par_iter().map(|r| (r - 1.0).abs()).collect();
+    changes.par_sort_unstable_by(f64::total_cmp);
     Some(LayerChange {
         vertices: ratios.len(),
         median_ratio: ratios[ratios.len() / 2],
@@ -1267,73 +1278,105 @@ impl Intent {
 /// decision, since averaging neighbours does not make a mesh more coherently
 /// stretched than its elements are.
 pub fn raw_anisotropic_share(mesh: &Mesh, points: &[Vec3]) -> Result<f64> {
-    let pts = crate::metric::oriented(mesh, points);
-    let a = element_aspects(&element_metrics(mesh, &pts, false)?, mesh.dim());
-    Ok(a.iter().filter(|&&x| x >= ANISOTROPIC_ASPECT).count() as f64 / a.len().max(1) as f64)
+    Ok(Shapes::of(mesh, points)?.raw_share(mesh.dim()))
+}
+
+/// Each element's G (see [`element_metrics`]) at oriented points, and its
+/// eigen-decomposition, computed once for the default target's tests.
+pub struct Shapes<'a> {
+    pts: Cow<'a, [Vec3]>,
+    eigen: Vec<(Vec3, Mat3)>,
+}
+
+impl<'a> Shapes<'a> {
+    /// The shapes of `mesh` at `points`.
+    pub fn of(mesh: &Mesh, points: &'a [Vec3]) -> Result<Shapes<'a>> {
+        let pts = crate::metric::oriented(mesh, points);
+        let eigen = element_metrics(mesh, &pts, false)?.par_iter().map(sym_eigen).collect();
+        Ok(Shapes { pts, eigen })
+    }
+
+    /// [`raw_anisotropic_share`].
+    pub fn raw_share(&self, n: usize) -> f64 {
+        let stretched = self
+            .eigen
+            .par_iter()
+            .filter(|(l, _)| aspect(l, n) >= ANISOTROPIC_ASPECT)
+            .count();
+        stretched as f64 / self.eigen.len().max(1) as f64
+    }
 }
 
 /// The [`Intent`] of `mesh` at `points` (inverted elements are left out).
 pub fn intent(mesh: &Mesh, points: &[Vec3]) -> Result<Intent> {
-    let pts = crate::metric::oriented(mesh, points);
-    let g = element_metrics(mesh, &pts, false)?;
-    let logs: Vec<Mat3> = g.iter().map(|m| sym_fn(m, |l| l.max(f64::MIN_POSITIVE).ln())).collect();
-    let smoothed_logs = mean_regularise(mesh, logs, INTENT_PASSES);
-    let smooth: Vec<Mat3> = smoothed_logs.iter().map(|l| sym_fn(l, f64::exp)).collect();
-    let mut growths = layer_growths(mesh, &pts, &smoothed_logs);
-    growths.sort_unstable_by(f64::total_cmp);
+    Ok(intent_of(mesh, &Shapes::of(mesh, points)?))
+}
+
+/// [`intent`] from the shapes at hand. G is regularised in the log domain:
+/// exp and log keep eigenvectors, so one decomposition of each of log G and
+/// its regularised mean serves every measure below.
+pub fn intent_of(mesh: &Mesh, shapes: &Shapes<'_>) -> Intent {
+    let n = mesh.dim();
+    let pts = &shapes.pts;
+    let compose = |(l, v): &(Vec3, Mat3), f: fn(f64) -> f64| -> Mat3 {
+        let fl = l.map(f);
+        std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| v[i][k] * fl[k] * v[j][k]).sum()))
+    };
+    let logs: Vec<Mat3> = shapes
+        .eigen
+        .par_iter()
+        .map(|e| compose(e, |l| l.max(f64::MIN_POSITIVE).ln()))
+        .collect();
+    let nb = element_neighbours(mesh, &vertex_elements(mesh));
+    let smoothed_logs = mean_regularise(mesh, &nb, logs, INTENT_PASSES);
+    let log_eigen: Vec<(Vec3, Mat3)> = smoothed_logs.par_iter().map(sym_eigen).collect();
+    // the regularised G's eigenvalues: exp of its log's
+    let smooth: Vec<Vec3> = log_eigen.par_iter().map(|(l, _)| l.map(f64::exp)).collect();
+    let mut growths = layer_growths(mesh, pts, &nb, &log_eigen);
+    growths.par_sort_unstable_by(f64::total_cmp);
     let growth = growths.get(growths.len() / 2).copied().unwrap_or(1.0);
     let valid: Vec<bool> = (0..mesh.num_elements())
-        .map(|e| crate::metric::element_min_det(mesh, &pts, e) > 0.0)
+        .into_par_iter()
+        .map(|e| crate::metric::element_min_det(mesh, pts, e) > 0.0)
         .collect();
-    let pick = |g: &[Mat3]| -> Vec<f64> {
-        let mut a: Vec<f64> = element_aspects(g, mesh.dim())
-            .into_iter()
+    let pick = |l: &[Vec3]| -> Vec<f64> {
+        let mut a: Vec<f64> = l
+            .par_iter()
             .zip(&valid)
-            .filter(|&(a, &ok)| ok && a.is_finite())
-            .map(|(a, _)| a)
+            .map(|(l, &ok)| if ok { aspect(l, n) } else { f64::NAN })
+            .filter(|a| a.is_finite())
             .collect();
-        a.sort_unstable_by(f64::total_cmp);
+        a.par_sort_unstable_by(f64::total_cmp);
         a
     };
+    let raw: Vec<Vec3> = shapes.eigen.iter().map(|(l, _)| *l).collect();
     let share = |a: &[f64]| a.iter().filter(|&&x| x >= ANISOTROPIC_ASPECT).count() as f64 / a.len().max(1) as f64;
-    let (raw, reg) = (pick(&g), pick(&smooth));
+    let (raw, reg) = (pick(&raw), pick(&smooth));
     if reg.is_empty() {
-        return Ok(Intent {
+        return Intent {
             anisotropic_share: 0.0,
             median_aspect: 1.0,
             max_aspect: 1.0,
             raw_share: 0.0,
             thickness_range: 1.0,
             growth: 1.0,
-        });
+        };
     }
-    Ok(Intent {
+    Intent {
         anisotropic_share: share(&reg),
         median_aspect: reg[reg.len() / 2],
         max_aspect: *reg.last().unwrap(),
         raw_share: share(&raw),
         growth,
         thickness_range: {
-            let n = mesh.dim();
             let mut sz: Vec<f64> = smooth
-                .iter()
+                .par_iter()
                 .zip(&valid)
                 .filter(|&(_, &ok)| ok)
-                .map(|(m, _)| {
-                    let (l, _) = sym_eigen(m);
-                    // in 2D the z eigenvalue is the 1 of element_metrics
-                    let mut l = l.to_vec();
-                    if n == 2 {
-                        let z = (0..3)
-                            .min_by(|&a, &b| (l[a] - 1.0).abs().total_cmp(&(l[b] - 1.0).abs()))
-                            .unwrap();
-                        l.remove(z);
-                    }
-                    l.iter().cloned().fold(f64::MAX, f64::min).max(0.0).sqrt()
-                })
+                .map(|(l, _)| in_plane(l, n).fold(f64::MAX, f64::min).max(0.0).sqrt())
                 .collect();
-            sz.sort_unstable_by(f64::total_cmp);
+            sz.par_sort_unstable_by(f64::total_cmp);
             sz[sz.len() * 99 / 100] / sz[sz.len() / 100].max(f64::MIN_POSITIVE)
         },
-    })
+    }
 }

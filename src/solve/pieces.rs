@@ -170,9 +170,12 @@ fn ideal_targets_only(job: &PiecesJob, share: &Mesh, me: usize) -> Result<()> {
         // coherently stretched elements that sets the detection going is refused
         crate::problem::Target::Auto => {
             use crate::problem::targets;
-            job.metric == MetricKind::InverseMeanRatio
-                && targets::raw_anisotropic_share(share, &share.points)? >= targets::ANISOTROPIC_SHARE
-                && targets::intent(share, &share.points)?.anisotropic_share >= targets::ANISOTROPIC_SHARE
+            let stretched = || -> Result<bool> {
+                let shapes = targets::Shapes::of(share, &share.points)?;
+                Ok(shapes.raw_share(share.dim()) >= targets::ANISOTROPIC_SHARE
+                    && targets::intent_of(share, &shapes).anisotropic_share >= targets::ANISOTROPIC_SHARE)
+            };
+            job.metric == MetricKind::InverseMeanRatio && stretched()?
         }
         t => t.is_constructed(),
     };

@@ -36,7 +36,11 @@ fn smooth_untangles_a_tangled_input_and_says_so() {
         "{t}"
     );
     assert!(t.contains("untangled") && t.contains("inverted corner(s)"), "{t}");
-    // the report before and after: the inverted count, then none
+    // the quality before and after: the inverted count (last column), then none
+    assert_eq!(quality_row(&t, "before").last(), Some(&bad.to_string()), "{t}");
+    assert_eq!(quality_row(&t, "after").last().map(String::as_str), Some("0"), "{t}");
+    let o = meshsmooth(&["smooth", s(&input), "-o", s(&out), "--device", "cpu", "-v"]);
+    let t = text(&o);
     let (before, after) = t.split_once("== optimised mesh ==").expect("both reports");
     assert!(before.contains(&format!("inverted elements: {bad} ")), "{before}");
     assert!(after.contains("(inverted elements: 0)"), "{after}");
@@ -67,7 +71,9 @@ fn untangle_command_writes_an_untangled_mesh() {
     let o = meshsmooth(&["untangle", s(&input), "-o", s(&out), "--device", "cpu"]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
-    assert!(t.contains("== untangled mesh =="), "{t}");
+    assert_eq!(quality_row(&t, "after").last().map(String::as_str), Some("0"), "{t}");
+    let o = meshsmooth(&["untangle", s(&input), "-o", s(&out), "--device", "cpu", "-v"]);
+    assert!(text(&o).contains("== untangled mesh =="), "{}", text(&o));
     let m = io::read(&out).unwrap();
     assert!(inverted_elements(&m, &m.points).is_empty());
 }
@@ -168,4 +174,13 @@ fn save_partial_writes_the_still_tangled_result_beside_the_output() {
     let partial = io::read(dir.path().join("o.partial.vtk")).unwrap();
     assert!(!inverted_elements(&partial, &partial.points).is_empty());
     assert_ne!(partial.points[8], m.points[8]);
+}
+
+/// The cells of the terminal's quality row `name` ("before", "after").
+fn quality_row(t: &str, name: &str) -> Vec<String> {
+    let line = t
+        .lines()
+        .find(|l| l.trim_start().starts_with(&format!("{name} ")))
+        .unwrap_or_else(|| panic!("no {name} row in {t}"));
+    line.split_whitespace().skip(1).map(String::from).collect()
 }
