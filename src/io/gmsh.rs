@@ -522,8 +522,29 @@ impl Reader<'_> {
             }
             let dim: i32 = t[0].parse().map_err(|_| bad())?;
             let tag: i32 = t[1].parse().map_err(|_| bad())?;
-            let name = t[2..].join(" ");
-            let name = name.trim_matches('"').to_string();
+            let quoted = t[2..].join(" ");
+            // Gmsh itself crashes on a group of another dimension: refuse it
+            // here rather than copy it into every output
+            if !(0..=3).contains(&dim) {
+                return Err(self.c.err(format!(
+                    "$PhysicalNames: physical group {tag} has dimension {dim}; a dimension is 0, 1, 2 or 3"
+                )));
+            }
+            if tag <= 0 {
+                return Err(self.c.err(format!(
+                    "$PhysicalNames: physical tag {tag} (dimension {dim}) is not positive"
+                )));
+            }
+            let name = match quoted.strip_prefix('"').and_then(|q| q.strip_suffix('"')) {
+                Some(name) => name.to_string(),
+                None => {
+                    return Err(self.c.err(format!(
+                        "$PhysicalNames: the name of physical group {tag} (dimension {dim}) is not in double \
+                         quotes: {}",
+                        clip(&quoted)
+                    )));
+                }
+            };
             self.raw.physical_names.push(PhysicalName { dim, tag, name });
         }
         self.end("$EndPhysicalNames")

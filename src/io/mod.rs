@@ -600,6 +600,7 @@ pub(crate) struct RawMesh {
     /// Arrays of the whole data set.
     pub field_data: Vec<DataArray>,
     pub physical_names: Vec<PhysicalName>,
+    pub gmsh_entities: Vec<crate::mesh::data::GmshEntity>,
 }
 
 impl RawMesh {
@@ -683,6 +684,7 @@ impl RawMesh {
         mesh.data.cell = self.cell_data;
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
+        mesh.data.gmsh_entities = self.gmsh_entities;
         let mut fixed = self.fixed;
         if fixed.iter().any(|&f| f) {
             fixed.resize(n, false);
@@ -775,6 +777,7 @@ impl RawMesh {
         }
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
+        mesh.data.gmsh_entities = self.gmsh_entities;
         if fixed.iter().any(|&f| f) {
             mesh.fixed = fixed;
         }
