@@ -2,7 +2,8 @@
 //!
 //! A view is read as a point or cell array named after the view (its first
 //! string tag), of `f64` values with the view's number of components; a
-//! node or cell the view does not list gets NaN. A view name that comes
+//! node or cell the view does not list gets NaN (and is left out on
+//! write). A view name that comes
 //! again (later time steps) replaces the earlier one, so the last step is
 //! kept. The writers write every numeric point array as `$NodeData` and
 //! every numeric cell array but the tag arrays as `$ElementData` (strings
@@ -121,8 +122,10 @@ impl Reader<'_> {
             On::Nodes => &mut self.raw.point_data,
             On::Elements => &mut self.raw.cell_data,
         };
-        arrays.retain(|a| a.name != array.name);
-        arrays.push(array);
+        match arrays.iter_mut().find(|a| a.name == array.name) {
+            Some(earlier) => *earlier = array,
+            None => arrays.push(array),
+        }
         Ok(())
     }
 }
@@ -186,7 +189,9 @@ pub(super) fn write_views(w: &mut dyn Write, mesh: &Mesh, binary: bool) -> Write
     Ok(())
 }
 
-/// One view: `rows` are (tag, array, tuple) entries.
+/// One view: `rows` are (tag, array, tuple) entries; tuples of NaN only
+/// (what a view that does not list an entity reads as) are left out, and
+/// so is a view left with no entries.
 fn write_view(
     w: &mut dyn Write,
     on: On,
@@ -197,9 +202,16 @@ fn write_view(
     let section = on.section();
     let name: String = a.name.chars().filter(|&c| c != '"' && c != '\n').collect();
     let k = a.components;
+    let rows: Vec<_> = rows
+        .iter()
+        .filter(|&&(_, arr, i)| (0..k).any(|c| !arr.get_f64(i * k + c).is_nan()))
+        .collect();
+    if rows.is_empty() {
+        return Ok(());
+    }
     writeln!(w, "{section}\n1\n\"{name}\"\n1\n0\n3\n0\n{k}\n{}", rows.len())?;
     let mut buf = Vec::new();
-    for &(tag, arr, i) in rows {
+    for &&(tag, arr, i) in &rows {
         let values = (0..k).map(|c| arr.get_f64(i * k + c));
         if binary {
             buf.extend_from_slice(&(tag as i32).to_le_bytes());
