@@ -387,12 +387,9 @@ fn gmsh_reads_as_we_do(files: &[(PathBuf, Mesh)]) {
         return;
     }
     for (path, m) in files {
-        let o = Command::new("gmsh").arg(path).arg("-check").output().unwrap();
-        let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
-        assert!(
-            o.status.success() && !log.contains("Error"),
-            "{}: gmsh -check:\n{log}",
-            path.display()
+        let log = run_gmsh(
+            &format!("{} -check", path.display()),
+            &[path.as_os_str(), "-check".as_ref()],
         );
         let count = |what: &str| {
             log.lines()
@@ -551,6 +548,18 @@ pub(crate) fn gmsh_available() -> bool {
     ok
 }
 
+/// Runs `gmsh` with `args`, asserting that it succeeds without an error
+/// (`ctx` says what for); its output.
+pub(crate) fn run_gmsh<S: AsRef<std::ffi::OsStr>>(ctx: &str, args: &[S]) -> String {
+    let o = Command::new("gmsh").args(args).output().unwrap();
+    let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && !log.contains("Error"),
+        "{ctx}: gmsh failed:\n{log}"
+    );
+    log
+}
+
 /// Gmsh loads every `.msh` meshsmooth writes (`-check`), and saves it again
 /// with the same physical groups on the same cells.
 #[test]
@@ -583,23 +592,12 @@ fn gmsh_reads_back_every_msh_meshsmooth_writes() {
             let name = src.file_name().unwrap().to_string_lossy().to_string();
             let out = dir.path().join(format!("{name}.{f}.msh"));
             io::write(&out, &m, f, &[]).unwrap();
-            let check = Command::new("gmsh").arg(&out).arg("-check").output().unwrap();
-            let log = String::from_utf8_lossy(&check.stdout).to_string() + &String::from_utf8_lossy(&check.stderr);
-            assert!(
-                check.status.success() && !log.contains("Error"),
-                "{name} as {f}: gmsh -check failed:\n{log}"
-            );
+            run_gmsh(&format!("{name} as {f}: -check"), &[out.as_os_str(), "-check".as_ref()]);
             let resaved = dir.path().join(format!("{name}.{f}.resaved.msh"));
-            let save = Command::new("gmsh")
-                .arg(&out)
-                .args(["-save", "-format", "msh22", "-o"])
-                .arg(&resaved)
-                .output()
-                .unwrap();
-            let log = String::from_utf8_lossy(&save.stdout).to_string() + &String::from_utf8_lossy(&save.stderr);
-            assert!(
-                save.status.success() && !log.contains("Error"),
-                "{name} as {f}: gmsh -save:\n{log}"
+            let save = ["-save", "-format", "msh22", "-o"].map(std::ffi::OsStr::new);
+            run_gmsh(
+                &format!("{name} as {f}: -save"),
+                &[&[out.as_os_str()], &save[..], &[resaved.as_os_str()]].concat(),
             );
             let back = io::read(&resaved).unwrap_or_else(|e| panic!("{name} as {f}, saved by Gmsh: {e}"));
             assert_eq!(groups_by_geometry(&back), want, "{name} as {f}: groups after Gmsh");

@@ -12,7 +12,7 @@ use meshsmooth::mesh::data::{GMSH_DIM_TAGS, GMSH_PHYSICAL};
 use meshsmooth::mesh::{DataArray, ElementKind, LowerKind, Mesh, ValueType, Values};
 
 use crate::common::cli::{meshsmooth, s, text};
-use crate::interop::{gmsh_available, meshio_python};
+use crate::interop::{gmsh_available, meshio_python, run_gmsh};
 
 fn interop_file(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -30,6 +30,28 @@ fn array<'a>(arrays: &'a [DataArray], name: &str) -> &'a DataArray {
 /// Values as f64 bits (NaN compares equal to NaN).
 fn bits(a: &DataArray) -> Vec<u64> {
     (0..a.values.len()).map(|i| a.get_f64(i).to_bits()).collect()
+}
+
+/// `src` smoothed by the CLI to `out` in `format`, read back: it moved
+/// from `input`.
+fn smooth_to(src: &Path, out: &Path, format: &str, input: &Mesh) -> Mesh {
+    let o = meshsmooth(&[
+        "smooth",
+        s(src),
+        "-o",
+        s(out),
+        "--format",
+        format,
+        "--device",
+        "cpu",
+        "--max-iter",
+        "5",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{format}: {}", text(&o));
+    let got = io::read(out).unwrap();
+    assert_ne!(got.points, input.points, "{format}: smoothed");
+    got
 }
 
 /// meshio's volume mesh with its boundary: smoothed to every VTK and VTU
@@ -52,22 +74,7 @@ fn smooth_keeps_the_boundary_triangles_of_a_meshio_vtu_and_their_groups() {
         ("vtk-binary", "vtk"),
     ] {
         let out = dir.path().join(format!("out-{format}.{ext}"));
-        let o = meshsmooth(&[
-            "smooth",
-            s(&src),
-            "-o",
-            s(&out),
-            "--format",
-            format,
-            "--device",
-            "cpu",
-            "--max-iter",
-            "5",
-            "-q",
-        ]);
-        assert!(o.status.success(), "{format}: {}", text(&o));
-        let got = io::read(&out).unwrap();
-        assert_ne!(got.points, input.points, "{format}: smoothed");
+        let got = smooth_to(&src, &out, format, &input);
         assert_eq!(got.num_elements(), 1577, "{format}");
         assert_eq!(got.lower, input.lower, "{format}: boundary triangles");
         assert!(got.lower.iter().all(|(k, _)| *k == LowerKind::Triangle));
@@ -215,9 +222,7 @@ fn gmsh_has_the_views(ctx: &str, path: &Path, m: &Mesh) {
         ),
     )
     .unwrap();
-    let o = Command::new("gmsh").arg(&script).arg("-0").output().unwrap();
-    let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() && !log.contains("Error"), "{ctx}: gmsh:\n{log}");
+    run_gmsh(&format!("{ctx}: views"), &[script.as_os_str(), "-0".as_ref()]);
     let key = |p: [f64; 3]| p.map(f64::to_bits);
     let ids: HashMap<[u64; 3], usize> = m.points.iter().enumerate().map(|(i, &p)| (key(p), i)).collect();
     let mut seen = Vec::new();
@@ -286,22 +291,7 @@ fn msh41_entities_and_node_entities_survive_smooth() {
     let dir = tempfile::tempdir().unwrap();
     for format in ["msh4", "msh4-binary"] {
         let out = dir.path().join(format!("{format}.msh"));
-        let o = meshsmooth(&[
-            "smooth",
-            s(&src),
-            "-o",
-            s(&out),
-            "--format",
-            format,
-            "--device",
-            "cpu",
-            "--max-iter",
-            "5",
-            "-q",
-        ]);
-        assert!(o.status.success(), "{format}: {}", text(&o));
-        let got = io::read(&out).unwrap();
-        assert_ne!(got.points, input.points, "{format}: smoothed");
+        let got = smooth_to(&src, &out, format, &input);
         assert_eq!(got.data.gmsh_entities, input.data.gmsh_entities, "{format}: entities");
         assert_eq!(
             array(&got.data.point, GMSH_DIM_TAGS),
@@ -312,16 +302,16 @@ fn msh41_entities_and_node_entities_survive_smooth() {
             continue;
         }
         let resaved = dir.path().join(format!("{format}.gmsh.msh"));
-        let o = Command::new("gmsh")
-            .arg(&out)
-            .args(["-save", "-format", "msh41", "-o"])
-            .arg(&resaved)
-            .output()
-            .unwrap();
-        let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
-        assert!(
-            o.status.success() && !log.contains("Error"),
-            "{format}: gmsh -save:\n{log}"
+        run_gmsh(
+            &format!("{format}: -save"),
+            &[
+                &out,
+                Path::new("-save"),
+                Path::new("-format"),
+                Path::new("msh41"),
+                Path::new("-o"),
+                &resaved,
+            ],
         );
         let back = io::read(&resaved).unwrap();
         let shape = |m: &Mesh| -> Vec<(i32, i32, Vec<i32>, Vec<i32>)> {
