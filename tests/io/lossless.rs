@@ -374,3 +374,45 @@ fn bad_physical_names_are_refused_with_file_and_line() {
     assert_eq!(names, [(3, 2, "solid part"), (0, 9, "")]);
     assert_eq!(m.kinds, [ElementKind::Tetrahedron]);
 }
+
+/// A view naming a node or element the file does not have is refused with
+/// the file, the line and the view; so is a view before its mesh.
+#[test]
+fn bad_views_are_refused_with_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n\
+                $Elements\n1\n1 4 2 2 1 1 2 3 4\n$EndElements\n";
+    for (view, line, why) in [
+        (
+            "$NodeData\n1\n\"t\"\n1\n0\n3\n0\n1\n2\n1 5\n9 6\n$EndNodeData\n",
+            "line 25",
+            "'t' has a value for node 9, which is not in $Nodes",
+        ),
+        (
+            "$ElementData\n1\n\"p\"\n1\n0\n3\n0\n1\n1\n2 5\n$EndElementData\n",
+            "line 24",
+            "'p' has a value for element 2, which is not in $Elements",
+        ),
+        (
+            "$NodeData\n1\n\"t\"\n1\n0\n2\n0\n1\n$EndNodeData\n",
+            "line 22",
+            "expected the integer tags 'time-step components count'",
+        ),
+    ] {
+        let path = dir.path().join("bad-view.msh");
+        std::fs::write(&path, format!("{mesh}{view}")).unwrap();
+        let e = io::read(&path).expect_err(view).to_string();
+        assert!(
+            e.contains("bad-view.msh") && e.contains(line) && e.contains(why),
+            "{view}: {e}"
+        );
+    }
+    let path = dir.path().join("early-view.msh");
+    let early = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$NodeData\n1\n\"t\"\n1\n0\n3\n0\n1\n0\n$EndNodeData\n";
+    std::fs::write(&path, format!("{early}{}", &mesh[31..])).unwrap();
+    let e = io::read(&path).expect_err("view first").to_string();
+    assert!(
+        e.contains("early-view.msh") && e.contains("line 4") && e.contains("$NodeData before $Nodes"),
+        "{e}"
+    );
+}
