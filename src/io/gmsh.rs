@@ -764,6 +764,14 @@ fn write_physical_names(w: &mut dyn Write, mesh: &Mesh) -> WriteResult {
     if names.is_empty() {
         return Ok(());
     }
+    // what the reader refuses (Gmsh 4.8 crashes on a bad dimension) is not written either
+    if let Some(p) = names.iter().find(|p| !(0..=3).contains(&p.dim) || p.tag <= 0) {
+        return Err(Error::InvalidMesh(format!(
+            "cannot write physical group '{}' (dimension {}, tag {}): a Gmsh group has a dimension 0 to 3 and a positive tag",
+            p.name, p.dim, p.tag
+        ))
+        .into());
+    }
     writeln!(w, "$PhysicalNames\n{}", names.len())?;
     for p in names {
         let name: String = p.name.chars().filter(|&c| c != '"' && c != '\n').collect();

@@ -416,3 +416,23 @@ fn bad_views_are_refused_with_file_and_line() {
         "{e}"
     );
 }
+
+/// A physical group Gmsh cannot take, set by a program rather than read,
+/// is not written either: the write fails and leaves no file.
+#[test]
+fn bad_physical_names_are_not_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = Mesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+    m.push_element(ElementKind::Tetrahedron, &[0, 1, 2, 3]);
+    m.data.physical_names = vec![meshsmooth::mesh::PhysicalName {
+        dim: -5,
+        tag: 1,
+        name: "skin".into(),
+    }];
+    for f in [Format::Msh22Ascii, Format::Msh41Binary] {
+        let path = dir.path().join(format!("{f}.msh"));
+        let e = io::write(&path, &m, f, &[]).expect_err("dimension -5").to_string();
+        assert!(e.contains("'skin'") && e.contains("dimension -5"), "{f}: {e}");
+        assert!(!path.exists(), "{f}");
+    }
+}
