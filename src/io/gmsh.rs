@@ -6,8 +6,12 @@
 //! Each element's physical and elementary tags become the cell arrays
 //! `gmsh:physical` and `gmsh:geometrical` (meshio's names; in 4.1 files the
 //! physical tag is the first of its entity's, from `$Entities`), and
-//! `$PhysicalNames` is kept; the writers put them back, with an `$Entities`
-//! section in 4.1 that names every entity the elements use.
+//! `$PhysicalNames` is kept; the writers put them back. 4.1 entities and
+//! the entity of each node are kept too (`entities`), and `$NodeData` /
+//! `$ElementData` views become point and cell arrays and back (`views`).
+
+mod entities;
+mod views;
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -19,8 +23,9 @@ use super::batch::write_records;
 use super::lex::{Cursor, clip};
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
 use crate::error::{Error, Result};
-use crate::mesh::data::{GMSH_ELEMENTARY, GMSH_PHYSICAL};
+use crate::mesh::data::{GMSH_DIM_TAGS, GMSH_ELEMENTARY, GMSH_PHYSICAL};
 use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
+use views::{ElementTags, On};
 
 fn type_name(t: i64) -> &'static str {
     match t {
@@ -137,6 +142,12 @@ struct Reader<'a> {
     elementary: Vec<i64>,
     /// 4.1: the first physical tag of each (dim, entity tag).
     entity_physical: HashMap<(i32, i32), i64>,
+    /// 4.1: each node's entity, (dim, tag) after (dim, tag).
+    node_dim_tags: Vec<i64>,
+    /// The tag of every cell read.
+    element_tags: ElementTags,
+    /// Element tag to cell, built for the first `$ElementData`.
+    element_index: Option<TagMap>,
 }
 
 pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> Result<RawMesh> {
@@ -199,6 +210,9 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> 
         physical: Vec::new(),
         elementary: Vec::new(),
         entity_physical: HashMap::new(),
+        node_dim_tags: Vec::new(),
+        element_tags: ElementTags::default(),
+        element_index: None,
     };
     r.end("$EndMeshFormat")?;
     while let Some((_, t)) = r.c.line_tokens() {
@@ -207,6 +221,8 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> 
             "$Elements" => r.elements()?,
             "$PhysicalNames" => r.physical_names()?,
             "$Entities" if r.v4 => r.entities()?,
+            "$NodeData" => r.view(On::Nodes)?,
+            "$ElementData" => r.view(On::Elements)?,
             s if s.starts_with('$') && !s.starts_with("$End") => {
                 let end = format!("$End{}", &s[1..]);
                 if !r.c.skip_past(end.as_bytes()) {
@@ -228,6 +244,15 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> 
         return Err(Error::parse(path, None, "missing $Elements section"));
     }
     let mut raw = r.raw;
+    if r.v4 && r.node_dim_tags.len() == 2 * raw.points.len() {
+        raw.point_data.retain(|a| a.name != GMSH_DIM_TAGS);
+        raw.point_data.insert(
+            0,
+            DataArray::new(GMSH_DIM_TAGS, ValueType::I32, 2, Values::Int(r.node_dim_tags)),
+        );
+    }
+    // the tags first, then the views (a view named like a tag array gives way)
+    let views = std::mem::take(&mut raw.cell_data);
     raw.cell_data.push(DataArray::new(
         GMSH_PHYSICAL,
         ValueType::I32,
@@ -240,6 +265,11 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> 
         1,
         Values::Int(r.elementary),
     ));
+    raw.cell_data.extend(
+        views
+            .into_iter()
+            .filter(|a| a.name != GMSH_PHYSICAL && a.name != GMSH_ELEMENTARY),
+    );
     Ok(raw)
 }
 
@@ -359,9 +389,12 @@ impl Reader<'_> {
                     return Err(self.truncated("$Nodes", n, read));
                 }
                 let dim = self.uint(false, "entityDim")?;
-                self.uint(false, "entityTag")?;
+                let entity = self.int("entityTag")?;
                 let parametric = self.uint(false, "parametric")?;
                 let k = self.count(true, "numNodesInBlock")?;
+                for _ in 0..k {
+                    self.node_dim_tags.extend([dim as i64, i64::from(entity)]);
+                }
                 let extra = if parametric != 0 && (1..=2).contains(&dim) {
                     dim as usize
                 } else {
@@ -399,6 +432,7 @@ impl Reader<'_> {
     }
 
     fn element(&mut self, tag: u64, t: i64, wide: bool, physical: i64, elementary: i64) -> Result<()> {
+        self.element_tags.push(tag, self.physical.len());
         self.physical.push(physical);
         self.elementary.push(elementary);
         let shape = shape_of(tag, t).map_err(|m| self.err(m))?;
@@ -493,6 +527,9 @@ impl Reader<'_> {
             return false;
         }
         self.raw.push_block(shape, nv, ids);
+        for (i, r) in bytes.chunks_exact(rec).enumerate() {
+            self.element_tags.push(word(&r[..d]), self.physical.len() + i);
+        }
         self.physical.resize(self.physical.len() + k, physical);
         self.elementary.resize(self.elementary.len() + k, elementary);
         true
@@ -522,47 +559,32 @@ impl Reader<'_> {
             }
             let dim: i32 = t[0].parse().map_err(|_| bad())?;
             let tag: i32 = t[1].parse().map_err(|_| bad())?;
-            let name = t[2..].join(" ");
-            let name = name.trim_matches('"').to_string();
+            let quoted = t[2..].join(" ");
+            // Gmsh itself crashes on a group of another dimension: refuse it
+            // here rather than copy it into every output
+            if !(0..=3).contains(&dim) {
+                return Err(self.c.err(format!(
+                    "$PhysicalNames: physical group {tag} has dimension {dim}; a dimension is 0, 1, 2 or 3"
+                )));
+            }
+            if tag <= 0 {
+                return Err(self.c.err(format!(
+                    "$PhysicalNames: physical tag {tag} (dimension {dim}) is not positive"
+                )));
+            }
+            let name = match quoted.strip_prefix('"').and_then(|q| q.strip_suffix('"')) {
+                Some(name) => name.to_string(),
+                None => {
+                    return Err(self.c.err(format!(
+                        "$PhysicalNames: the name of physical group {tag} (dimension {dim}) is not in double \
+                         quotes: {}",
+                        clip(&quoted)
+                    )));
+                }
+            };
             self.raw.physical_names.push(PhysicalName { dim, tag, name });
         }
         self.end("$EndPhysicalNames")
-    }
-
-    /// 4.1 `$Entities`: the physical tags of every entity.
-    fn entities(&mut self) -> Result<()> {
-        let mut counts = [0usize; 4];
-        for c in &mut counts {
-            *c = self.count(true, "the number of entities")?;
-        }
-        for (dim, &n) in counts.iter().enumerate() {
-            for _ in 0..n {
-                if self.eof_text() {
-                    return Err(self.c.eof("$Entities"));
-                }
-                let tag = self.int("entity tag")?;
-                let coords = if dim == 0 { 3 } else { 6 };
-                for _ in 0..coords {
-                    self.coord("entity bounds")?;
-                }
-                let np = self.count(true, "numPhysicalTags")?;
-                let mut first = 0;
-                for i in 0..np {
-                    let p = self.int("physical tag")?;
-                    if i == 0 {
-                        first = p as i64;
-                    }
-                }
-                if dim > 0 {
-                    let nb = self.count(true, "numBoundingEntities")?;
-                    for _ in 0..nb {
-                        self.int("bounding entity tag")?;
-                    }
-                }
-                self.entity_physical.insert((dim as i32, tag), first);
-            }
-        }
-        self.end("$EndEntities")
     }
 
     fn elements(&mut self) -> Result<()> {
@@ -742,6 +764,14 @@ fn write_physical_names(w: &mut dyn Write, mesh: &Mesh) -> WriteResult {
     if names.is_empty() {
         return Ok(());
     }
+    // what the reader refuses (Gmsh 4.8 crashes on a bad dimension) is not written either
+    if let Some(p) = names.iter().find(|p| !(0..=3).contains(&p.dim) || p.tag <= 0) {
+        return Err(Error::InvalidMesh(format!(
+            "cannot write physical group '{}' (dimension {}, tag {}): a Gmsh group has a dimension 0 to 3 and a positive tag",
+            p.name, p.dim, p.tag
+        ))
+        .into());
+    }
     writeln!(w, "$PhysicalNames\n{}", names.len())?;
     for p in names {
         let name: String = p.name.chars().filter(|&c| c != '"' && c != '\n').collect();
@@ -749,88 +779,6 @@ fn write_physical_names(w: &mut dyn Write, mesh: &Mesh) -> WriteResult {
     }
     writeln!(w, "$EndPhysicalNames")?;
     Ok(())
-}
-
-/// An entity of a 4.1 file: every (dim, elementary tag) the cells use.
-struct Entity {
-    dim: usize,
-    tag: i32,
-    physical: Vec<i32>,
-    lo: [f64; 3],
-    hi: [f64; 3],
-}
-
-fn entities(mesh: &Mesh, cells: &[OutCell<'_>]) -> Vec<Entity> {
-    // each cell's entity, numbered in order of first appearance; runs of one
-    // entity (the usual case) skip the map
-    let mut index: HashMap<(usize, i32), usize> = HashMap::new();
-    let mut out: Vec<Entity> = Vec::new();
-    let mut of = Vec::with_capacity(cells.len());
-    let mut last: Option<((usize, i32), usize)> = None;
-    for c in cells {
-        let key = (c.dim, c.elementary);
-        let i = match last {
-            Some((k, i)) if k == key => i,
-            _ => *index.entry(key).or_insert_with(|| {
-                out.push(Entity {
-                    dim: c.dim,
-                    tag: c.elementary,
-                    physical: Vec::new(),
-                    lo: [f64::INFINITY; 3],
-                    hi: [f64::NEG_INFINITY; 3],
-                });
-                out.len() - 1
-            }),
-        };
-        last = Some((key, i));
-        of.push(i as u32);
-    }
-    // physical tags in order of first appearance and bounding boxes, per
-    // fixed chunk in parallel, merged in chunk order (min and max are exact)
-    const CHUNK: usize = 1 << 14;
-    let blank = |e: &Entity| Entity {
-        dim: e.dim,
-        tag: e.tag,
-        physical: Vec::new(),
-        lo: [f64::INFINITY; 3],
-        hi: [f64::NEG_INFINITY; 3],
-    };
-    let parts: Vec<Vec<Entity>> = cells
-        .par_chunks(CHUNK)
-        .zip(of.par_chunks(CHUNK))
-        .map(|(cs, is)| {
-            let mut ents: Vec<Entity> = out.iter().map(blank).collect();
-            for (c, &i) in cs.iter().zip(is) {
-                let e = &mut ents[i as usize];
-                if c.physical != 0 && !e.physical.contains(&c.physical) {
-                    e.physical.push(c.physical);
-                }
-                for &v in c.vs.iter() {
-                    let p = mesh.points[v as usize];
-                    for k in 0..3 {
-                        e.lo[k] = e.lo[k].min(p[k]);
-                        e.hi[k] = e.hi[k].max(p[k]);
-                    }
-                }
-            }
-            ents
-        })
-        .collect();
-    for part in parts {
-        for (e, p) in out.iter_mut().zip(part) {
-            for ph in p.physical {
-                if !e.physical.contains(&ph) {
-                    e.physical.push(ph);
-                }
-            }
-            for k in 0..3 {
-                e.lo[k] = e.lo[k].min(p.lo[k]);
-                e.hi[k] = e.hi[k].max(p.hi[k]);
-            }
-        }
-    }
-    out.sort_by_key(|e| (e.dim, e.tag));
-    out
 }
 
 pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
@@ -890,7 +838,7 @@ pub(crate) fn write22(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     }
     check_cell_data(mesh, cell_data)?;
     writeln!(w, "$EndElements")?;
-    Ok(())
+    views::write_views(w, mesh, binary)
 }
 
 pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], binary: bool) -> WriteResult {
@@ -928,71 +876,35 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     writeln!(w, "$EndMeshFormat")?;
     write_physical_names(w, mesh)?;
     let cells = output_cells(mesh);
-    let ents = entities(mesh, &cells);
-    // $Entities: Gmsh refuses element blocks whose entity it does not know.
-    writeln!(w, "$Entities")?;
-    let count = |d: usize| ents.iter().filter(|e| e.dim == d).count() as u64;
-    nums(w, &mut buf, &[], &[count(0), count(1), count(2), count(3)])?;
-    for e in &ents {
-        let mut line = String::new();
-        if binary {
-            buf.extend_from_slice(&e.tag.to_le_bytes());
-        } else {
-            line.push_str(&e.tag.to_string());
-        }
-        let reals: Vec<f64> = if e.dim == 0 {
-            e.lo.to_vec()
-        } else {
-            e.lo.iter().chain(&e.hi).copied().collect()
-        };
-        for x in reals {
-            if binary {
-                buf.extend_from_slice(&x.to_le_bytes());
-            } else {
-                line.push(' ');
-                line.push_str(&fmt_f64(x));
-            }
-        }
-        if binary {
-            buf.extend_from_slice(&(e.physical.len() as u64).to_le_bytes());
-            e.physical.iter().for_each(|p| buf.extend_from_slice(&p.to_le_bytes()));
-            if e.dim > 0 {
-                buf.extend_from_slice(&0u64.to_le_bytes());
-            }
-        } else {
-            line.push_str(&format!(" {}", e.physical.len()));
-            for p in &e.physical {
-                line.push_str(&format!(" {p}"));
-            }
-            if e.dim > 0 {
-                line.push_str(" 0");
-            }
-            writeln!(w, "{line}")?;
-        }
-    }
-    flush(w, &mut buf)?;
-    writeln!(w, "$EndEntities\n$Nodes")?;
-    // every node in one block, on the entity of the first element
-    let (ndim, ntag) = cells.first().map_or((mesh.dim(), 1), |c| (c.dim, c.elementary));
-    let nblocks = u64::from(n > 0);
-    nums(w, &mut buf, &[], &[nblocks, n as u64, 1.min(n as u64), n as u64])?;
-    if n > 0 {
-        nums(w, &mut buf, &[ndim as i32, ntag, 0], &[n as u64])?;
+    let blocks = entities::node_blocks(mesh, &cells);
+    entities::write_entities(w, &entities::entities(mesh, &cells, &blocks), binary)?;
+    writeln!(w, "$Nodes")?;
+    nums(
+        w,
+        &mut buf,
+        &[],
+        &[blocks.len() as u64, n as u64, 1.min(n as u64), n as u64],
+    )?;
+    for b in &blocks {
+        let (start, k) = (b.nodes.start, b.nodes.len());
+        nums(w, &mut buf, &[b.dim as i32, b.tag, 0], &[k as u64])?;
         if binary {
             // tags and coordinates encoded in parallel batches
             w.write_all(&buf)?;
             buf.clear();
-            write_records(w, n, 8, |i, out| out.copy_from_slice(&(i as u64 + 1).to_le_bytes()))?;
-            write_records(w, n, 24, |i, out| {
-                for (k, c) in mesh.points[i].iter().enumerate() {
-                    out[8 * k..8 * k + 8].copy_from_slice(&c.to_le_bytes());
+            write_records(w, k, 8, |i, out| {
+                out.copy_from_slice(&((start + i) as u64 + 1).to_le_bytes())
+            })?;
+            write_records(w, k, 24, |i, out| {
+                for (c, x) in mesh.points[start + i].iter().enumerate() {
+                    out[8 * c..8 * c + 8].copy_from_slice(&x.to_le_bytes());
                 }
             })?;
         } else {
-            for i in 1..=n as u64 {
-                nums(w, &mut buf, &[], &[i])?;
+            for i in b.nodes.clone() {
+                nums(w, &mut buf, &[], &[i as u64 + 1])?;
             }
-            for p in &mesh.points {
+            for p in &mesh.points[b.nodes.clone()] {
                 writeln!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
             }
         }
@@ -1037,7 +949,7 @@ pub(crate) fn write41(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bi
     flush(w, &mut buf)?;
     check_cell_data(mesh, cell_data)?;
     writeln!(w, "$EndElements")?;
-    Ok(())
+    views::write_views(w, mesh, binary)
 }
 
 #[cfg(test)]

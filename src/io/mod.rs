@@ -8,10 +8,14 @@
 //! - vertices of lower cells are fixed; so are those flagged by VTK point data
 //!   `fixed`, Medit RequiredVertices, or Gmsh point elements. `Mesh::fixed` is
 //!   left empty when no vertex is fixed;
-//! - VTK/VTU files store elements only (no lower cells) and carry `fixed` as
-//!   point data; Gmsh stores fixed vertices not covered by lower cells as
-//!   point elements (type 15), which read back as lower `Vertex` cells; Medit
-//!   stores them as RequiredVertices and groups elements by kind;
+//! - VTK/VTU files store the elements, then the lower cells (`vtk_cells`);
+//!   their cell arrays cover both, the lower cells' values from
+//!   `MeshData::lower`, and where there are none (the `cell_data` quality
+//!   arrays, which measure elements only) NaN for floats, 0 for integers
+//!   and "" for strings. `.pvtu` pieces hold elements only. VTK/VTU carry
+//!   `fixed` as point data; Gmsh stores fixed vertices not covered by lower
+//!   cells as point elements (type 15), which read back as lower `Vertex`
+//!   cells; Medit stores them as RequiredVertices and groups elements by kind;
 //! - the input's point, cell and field arrays live in `Mesh::data` and are
 //!   written to VTK/VTU (all of them, after the `cell_data` quality arrays of
 //!   [`write`] replace any input array of the same name); Gmsh keeps the
@@ -30,6 +34,7 @@ mod medit;
 mod pvtu;
 mod smoothed;
 mod vtk;
+mod vtk_cells;
 mod vtu;
 
 pub use atomic::{Staged, is_stream, same_file, same_target, stage, write_atomic};
@@ -46,7 +51,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
+use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName};
 
 /// File formats meshsmooth reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -219,18 +224,23 @@ impl Format {
         }
     }
 
-    /// Whether the format stores lower-dimensional cells (VTK and VTU do not:
-    /// ParaView would mix them with the elements).
+    /// Whether the format stores lower-dimensional cells (boundary faces and
+    /// lines, points) and their cell arrays: every format does.
     pub fn keeps_lower_cells(self) -> bool {
-        !matches!(
+        match self {
+            Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => true,
+            Format::Msh22Ascii | Format::Msh22Binary | Format::Msh41Ascii | Format::Msh41Binary => true,
+            Format::Medit => true,
+        }
+    }
+
+    /// Whether the format stores per-element data given to [`write`]
+    /// (VTK and VTU).
+    pub fn keeps_cell_data(self) -> bool {
+        matches!(
             self,
             Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib
         )
-    }
-
-    /// Whether the format stores per-element data given to [`write`].
-    pub fn keeps_cell_data(self) -> bool {
-        !self.keeps_lower_cells()
     }
 }
 
@@ -535,27 +545,6 @@ impl From<Error> for WriteError {
 /// What a writer returns.
 pub type WriteResult = std::result::Result<(), WriteError>;
 
-/// The cell arrays a VTK/VTU writer writes: the input's, except those a
-/// quality array of the same name replaces, then the quality arrays.
-pub(crate) fn out_cell_arrays<'a>(mesh: &'a Mesh, cell_data: &[CellData]) -> Vec<std::borrow::Cow<'a, DataArray>> {
-    let mut out: Vec<std::borrow::Cow<DataArray>> = mesh
-        .data
-        .cell
-        .iter()
-        .filter(|a| !cell_data.iter().any(|c| c.name == a.name))
-        .map(std::borrow::Cow::Borrowed)
-        .collect();
-    out.extend(cell_data.iter().map(|c| {
-        std::borrow::Cow::Owned(DataArray::new(
-            c.name,
-            ValueType::F64,
-            1,
-            Values::Float(c.values.to_vec()),
-        ))
-    }));
-    out
-}
-
 /// Checked by every writer right before it writes cell data, so a bad array
 /// fails the write midway and exercises the atomic clean-up.
 fn check_cell_data(mesh: &Mesh, cell_data: &[CellData]) -> Result<()> {
@@ -611,6 +600,7 @@ pub(crate) struct RawMesh {
     /// Arrays of the whole data set.
     pub field_data: Vec<DataArray>,
     pub physical_names: Vec<PhysicalName>,
+    pub gmsh_entities: Vec<crate::mesh::data::GmshEntity>,
 }
 
 impl RawMesh {
@@ -694,6 +684,7 @@ impl RawMesh {
         mesh.data.cell = self.cell_data;
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
+        mesh.data.gmsh_entities = self.gmsh_entities;
         let mut fixed = self.fixed;
         if fixed.iter().any(|&f| f) {
             fixed.resize(n, false);
@@ -786,6 +777,7 @@ impl RawMesh {
         }
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
+        mesh.data.gmsh_entities = self.gmsh_entities;
         if fixed.iter().any(|&f| f) {
             mesh.fixed = fixed;
         }

@@ -10,7 +10,8 @@ use std::io::Write;
 use std::path::Path;
 
 use super::lex::{Cursor, Endian, Scalar, as_index, clip, empty_values, push_val};
-use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
+use super::vtk_cells::{cell_types, out_cell_arrays};
+use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
 use crate::error::{Error, Result};
 use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
 
@@ -892,11 +893,17 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
             ElementKind::Polyhedron => 2 + mesh.faces.of(e).map(|f| 1 + f.len()).sum::<usize>(),
             _ => 1 + mesh.element(e).len(),
         })
+        .chain(mesh.lower.iter().map(|(_, vs)| 1 + vs.len()))
         .sum();
-    writeln!(w, "CELLS {ne} {size}")?;
+    // the lower cells follow the elements (see `vtk_cells`)
+    let nc = ne + mesh.lower.len();
+    writeln!(w, "CELLS {nc} {size}")?;
     let mut buf = Vec::new();
-    for e in 0..ne {
-        let vs = cell_values(e);
+    for c in 0..nc {
+        let vs = match c.checked_sub(ne) {
+            None => cell_values(c),
+            Some(l) => mesh.lower[l].1.clone(),
+        };
         if binary {
             buf.extend_from_slice(&(vs.len() as i32).to_be_bytes());
             for &v in vs.iter() {
@@ -914,8 +921,8 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
         w.write_all(&buf)?;
         writeln!(w)?;
     }
-    writeln!(w, "CELL_TYPES {ne}")?;
-    write_ints(w, binary, mesh.kinds.iter().map(|k| k.vtk_id() as i32))?;
+    writeln!(w, "CELL_TYPES {nc}")?;
+    write_ints(w, binary, cell_types(mesh).map(i32::from))?;
     let point_arrays: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
     if !mesh.fixed.is_empty() || !point_arrays.is_empty() {
         writeln!(w, "POINT_DATA {n}")?;
@@ -929,7 +936,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
     check_cell_data(mesh, cell_data)?;
     let cells = out_cell_arrays(mesh, cell_data);
     if !cells.is_empty() {
-        writeln!(w, "CELL_DATA {ne}")?;
+        writeln!(w, "CELL_DATA {nc}")?;
         let refs: Vec<&DataArray> = cells.iter().map(|c| c.as_ref()).collect();
         write_field(w, &refs, binary)?;
     }

@@ -25,7 +25,8 @@ use super::codec::{B64Source, Codec, Layout, RawSource, Source, b64_encode, b64_
 use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val};
 use super::limits::Budget;
 use super::vtk::{vtk_shape, vtk_type_name};
-use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, out_cell_arrays};
+use super::vtk_cells::{cell_types, lower_connectivity, out_cell_arrays};
+use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
 use crate::error::{Error, Location, Result};
 use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
 
@@ -1487,7 +1488,9 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         }
         writeln!(o.w, "    </FieldData>")?;
     }
-    writeln!(o.w, "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{ne}\">")?;
+    // the lower cells follow the elements (see `vtk_cells`)
+    let nc = ne + mesh.lower.len();
+    writeln!(o.w, "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{nc}\">")?;
     let points_data: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
     if !mesh.fixed.is_empty() || !points_data.is_empty() {
         writeln!(o.w, "      <PointData>")?;
@@ -1506,6 +1509,8 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         writeln!(o.w, "      </PointData>")?;
     }
     let ids = &mesh.conn[mesh.offsets[0]..mesh.offsets[ne]];
+    let (lower_ids, lower_ends) = lower_connectivity(mesh, ids.len());
+    let types: Vec<u8> = cell_types(mesh).collect();
     if enc == Encoding::Base64 {
         // straight from the mesh, with no copy of points, ids, offsets or types
         let le = |out: &mut Vec<u8>, b: &[u8]| out.extend_from_slice(b);
@@ -1515,13 +1520,25 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         })?;
         writeln!(o.w, "      </Points>")?;
         writeln!(o.w, "      <Cells>")?;
-        o.b64_array("connectivity", ValueType::I64, 1, ids.len(), |i, out| {
-            le(out, &(ids[i] as i64).to_le_bytes())
+        let id = |i: usize| ids.get(i).copied().unwrap_or_else(|| lower_ids[i - ids.len()]);
+        o.b64_array(
+            "connectivity",
+            ValueType::I64,
+            1,
+            ids.len() + lower_ids.len(),
+            |i, out| le(out, &(id(i) as i64).to_le_bytes()),
+        )?;
+        let end = |c: usize| {
+            if c < ne {
+                mesh.offsets[c + 1]
+            } else {
+                lower_ends[c - ne]
+            }
+        };
+        o.b64_array("offsets", ValueType::I64, 1, nc, |c, out| {
+            le(out, &(end(c) as i64).to_le_bytes())
         })?;
-        o.b64_array("offsets", ValueType::I64, 1, ne, |i, out| {
-            le(out, &(mesh.offsets[i + 1] as i64).to_le_bytes())
-        })?;
-        o.b64_array("types", ValueType::U8, 1, ne, |i, out| out.push(mesh.kinds[i].vtk_id()))?;
+        o.b64_array("types", ValueType::U8, 1, nc, |c, out| out.push(types[c]))?;
     } else {
         writeln!(o.w, "      <Points>")?;
         let pts = DataArray::new(
@@ -1533,15 +1550,16 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         o.array("        ", &pts)?;
         writeln!(o.w, "      </Points>")?;
         writeln!(o.w, "      <Cells>")?;
-        let conn = ids.par_iter().map(|&v| v as i64).collect();
+        let conn = ids.par_iter().chain(&lower_ids).map(|&v| v as i64).collect();
         let conn = DataArray::new("connectivity", ValueType::I64, 1, Values::Int(conn));
-        o.array_rows("        ", &conn, Some(&mesh.offsets))?;
-        let offs: Vec<i64> = mesh.offsets[1..].iter().map(|&x| x as i64).collect();
+        let rows: Vec<usize> = mesh.offsets.iter().chain(&lower_ends).copied().collect();
+        o.array_rows("        ", &conn, Some(&rows))?;
+        let offs: Vec<i64> = rows[1..].iter().map(|&x| x as i64).collect();
         o.array(
             "        ",
             &DataArray::new("offsets", ValueType::I64, 1, Values::Int(offs)),
         )?;
-        let types: Vec<i64> = mesh.kinds.iter().map(|k| k.vtk_id() as i64).collect();
+        let types: Vec<i64> = types.iter().map(|&t| i64::from(t)).collect();
         o.array(
             "        ",
             &DataArray::new("types", ValueType::U8, 1, Values::Int(types)),
@@ -1563,6 +1581,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
             }
             ends.push(stream.len() as i64);
         }
+        ends.resize(nc, -1);
         o.array(
             "        ",
             &DataArray::new("faces", ValueType::I64, 1, Values::Int(stream)),

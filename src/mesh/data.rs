@@ -163,6 +163,28 @@ pub struct PhysicalName {
     pub name: String,
 }
 
+/// A Gmsh 4.1 `$Entities` entry (a geometric point, curve, surface or
+/// volume), kept so that a 4.1 output lists the input's entities, empty
+/// ones too, as they were.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GmshEntity {
+    /// 0 (point) to 3 (volume).
+    pub dim: i32,
+    /// The entity's tag (unique within its dimension).
+    pub tag: i32,
+    /// Bounding box: min x, y, z, then max x, y, z (a point's are equal).
+    pub bounds: [f64; 6],
+    /// The physical groups it belongs to.
+    pub physical: Vec<i32>,
+    /// Its bounding entities of dimension `dim - 1`, signed by orientation
+    /// (none for points).
+    pub bounding: Vec<i32>,
+}
+
+/// The point array of each node's Gmsh entity, as (dim, tag) pairs (meshio's
+/// name): from 4.1 `$Nodes` blocks, written back as node blocks.
+pub const GMSH_DIM_TAGS: &str = "gmsh:dim_tags";
+
 /// Names of the cell arrays that hold Gmsh's tags (meshio's names, so a
 /// meshio-written VTU keeps its groups through a `.msh` output).
 pub const GMSH_PHYSICAL: &str = "gmsh:physical";
@@ -183,6 +205,9 @@ pub struct MeshData {
     pub field: Vec<DataArray>,
     /// Gmsh `$PhysicalNames`.
     pub physical_names: Vec<PhysicalName>,
+    /// Gmsh 4.1 `$Entities` (empty when the input had none).
+    #[serde(default)]
+    pub gmsh_entities: Vec<GmshEntity>,
 }
 
 impl MeshData {
@@ -193,6 +218,7 @@ impl MeshData {
             && self.lower.is_empty()
             && self.field.is_empty()
             && self.physical_names.is_empty()
+            && self.gmsh_entities.is_empty()
     }
 
     /// The element array called `name`, if any.

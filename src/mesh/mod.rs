@@ -45,6 +45,16 @@ impl LowerKind {
             LowerKind::Quadrilateral => 4,
         }
     }
+
+    /// VTK cell type id (`VTK_VERTEX`, `VTK_LINE`, `VTK_TRIANGLE`, `VTK_QUAD`).
+    pub fn vtk_id(self) -> u8 {
+        match self {
+            LowerKind::Vertex => 1,
+            LowerKind::Line => 3,
+            LowerKind::Triangle => 5,
+            LowerKind::Quadrilateral => 9,
+        }
+    }
 }
 
 /// An unstructured mesh: points, elements of mixed kinds (in file order), optional

@@ -1,7 +1,10 @@
 //! Files written by other tools: VTK 9.7 (ParaView's writers), meshio 5.3 and
 //! Gmsh 4.8. Each is read with the counts its manifest gives, written in every
-//! output format, read back, and its data arrays compared; Gmsh reads back
-//! every `.msh` meshsmooth writes with its physical groups intact.
+//! output format, read back, and its cells (lower cells too), groups and data
+//! arrays compared as far as the format holds them; meshio reads every VTK
+//! and VTU output and Gmsh every `.msh` output with the same counts and
+//! values, and Gmsh reads back every `.msh` meshsmooth writes with its
+//! physical groups intact.
 //!
 //! `tests/data/interop/` holds a few of the files so the tests run anywhere;
 //! the whole set is `../shared/interop/` (skipped with a message if absent).
@@ -11,14 +14,14 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use meshsmooth::io::{self, Format};
-use meshsmooth::mesh::data::{GMSH_ELEMENTARY, GMSH_PHYSICAL};
+use meshsmooth::mesh::data::{GMSH_DIM_TAGS, GMSH_ELEMENTARY, GMSH_PHYSICAL};
 use meshsmooth::mesh::{DataArray, ElementKind, LowerKind, Mesh, ValueType, Values};
 
 fn local_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop")
 }
 
-fn shared_dir() -> Option<PathBuf> {
+pub(crate) fn shared_dir() -> Option<PathBuf> {
     let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/interop");
     if d.join("MANIFEST.tsv").is_file() {
         Some(d)
@@ -163,6 +166,8 @@ fn check_folder(dir: &Path) -> usize {
     let rows = manifest(dir);
     assert!(!rows.is_empty(), "{}: empty manifest", dir.display());
     let out = tempfile::tempdir().unwrap();
+    // every output, read back by meshio or Gmsh once all are written
+    let (mut check_by_meshio, mut check_by_gmsh) = (Vec::new(), Vec::new());
     for row in &rows {
         let path = dir.join(&row.file);
         let name = &row.file;
@@ -209,12 +214,18 @@ fn check_folder(dir: &Path) -> usize {
             assert_eq!(got.points, m.points, "{ctx}: points");
             assert_eq!(got.kinds, m.kinds, "{ctx}: kinds");
             assert_eq!(got.conn, m.conn, "{ctx}: connectivity");
+            check_lower_cells(&ctx, f, &got, &m);
             if is_vtk(f) {
                 // every array, exactly: names, types, components, values
                 assert_arrays_eq(&format!("{ctx}: point data"), &got.data.point, &m.data.point);
                 assert_arrays_eq(&format!("{ctx}: cell data"), &got.data.cell, &m.data.cell);
                 assert_arrays_eq(&format!("{ctx}: field data"), &got.data.field, &m.data.field);
+                if !m.data.lower.is_empty() {
+                    assert_arrays_eq(&format!("{ctx}: lower-cell data"), &got.data.lower, &m.data.lower);
+                }
+                check_by_meshio.push((p, got));
             } else if f != Format::Medit {
+                check_gmsh_data(&ctx, f, &got, &m);
                 assert_eq!(got.data.physical_names, m.data.physical_names, "{ctx}: physical names");
                 for tag in [GMSH_PHYSICAL, GMSH_ELEMENTARY] {
                     let want: Vec<i64> = match m.data.cell_array(tag) {
@@ -231,10 +242,171 @@ fn check_folder(dir: &Path) -> usize {
                         }
                     }
                 }
+                check_by_gmsh.push((p, got));
             }
         }
     }
+    meshio_reads_as_we_do(&check_by_meshio);
+    gmsh_reads_as_we_do(&check_by_gmsh);
     rows.len()
+}
+
+/// Every format keeps the lower cells: in order, except that Medit groups
+/// them by kind.
+fn check_lower_cells(ctx: &str, f: Format, got: &Mesh, want: &Mesh) {
+    assert!(f.keeps_lower_cells(), "{ctx}");
+    assert_eq!(
+        cell_counts(got),
+        cell_counts(want),
+        "{ctx}: cells by type, lower cells too"
+    );
+    if f != Format::Medit {
+        assert!(got.lower == want.lower, "{ctx}: lower cells");
+    }
+}
+
+/// A Gmsh output keeps the numeric point and cell arrays as views (values
+/// as f64), and a 4.1 output the entities and each node's entity.
+fn check_gmsh_data(ctx: &str, f: Format, got: &Mesh, want: &Mesh) {
+    let structure = [GMSH_PHYSICAL, GMSH_ELEMENTARY, GMSH_DIM_TAGS, "fixed"];
+    for (what, have, arrays) in [
+        ("point", &got.data.point, &want.data.point),
+        ("cell", &got.data.cell, &want.data.cell),
+    ] {
+        for a in arrays
+            .iter()
+            .filter(|a| a.ty != ValueType::Str && !structure.contains(&a.name.as_str()))
+        {
+            let g = have
+                .iter()
+                .find(|g| g.name == a.name)
+                .unwrap_or_else(|| panic!("{ctx}: {what} array '{}' not kept as a view", a.name));
+            assert_eq!(
+                (g.ty, g.components),
+                (ValueType::F64, a.components),
+                "{ctx}: '{}'",
+                a.name
+            );
+            let same = (0..a.values.len()).all(|i| g.get_f64(i).to_bits() == a.get_f64(i).to_bits());
+            assert!(same, "{ctx}: {what} array '{}' values", a.name);
+        }
+    }
+    // (without entities of its own, a mesh gets those its cells use)
+    if matches!(f, Format::Msh41Ascii | Format::Msh41Binary) && !want.data.gmsh_entities.is_empty() {
+        assert_eq!(got.data.gmsh_entities, want.data.gmsh_entities, "{ctx}: entities");
+        if let Some(a) = want.data.point.iter().find(|a| a.name == GMSH_DIM_TAGS) {
+            let g = got
+                .data
+                .point
+                .iter()
+                .find(|g| g.name == GMSH_DIM_TAGS)
+                .expect("gmsh:dim_tags");
+            assert_eq!(g.values, a.values, "{ctx}: the entity of each node");
+        }
+    }
+}
+
+/// meshio 5.3 reads each VTK/VTU file with the cells and numeric cell
+/// arrays (elements, then lower cells) meshsmooth reads from it. meshio
+/// reads no string arrays (neither in VTK's own files), so a mesh with one
+/// is checked in a copy written without them.
+fn meshio_reads_as_we_do(files: &[(PathBuf, Mesh)]) {
+    let Some(python) = meshio_python() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let paths: Vec<PathBuf> = files
+        .iter()
+        .enumerate()
+        .map(|(i, (p, m))| {
+            let strings = |a: &[DataArray]| a.iter().any(|a| a.ty == ValueType::Str);
+            if !strings(&m.data.point) && !strings(&m.data.cell) && !strings(&m.data.field) {
+                return p.clone();
+            }
+            let mut bare = m.clone();
+            for arrays in [
+                &mut bare.data.point,
+                &mut bare.data.cell,
+                &mut bare.data.lower,
+                &mut bare.data.field,
+            ] {
+                arrays.retain(|a| a.ty != ValueType::Str);
+            }
+            let copy = dir
+                .path()
+                .join(format!("{i}.{}", p.file_name().unwrap().to_string_lossy()));
+            io::write(&copy, &bare, Format::of_file(p).unwrap(), &[]).unwrap();
+            copy
+        })
+        .collect();
+    let script = [
+        "import sys, json, meshio, numpy as np",
+        "out = []",
+        "for p in sys.argv[1:]:",
+        "    m = meshio.read(p)",
+        "    cells = {}",
+        "    for c in m.cells:",
+        "        cells[c.type] = cells.get(c.type, 0) + len(c.data)",
+        "    data = {}",
+        "    for k, blocks in m.cell_data.items():",
+        "        if all(b.dtype.kind in 'iuf' for b in blocks):",
+        "            v = np.concatenate([np.asarray(b, dtype=float).ravel() for b in blocks])",
+        "            data[k] = [None if np.isnan(x) else float(x) for x in v]",
+        "    out.append([len(m.points), cells, data])",
+        "print(json.dumps(out))",
+    ]
+    .join("\n");
+    type Read = (usize, BTreeMap<String, usize>, BTreeMap<String, Vec<Option<f64>>>);
+    let o = Command::new(&python)
+        .args(["-c", &script])
+        .args(&paths)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "meshio: {}", String::from_utf8_lossy(&o.stderr));
+    let read: Vec<Read> = serde_json::from_slice(&o.stdout).unwrap();
+    for ((path, m), (points, cells, data)) in files.iter().zip(read) {
+        let ctx = format!("{} read by meshio", path.display());
+        assert_eq!(points, m.num_points(), "{ctx}: points");
+        assert_eq!(cells, cell_counts(m), "{ctx}: cells by type");
+        for a in m.data.cell.iter().filter(|a| a.ty != ValueType::Str) {
+            let lower = m.data.lower_array(&a.name);
+            let want: Vec<Option<f64>> = (0..a.values.len())
+                .map(|i| a.get_f64(i))
+                .chain(lower.iter().flat_map(|l| (0..l.values.len()).map(|i| l.get_f64(i))))
+                .map(|x| (!x.is_nan()).then_some(x))
+                .collect();
+            assert_eq!(data.get(&a.name), Some(&want), "{ctx}: cell array '{}'", a.name);
+        }
+    }
+}
+
+/// Gmsh loads each `.msh` file (`-check`) with as many nodes and elements
+/// (lower cells included) as meshsmooth reads from it.
+fn gmsh_reads_as_we_do(files: &[(PathBuf, Mesh)]) {
+    if files.is_empty() || !gmsh_available() {
+        return;
+    }
+    for (path, m) in files {
+        let log = run_gmsh(
+            &format!("{} -check", path.display()),
+            &[path.as_os_str(), "-check".as_ref()],
+        );
+        let count = |what: &str| {
+            log.lines()
+                .filter_map(|l| {
+                    l.strip_prefix("Info    : ")?
+                        .strip_suffix(what)?
+                        .trim()
+                        .parse::<usize>()
+                        .ok()
+                })
+                .next_back()
+                .unwrap_or_else(|| panic!("{}: no '{what}' count in:\n{log}", path.display()))
+        };
+        let ctx = format!("{} read by Gmsh", path.display());
+        assert_eq!(count(" nodes"), m.num_points(), "{ctx}: nodes");
+        assert_eq!(count(" elements"), m.num_elements() + m.lower.len(), "{ctx}: elements");
+    }
 }
 
 /// Values VTK's files are known to hold (see the shared README): a
@@ -266,7 +438,7 @@ fn check_known_values(name: &str, m: &Mesh) {
 
 #[test]
 fn local_copies_of_other_tools_files_round_trip_with_their_data() {
-    assert_eq!(check_folder(&local_dir()), 7);
+    assert_eq!(check_folder(&local_dir()), 8);
 }
 
 /// Wedges with their base reversed, as Gmsh's VTK export writes them (its
@@ -361,7 +533,7 @@ fn groups_by_geometry(m: &Mesh) -> HashMap<Vec<[i64; 3]>, i64> {
     out
 }
 
-fn gmsh_available() -> bool {
+pub(crate) fn gmsh_available() -> bool {
     let ok = Command::new("gmsh")
         .arg("--version")
         .output()
@@ -374,6 +546,18 @@ fn gmsh_available() -> bool {
         eprintln!("skipping the Gmsh read-back test: gmsh is not installed (apt-get install gmsh)");
     }
     ok
+}
+
+/// Runs `gmsh` with `args`, asserting that it succeeds without an error
+/// (`ctx` says what for); its output.
+pub(crate) fn run_gmsh<S: AsRef<std::ffi::OsStr>>(ctx: &str, args: &[S]) -> String {
+    let o = Command::new("gmsh").args(args).output().unwrap();
+    let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && !log.contains("Error"),
+        "{ctx}: gmsh failed:\n{log}"
+    );
+    log
 }
 
 /// Gmsh loads every `.msh` meshsmooth writes (`-check`), and saves it again
@@ -408,23 +592,12 @@ fn gmsh_reads_back_every_msh_meshsmooth_writes() {
             let name = src.file_name().unwrap().to_string_lossy().to_string();
             let out = dir.path().join(format!("{name}.{f}.msh"));
             io::write(&out, &m, f, &[]).unwrap();
-            let check = Command::new("gmsh").arg(&out).arg("-check").output().unwrap();
-            let log = String::from_utf8_lossy(&check.stdout).to_string() + &String::from_utf8_lossy(&check.stderr);
-            assert!(
-                check.status.success() && !log.contains("Error"),
-                "{name} as {f}: gmsh -check failed:\n{log}"
-            );
+            run_gmsh(&format!("{name} as {f}: -check"), &[out.as_os_str(), "-check".as_ref()]);
             let resaved = dir.path().join(format!("{name}.{f}.resaved.msh"));
-            let save = Command::new("gmsh")
-                .arg(&out)
-                .args(["-save", "-format", "msh22", "-o"])
-                .arg(&resaved)
-                .output()
-                .unwrap();
-            let log = String::from_utf8_lossy(&save.stdout).to_string() + &String::from_utf8_lossy(&save.stderr);
-            assert!(
-                save.status.success() && !log.contains("Error"),
-                "{name} as {f}: gmsh -save:\n{log}"
+            let save = ["-save", "-format", "msh22", "-o"].map(std::ffi::OsStr::new);
+            run_gmsh(
+                &format!("{name} as {f}: -save"),
+                &[&[out.as_os_str()], &save[..], &[resaved.as_os_str()]].concat(),
             );
             let back = io::read(&resaved).unwrap_or_else(|e| panic!("{name} as {f}, saved by Gmsh: {e}"));
             assert_eq!(groups_by_geometry(&back), want, "{name} as {f}: groups after Gmsh");
@@ -515,8 +688,10 @@ fn data_arrays_follow_a_reordering() {
     }
 }
 
-/// A Python with meshio: `MESHSMOOTH_PYTHON`, else the checkout's `.venv`.
-fn meshio_python() -> Option<PathBuf> {
+/// A Python with meshio: `MESHSMOOTH_PYTHON`, else the checkout's `.venv`;
+/// `None` (said) where there is none, except under CI, which must have it
+/// (see .ci/install-test-deps).
+pub(crate) fn meshio_python() -> Option<PathBuf> {
     let p = std::env::var_os("MESHSMOOTH_PYTHON")
         .map(PathBuf::from)
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
@@ -524,6 +699,14 @@ fn meshio_python() -> Option<PathBuf> {
         .args(["-c", "import meshio"])
         .output()
         .is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "no Python with meshio at {}, and CI must run the meshio read-back tests (see .ci/install-test-deps)",
+            p.display()
+        );
+        eprintln!("skipping the meshio read-back: no Python with meshio (set MESHSMOOTH_PYTHON)");
+    }
     ok.then_some(p)
 }
 
@@ -533,7 +716,6 @@ fn meshio_python() -> Option<PathBuf> {
 #[test]
 fn meshio_reads_our_legacy_vtk_arrays() {
     let Some(python) = meshio_python() else {
-        eprintln!("skipped: no Python with meshio (set MESHSMOOTH_PYTHON)");
         return;
     };
     let mut m = Mesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);

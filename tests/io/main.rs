@@ -11,4 +11,5 @@ mod bad_input_io;
 mod bombs;
 mod interop;
 mod io_roundtrip;
+mod lossless;
 mod pvtu;
