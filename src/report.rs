@@ -30,6 +30,16 @@ pub struct Stats {
     pub max_min_ratio: f64,
 }
 
+/// The sum of `f` over `values` in parallel, the same to the last bit on
+/// every run (fixed chunks, summed in order), so reports repeat exactly.
+fn chunked_sum(values: &[f64], f: impl Fn(f64) -> f64 + Sync) -> f64 {
+    let parts: Vec<f64> = values
+        .par_chunks(1 << 14)
+        .map(|c| c.iter().map(|&v| f(v)).sum())
+        .collect();
+    parts.iter().sum()
+}
+
 impl Stats {
     /// The statistics of `values`.
     pub fn of(values: &[f64]) -> Stats {
@@ -46,16 +56,27 @@ impl Stats {
                 max_min_ratio: nan,
             };
         }
-        let mut sorted = values.to_vec();
-        sorted.sort_unstable_by(f64::total_cmp);
+        // the middle order statistics by selection, not a sort: reports run
+        // on every smooth, over every element of meshes of tens of millions
+        let mut scratch = values.to_vec();
+        let (left, mid, _) = scratch.select_nth_unstable_by(n / 2, f64::total_cmp);
         let median = if n % 2 == 1 {
-            sorted[n / 2]
+            *mid
         } else {
-            0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+            0.5 * (left.iter().copied().fold(f64::NEG_INFINITY, f64::max) + *mid)
         };
-        let avg = values.iter().sum::<f64>() / n as f64;
-        let var = values.iter().map(|v| (v - avg).powi(2)).sum::<f64>() / n as f64;
-        let (min, max) = (sorted[0], sorted[n - 1]);
+        let avg = chunked_sum(values, |v| v) / n as f64;
+        let var = chunked_sum(values, |v| (v - avg).powi(2)) / n as f64;
+        let (min, max) = values
+            .par_iter()
+            .fold(
+                || (f64::INFINITY, f64::NEG_INFINITY),
+                |(lo, hi), &v| (lo.min(v), hi.max(v)),
+            )
+            .reduce(
+                || (f64::INFINITY, f64::NEG_INFINITY),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
         Stats {
             count: n,
             avg,
@@ -156,10 +177,13 @@ pub fn quality_report_on_skin(mesh: &Mesh, points: &[[f64; 3]], skin: &[bool]) -
         })
         .collect();
 
-    let etas: Vec<f64> = per_element.iter().filter_map(|p| p.0).collect();
-    let volumes: Vec<f64> = per_element.iter().map(|p| p.1).collect();
-    let inverted_all: Vec<usize> = (0..ne).filter(|&e| per_element[e].0.is_none()).collect();
-    let objective = (inverted_all.is_empty() && ne > 0).then(|| etas.iter().sum::<f64>() / ne as f64);
+    let etas: Vec<f64> = per_element.par_iter().filter_map(|p| p.0).collect();
+    let volumes: Vec<f64> = per_element.par_iter().map(|p| p.1).collect();
+    let inverted_all: Vec<usize> = (0..ne)
+        .into_par_iter()
+        .filter(|&e| per_element[e].0.is_none())
+        .collect();
+    let objective = (inverted_all.is_empty() && ne > 0).then(|| chunked_sum(&etas, |v| v) / ne as f64);
 
     let mut histogram: Vec<Bin> = ETA_BIN_EDGES
         .iter()
@@ -170,9 +194,21 @@ pub fn quality_report_on_skin(mesh: &Mesh, points: &[[f64; 3]], skin: &[bool]) -
             count: 0,
         })
         .collect();
-    for &eta in &etas {
-        let bin = ETA_BIN_EDGES[1..].iter().take_while(|&&edge| eta >= edge).count();
-        histogram[bin].count += 1;
+    let counts = etas
+        .par_iter()
+        .fold(
+            || vec![0; ETA_BIN_EDGES.len()],
+            |mut c, &eta| {
+                c[ETA_BIN_EDGES[1..].iter().take_while(|&&edge| eta >= edge).count()] += 1;
+                c
+            },
+        )
+        .reduce(
+            || vec![0; ETA_BIN_EDGES.len()],
+            |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect(),
+        );
+    for (bin, count) in histogram.iter_mut().zip(counts) {
+        bin.count = count;
     }
 
     let nfixed = with_user_fixed(mesh, skin.to_vec()).iter().filter(|&&f| f).count();

@@ -324,31 +324,33 @@ fn reference_corner(kind: ElementKind, c: &[usize; 4], n: usize) -> Mat3 {
 /// (A_c R_c^-1)(A_c R_c^-1)^T (for an affine image J of the ideal element,
 /// exactly J J^T).
 pub fn element_metrics(mesh: &Mesh, points: &[Vec3], flip: bool) -> Result<Vec<Mat3>> {
-    let n = mesh.dim();
     (0..mesh.num_elements())
         .into_par_iter()
-        .map(|e| {
-            let kind = mesh.kinds[e];
-            let x = element_points(mesh, points, e, flip);
-            let cs = all_corners(mesh, e)?;
-            let mut g = [[0.0; 3]; 3];
-            for c in cs.iter() {
-                let rinv =
-                    crate::metric::mat3::inverse(&reference_corner(kind, c, n)).expect("ideal corners are valid");
-                let j = mul(&corner_matrix(&x, c, n), &rinv);
-                let jjt = mul(&j, &transpose(&j));
-                for r in 0..n {
-                    for s in 0..n {
-                        g[r][s] += jjt[r][s] / cs.len() as f64;
-                    }
-                }
-            }
-            for k in n..3 {
-                g[k][k] = 1.0;
-            }
-            Ok(g)
-        })
+        .map(|e| element_metric(mesh, points, flip, e))
         .collect()
+}
+
+/// Element `e`'s G of [`element_metrics`].
+fn element_metric(mesh: &Mesh, points: &[Vec3], flip: bool, e: usize) -> Result<Mat3> {
+    let n = mesh.dim();
+    let kind = mesh.kinds[e];
+    let x = element_points(mesh, points, e, flip);
+    let cs = all_corners(mesh, e)?;
+    let mut g = [[0.0; 3]; 3];
+    for c in cs.iter() {
+        let rinv = crate::metric::mat3::inverse(&reference_corner(kind, c, n)).expect("ideal corners are valid");
+        let j = mul(&corner_matrix(&x, c, n), &rinv);
+        let jjt = mul(&j, &transpose(&j));
+        for r in 0..n {
+            for s in 0..n {
+                g[r][s] += jjt[r][s] / cs.len() as f64;
+            }
+        }
+    }
+    for k in n..3 {
+        g[k][k] = 1.0;
+    }
+    Ok(g)
 }
 
 /// Per-corner targets: `offsets[e]..offsets[e + 1]` index element e's used
@@ -676,11 +678,11 @@ fn mean_regularise(mesh: &Mesh, nb: &Csr, mut vals: Vec<Mat3>, passes: usize) ->
                 for &j in js {
                     for r in 0..3 {
                         for c in 0..3 {
-                            m[r][c] += vals[j as usize][r][c] / js.len() as f64;
+                            m[r][c] += vals[j as usize][r][c];
                         }
                     }
                 }
-                m
+                m.map(|row| row.map(|x| x / js.len() as f64))
             })
             .collect();
     }
@@ -1023,24 +1025,34 @@ fn in_plane(l: &Vec3, n: usize) -> impl Iterator<Item = f64> + '_ {
 /// thickness away) is its first-layer vertex, and the height is the
 /// distance between the two. `None` where no wall has a stretched layer.
 pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Option<LayerChange> {
-    let shapes = Shapes::of(mesh, before).ok()?;
     let n = mesh.dim();
-    let aspects: Vec<f64> = shapes.eigen.par_iter().map(|(l, _)| aspect(l, n)).collect();
-    // an element's thickness: its smallest principal length (in 2D among the in-plane axes)
-    let thickness: Vec<f64> = shapes
-        .eigen
-        .par_iter()
-        .map(|(l, v)| {
-            (0..3)
+    let skin = crate::mesh::topology::skin_vertices(mesh);
+    let ve = vertex_elements(mesh);
+    // (aspect, thickness) of the elements at the walls, the only ones read:
+    // thickness is the smallest principal length (in 2D among the in-plane axes)
+    let pts = crate::metric::oriented(mesh, before);
+    let at_wall: Vec<bool> = (0..mesh.num_elements())
+        .into_par_iter()
+        .map(|e| mesh.element(e).iter().any(|&v| skin[v as usize]))
+        .collect();
+    let shape: Vec<(f64, f64)> = (0..mesh.num_elements())
+        .into_par_iter()
+        .map(|e| {
+            if !at_wall[e] {
+                return Ok((f64::NAN, f64::NAN));
+            }
+            let (l, v) = sym_eigen(&element_metric(mesh, &pts, false, e)?);
+            let thickness = (0..3)
                 .filter(|&k| n == 3 || v[2][k].abs() < 0.5)
                 .map(|k| l[k])
                 .fold(f64::INFINITY, f64::min)
                 .max(0.0)
-                .sqrt()
+                .sqrt();
+            Ok((aspect(&l, n), thickness))
         })
-        .collect();
-    let skin = crate::mesh::topology::skin_vertices(mesh);
-    let ve = vertex_elements(mesh);
+        .collect::<Result<_>>()
+        .ok()?;
+    let (aspects, thickness): (Vec<f64>, Vec<f64>) = shape.into_iter().unzip();
     let dist = |p: &[Vec3], a: usize, b: usize| sub(&p[a], &p[b]).iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut ratios: Vec<f64> = (0..mesh.num_points())
         .into_par_iter()
