@@ -19,6 +19,7 @@
 //!   `$PhysicalNames`; Medit keeps nothing but the mesh;
 //! - `cell_data` is written to VTK/VTU only (other formats check its length).
 
+mod abaqus;
 mod atomic;
 mod batch;
 mod codec;
@@ -46,7 +47,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName, ValueType, Values};
+use crate::mesh::{DataArray, ElementKind, ElementSet, LowerKind, Mesh, NodeSet, PhysicalName, ValueType, Values};
 
 /// File formats meshsmooth reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -71,17 +72,19 @@ pub enum Format {
     Msh41Binary,
     /// Medit (`.mesh`), ASCII.
     Medit,
+    /// Abaqus input (`.inp`), ASCII.
+    Abaqus,
 }
 
 /// How much of a file [`Format::of_file`] reads: a VTU file's first array
 /// (and its compressor attribute) sits within the header.
 const HEAD_BYTES: u64 = 64 << 10;
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus)";
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 10] = [
+    pub const ALL: [Format; 11] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
@@ -92,6 +95,7 @@ impl Format {
         Format::Msh41Ascii,
         Format::Msh41Binary,
         Format::Medit,
+        Format::Abaqus,
     ];
 
     /// Default format for a file name's extension (used for writing; reading
@@ -106,6 +110,7 @@ impl Format {
             Some("vtu") => Ok(Format::VtuAscii),
             Some("msh") => Ok(Format::Msh41Ascii),
             Some("mesh") => Ok(Format::Medit),
+            Some("inp") => Ok(Format::Abaqus),
             _ => Err(Error::Unsupported(format!(
                 "{}: unknown mesh file extension; supported: {EXTENSIONS}",
                 path.display()
@@ -195,6 +200,7 @@ impl Format {
                 })
             }
             Family::Medit => Some(Format::Medit),
+            Family::Abaqus => Some(Format::Abaqus),
         }
     }
 
@@ -216,6 +222,7 @@ impl Format {
             Format::Msh41Ascii => "msh4",
             Format::Msh41Binary => "msh4-binary",
             Format::Medit => "medit",
+            Format::Abaqus => "abaqus",
         }
     }
 
@@ -255,6 +262,7 @@ enum Family {
     Vtu,
     Gmsh,
     Medit,
+    Abaqus,
 }
 
 fn sniff(data: &[u8]) -> Option<Family> {
@@ -272,6 +280,9 @@ fn sniff(data: &[u8]) -> Option<Family> {
         Some(Family::Gmsh)
     } else if starts("MeshVersionFormatted") {
         Some(Family::Medit)
+    } else if starts("*") {
+        // a keyword or a `**` comment: no other format starts with one
+        Some(Family::Abaqus)
     } else {
         None
     }
@@ -333,6 +344,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
             Format::VtkAscii | Format::VtkBinary => Family::Vtk,
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => Family::Vtu,
             Format::Medit => Family::Medit,
+            Format::Abaqus => Family::Abaqus,
             _ => Family::Gmsh,
         },
     };
@@ -349,6 +361,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         Family::Vtu => vtu::read(path, &data, &budget)?,
         Family::Gmsh => gmsh::read(path, &data, &budget)?,
         Family::Medit => medit::read(path, &data, &budget)?,
+        Family::Abaqus => abaqus::read(path, &data, &budget)?,
     };
     drop(data);
     let mesh = raw.into_mesh(path)?;
@@ -473,10 +486,11 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[
         Format::Msh41Ascii => gmsh::write41(w, mesh, cell_data, false),
         Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
         Format::Medit => medit::write(w, mesh, cell_data),
+        Format::Abaqus => abaqus::write(w, mesh, cell_data),
     }
 }
 
-/// Gmsh and Medit files have no polyhedral cells: refuse before writing anything.
+/// Gmsh, Medit and Abaqus files have no polyhedral cells: refuse before writing anything.
 fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     let vtk = matches!(
         format,
@@ -484,7 +498,7 @@ fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     );
     match mesh.kinds.iter().position(|&k| k == ElementKind::Polyhedron) {
         Some(e) if !vtk => Err(Error::InvalidArgument(format!(
-            "cannot write {}: element {e} is a polyhedron, which the {format} format (Gmsh, Medit) cannot hold; \
+            "cannot write {}: element {e} is a polyhedron, which the {format} format cannot hold; \
              write VTK (.vtk) or VTK XML (.vtu)",
             path.display()
         ))),
@@ -611,6 +625,11 @@ pub(crate) struct RawMesh {
     /// Arrays of the whole data set.
     pub field_data: Vec<DataArray>,
     pub physical_names: Vec<PhysicalName>,
+    /// Named vertex sets (point ids).
+    pub node_sets: Vec<NodeSet>,
+    /// Named cell sets: every cell's index in file order, split into
+    /// elements and lower cells by [`into_mesh`](Self::into_mesh).
+    pub cell_sets: Vec<(String, Vec<u32>)>,
 }
 
 impl RawMesh {
@@ -694,6 +713,16 @@ impl RawMesh {
         mesh.data.cell = self.cell_data;
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
+        mesh.data.node_sets = self.node_sets;
+        mesh.data.element_sets = self
+            .cell_sets
+            .into_iter()
+            .map(|(name, elements)| ElementSet {
+                name,
+                elements,
+                lower: Vec::new(),
+            })
+            .collect();
         let mut fixed = self.fixed;
         if fixed.iter().any(|&f| f) {
             fixed.resize(n, false);
@@ -786,6 +815,8 @@ impl RawMesh {
         }
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
+        mesh.data.node_sets = self.node_sets;
+        mesh.data.element_sets = split_cell_sets(self.cell_sets, ncells, &elem_ids, &lower_ids);
         if fixed.iter().any(|&f| f) {
             mesh.fixed = fixed;
         }
@@ -798,6 +829,32 @@ impl RawMesh {
         }
         Ok(mesh)
     }
+}
+
+/// Sets of cells in file order as sets of elements and of lower cells,
+/// given which cells became which (`elem_ids`, `lower_ids`: ascending).
+fn split_cell_sets(sets: Vec<(String, Vec<u32>)>, cells: usize, elem_ids: &[usize], lower_ids: &[usize]) -> Vec<ElementSet> {
+    if sets.is_empty() {
+        return Vec::new();
+    }
+    // cell -> element id, or lower id with the top bit set
+    const LOWER: u32 = 1 << 31;
+    let mut to = vec![u32::MAX; cells];
+    elem_ids.iter().enumerate().for_each(|(e, &c)| to[c] = e as u32);
+    lower_ids.iter().enumerate().for_each(|(l, &c)| to[c] = l as u32 | LOWER);
+    sets.into_iter()
+        .map(|(name, cells)| {
+            let (lower, elements): (Vec<u32>, Vec<u32>) = cells
+                .iter()
+                .filter_map(|&c| to.get(c as usize).copied().filter(|&t| t != u32::MAX))
+                .partition(|&t| t & LOWER != 0);
+            ElementSet {
+                name,
+                elements,
+                lower: lower.into_iter().map(|t| t & !LOWER).collect(),
+            }
+        })
+        .collect()
 }
 
 /// Shortest text that parses back to exactly `x` (`{:?}` switches to
