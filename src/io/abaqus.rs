@@ -19,8 +19,14 @@
 //!
 //! Node and element numbers are kept as the point array `abaqus:node_id`
 //! and the cell array `abaqus:element_id`, each cell's type as an index
-//! (cell array `abaqus:type`) into the field array `abaqus:types`, so a
-//! mesh written back as `.inp` has the input's numbers and types.
+//! (cell array `abaqus:type`) into the field array `abaqus:types` (see
+//! [`ABAQUS_NODE_ID`](crate::mesh::data::ABAQUS_NODE_ID)), so a mesh
+//! written back as `.inp`, even by way of a `.vtu`, has the input's numbers
+//! and types. Writing, a mesh without them is numbered from 1 and takes
+//! each kind's common type (C3D4, C3D8, C3D6, CPS3, CPS4, T3D2 or T2D2);
+//! element sets, node sets and Gmsh physical groups become `*ELSET`s and
+//! `*NSET`s. Lower point cells and fixed flags have no Abaqus element and
+//! are not written.
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -31,17 +37,10 @@ use super::lex::clip;
 use super::limits::Budget;
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, is_planar_z0};
 use crate::error::{Error, Location, Result};
-use crate::mesh::data::GMSH_PHYSICAL;
+use crate::mesh::data::{
+    ABAQUS_ELEMENT_ID as ELEMENT_ID, ABAQUS_NODE_ID as NODE_ID, ABAQUS_TYPE as TYPE, ABAQUS_TYPES as TYPES, GMSH_PHYSICAL,
+};
 use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, NodeSet, ValueType, Values};
-
-/// The point array of the file's node numbers.
-pub const NODE_ID: &str = "abaqus:node_id";
-/// The cell array of the file's element numbers.
-pub const ELEMENT_ID: &str = "abaqus:element_id";
-/// The cell array of each cell's index into [`TYPES`].
-pub const TYPE: &str = "abaqus:type";
-/// The field array of the element type names [`TYPE`] indexes.
-pub const TYPES: &str = "abaqus:types";
 
 /// Includes nest at most this deep: deeper is a cycle in disguise or a bomb.
 pub const MAX_INCLUDE_DEPTH: usize = 16;
@@ -330,9 +329,7 @@ impl Reader<'_> {
     fn file(&mut self, path: &Path, data: &[u8]) -> Result<()> {
         self.open.push(path.to_path_buf());
         let mut line_no = 0;
-        let mut lines = data.split(|&b| b == b'\n');
-        let mut joined = String::new();
-        while let Some(bytes) = lines.next() {
+        for bytes in data.split(|&b| b == b'\n') {
             line_no += 1;
             let at = At { path, line: line_no };
             let text = std::str::from_utf8(bytes).map_err(|_| at.err("the line is not text (UTF-8)"))?;
@@ -348,34 +345,9 @@ impl Reader<'_> {
             if matches!(self.block, Block::Skip) {
                 continue;
             }
-            // a data line ending with a comma goes on on the next line
-            // (element records are joined in `element` instead: their
-            // comma may end a complete record)
-            let mut line = line;
-            if line.ends_with(',') && !matches!(self.block, Block::Elements { .. }) {
-                joined.clear();
-                joined.push_str(line);
-                for more in lines.by_ref() {
-                    line_no += 1;
-                    let more = std::str::from_utf8(more).map_err(|_| {
-                        At { path, line: line_no }.err("the line is not text (UTF-8)")
-                    })?;
-                    let more = more.trim();
-                    if more.starts_with("**") {
-                        continue;
-                    }
-                    if more.starts_with('*') {
-                        return Err(At { path, line: line_no }.err(
-                            "a keyword line where the data line before it (ending with a comma) goes on",
-                        ));
-                    }
-                    joined.push_str(more);
-                    if !more.ends_with(',') && !more.is_empty() {
-                        break;
-                    }
-                }
-                line = &joined;
-            }
+            // a line ending with a comma goes on on the next: set and node
+            // lines read the same line by line, element records are joined
+            // in `element`
             let comma = line.ends_with(',');
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let fields = match fields.split_last() {

@@ -570,6 +570,30 @@ pub(crate) fn out_cell_arrays<'a>(mesh: &'a Mesh, cell_data: &[CellData]) -> Vec
     out
 }
 
+/// Field arrays that carry named sets through VTK/VTU files, which have no
+/// sets: `node_set:NAME` holds a node set's vertex ids, `element_set:NAME`
+/// an element set's element ids (0-based; its lower cells are not written
+/// to VTK/VTU).
+const NODE_SET_FIELD: &str = "node_set:";
+const ELEMENT_SET_FIELD: &str = "element_set:";
+
+/// The field arrays a VTK/VTU writer writes: the input's, then one per set.
+pub(crate) fn out_field_arrays(mesh: &Mesh) -> Vec<std::borrow::Cow<'_, DataArray>> {
+    let ids = |prefix: &str, name: &str, ids: &[u32]| {
+        std::borrow::Cow::Owned(DataArray::new(
+            format!("{prefix}{name}"),
+            ValueType::I64,
+            1,
+            Values::Int(ids.iter().map(|&i| i64::from(i)).collect()),
+        ))
+    };
+    let data = &mesh.data;
+    let mut out: Vec<std::borrow::Cow<DataArray>> = data.field.iter().map(std::borrow::Cow::Borrowed).collect();
+    out.extend(data.node_sets.iter().map(|s| ids(NODE_SET_FIELD, &s.name, &s.vertices)));
+    out.extend(data.element_sets.iter().map(|s| ids(ELEMENT_SET_FIELD, &s.name, &s.elements)));
+    out
+}
+
 /// Checked by every writer right before it writes cell data, so a bad array
 /// fails the write midway and exercises the atomic clean-up.
 fn check_cell_data(mesh: &Mesh, cell_data: &[CellData]) -> Result<()> {
@@ -731,10 +755,41 @@ impl RawMesh {
         Ok(mesh)
     }
 
-    pub fn into_mesh(self, path: &Path) -> Result<Mesh> {
+    /// Takes the sets [`out_field_arrays`] wrote out of the field arrays.
+    fn sets_from_field(&mut self, path: &Path) -> Result<()> {
+        let (np, nc) = (self.points.len(), self.shapes.len());
+        let mut rest = Vec::with_capacity(self.field_data.len());
+        for a in std::mem::take(&mut self.field_data) {
+            let node = a.name.strip_prefix(NODE_SET_FIELD);
+            let cell = a.name.strip_prefix(ELEMENT_SET_FIELD);
+            let (Some(name), Values::Int(v)) = (node.or(cell), &a.values) else {
+                rest.push(a);
+                continue;
+            };
+            let n = if node.is_some() { np } else { nc };
+            let ids: Vec<u32> = v.iter().map_while(|&i| u32::try_from(i).ok().filter(|&i| (i as usize) < n)).collect();
+            if ids.len() != v.len() {
+                return Err(Error::parse(
+                    path,
+                    None,
+                    format!("field array '{}' holds an id past the {n} the file has", lex::clip(&a.name)),
+                ));
+            }
+            if node.is_some() {
+                self.node_sets.push(NodeSet { name: name.to_string(), vertices: ids });
+            } else {
+                self.cell_sets.push((name.to_string(), ids));
+            }
+        }
+        self.field_data = rest;
+        Ok(())
+    }
+
+    pub fn into_mesh(mut self, path: &Path) -> Result<Mesh> {
         if self.points.is_empty() {
             return Err(Error::parse(path, None, "the file has no points"));
         }
+        self.sets_from_field(path)?;
         let has3d = self.shapes.iter().any(|s| matches!(s, Shape::Elem(k) if k.dim() == 3));
         let ncells = self.shapes.len();
         let np = self.points.len();

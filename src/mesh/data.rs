@@ -194,6 +194,16 @@ pub struct ElementSet {
     pub lower: Vec<u32>,
 }
 
+/// The point array of an Abaqus file's node numbers (written back to `.inp`).
+pub const ABAQUS_NODE_ID: &str = "abaqus:node_id";
+/// The cell array of an Abaqus file's element numbers.
+pub const ABAQUS_ELEMENT_ID: &str = "abaqus:element_id";
+/// The cell array of each cell's index into [`ABAQUS_TYPES`].
+pub const ABAQUS_TYPE: &str = "abaqus:type";
+/// The field array of the Abaqus element type names (`C3D8R`) that
+/// [`ABAQUS_TYPE`] indexes.
+pub const ABAQUS_TYPES: &str = "abaqus:types";
+
 /// Everything of a file beyond the geometry and the topology.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MeshData {

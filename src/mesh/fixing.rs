@@ -10,7 +10,9 @@
 //! are facets on the skin (faces of a volume mesh, lines of a planar one)
 //! describe the boundary rather than fix it, so they release theirs too
 //! (internal interfaces stay fixed); a vertex also on another lower cell, or
-//! flagged by a `fixed` point array, stays fixed.
+//! flagged by a `fixed` point array, stays fixed. A node set given to
+//! `free_groups` releases its vertices whatever lower cells hold them (but
+//! not those a `fixed` array flags).
 
 use super::data::{DataArray, ElementSet, GMSH_PHYSICAL, NodeSet, Values};
 use super::{LowerKind, Mesh};
@@ -97,15 +99,8 @@ impl FixRules {
                     *k = nonzero(a, v);
                 }
             }
+            let flagged = keep.clone();
             let mut released: Vec<Option<usize>> = vec![None; n];
-            // a node set released stands for point cells of its group
-            for (k, (_, g)) in freed.iter().enumerate() {
-                for s in &g.node_sets {
-                    s.vertices.iter().for_each(|&v| {
-                        released[v as usize].get_or_insert(k);
-                    });
-                }
-            }
             for (i, (kind, vs)) in mesh.lower.iter().enumerate() {
                 match released_by(i, *kind, vs) {
                     Some(k) => vs.iter().for_each(|&v| {
@@ -122,6 +117,17 @@ impl FixRules {
                 {
                     fixed[v] = false;
                     counts[k] += 1;
+                }
+            }
+            // a node set names its vertices: they are released whatever
+            // lower cells hold them, unless a `fixed` array flags them
+            for (k, (_, g)) in freed.iter().enumerate() {
+                for &v in g.node_sets.iter().flat_map(|s| &s.vertices) {
+                    let v = v as usize;
+                    if fixed[v] && !flagged[v] {
+                        fixed[v] = false;
+                        counts[k] += 1;
+                    }
                 }
             }
             for (k, (g, _)) in freed.iter().enumerate() {

@@ -516,7 +516,7 @@ fn data_arrays_follow_a_reordering() {
 }
 
 /// A Python with meshio: `MESHSMOOTH_PYTHON`, else the checkout's `.venv`.
-fn meshio_python() -> Option<PathBuf> {
+pub(crate) fn meshio_python() -> Option<PathBuf> {
     let p = std::env::var_os("MESHSMOOTH_PYTHON")
         .map(PathBuf::from)
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
