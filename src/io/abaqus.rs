@@ -456,8 +456,9 @@ impl Reader<'_> {
         }
         let canon = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
         let me = canon(&target);
-        if let Some(i) = self.open.iter().position(|p| canon(p) == me) {
-            let chain: Vec<String> = self.open[i..]
+        if self.open.iter().any(|p| canon(p) == me) {
+            let chain: Vec<String> = self
+                .open
                 .iter()
                 .chain([&target])
                 .map(|p| p.display().to_string())

@@ -321,7 +321,7 @@ fn other_meshes_write_with_default_numbers_types_and_groups() {
 fn smooth_fixes_the_vertices_of_a_named_node_or_element_set() {
     let dir = tempfile::tempdir().unwrap();
     let inp = dir.path().join("box.inp");
-    crate::common::cli::generate_box(&inp, [4, 4, 4], "0.3", 7);
+    crate::common::cli::generate_box(&inp, [4, 4, 4], "random:0.3", 7);
     let m = io::read(&inp).unwrap();
     let skin = meshsmooth::mesh::topology::skin_vertices(&m);
     let interior: Vec<usize> = (0..m.num_points()).filter(|&v| !skin[v]).collect();
@@ -332,11 +332,11 @@ fn smooth_fixes_the_vertices_of_a_named_node_or_element_set() {
     let of_elem = (0..m.num_elements())
         .find(|&e| m.element(e).iter().all(|&v| !skin[v as usize] && !pinned.contains(&(v as usize))))
         .expect("an element of interior vertices");
-    let mut text = std::fs::read_to_string(&inp).unwrap();
+    let mut body = std::fs::read_to_string(&inp).unwrap();
     let list: Vec<String> = pinned.iter().map(|&v| ids[v].to_string()).collect();
-    text.push_str(&format!("*NSET, NSET=Pin\n{}\n", list.join(", ")));
-    text.push_str(&format!("*ELSET, ELSET=Core\n{}\n", element_ids(&m)[of_elem]));
-    std::fs::write(&inp, text).unwrap();
+    body.push_str(&format!("*NSET, NSET=Pin\n{}\n", list.join(", ")));
+    body.push_str(&format!("*ELSET, ELSET=Core\n{}\n", element_ids(&m)[of_elem]));
+    std::fs::write(&inp, body).unwrap();
     for (group, held) in [
         ("Pin", pinned.clone()),
         ("Core", m.element(of_elem).iter().map(|&v| v as usize).collect()),
@@ -451,8 +451,8 @@ fn bad_files_are_refused_naming_the_file_and_line() {
     expect_err(
         d,
         "gap.inp",
-        &with("*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*ELSET, ELSET=E, GENERATE\n1, 2\n"),
-        &["line 9", "element 2"],
+        "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n4, 0, 1, 0\n5, 0, 0, 1\n*NSET, NSET=G, GENERATE\n1, 4\n",
+        &["line 7", "set 'G' refers to node 3, which is not defined"],
     );
     expect_err(
         d,
