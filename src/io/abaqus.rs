@@ -470,7 +470,10 @@ impl Reader<'_> {
         }
         // each included file is charged to the read's budget and stays
         // charged: a tree of includes cannot read more than it allows
-        let data = super::input::read_file(&target, self.budget)?;
+        let data = super::input::read_file(&target, self.budget).map_err(|e| match e {
+            Error::Parse { msg, .. } => at.err(format!("*INCLUDE of {}: {msg}", target.display())),
+            other => other,
+        })?;
         self.file(&target, &data)
     }
 

@@ -524,3 +524,56 @@ fn meshio_reads_our_inp_and_we_read_meshios() {
     got.sort_unstable();
     assert_eq!(got, want);
 }
+
+/// Every prefix of a valid file with sets and an include, and many mutants
+/// (bytes changed, numbers made huge, the include pointed back at the file)
+/// read within a small budget to a mesh or to an error naming a file:
+/// never a panic, never slowly.
+#[test]
+fn prefixes_and_mutants_read_or_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let limits = io::ReadLimits { max_bytes: 64 << 20 };
+    let base = TWO_HEXES.replace("*Nset, nset=BOTTOM", "*INCLUDE, INPUT=part.inp\n*Nset, nset=BOTTOM");
+    put(dir.path(), "part.inp", "*ELSET, ELSET=MORE, GENERATE\n3, 7, 4\n");
+    let p = dir.path().join("fuzz.inp");
+    let check = |bytes: &[u8], what: &str| {
+        std::fs::write(&p, bytes).unwrap();
+        let start = std::time::Instant::now();
+        if let Err(e) = io::read_with_limits(&p, &limits) {
+            let e = e.to_string();
+            assert!(e.contains("fuzz.inp") || e.contains("part.inp"), "{what}: {e}");
+        }
+        assert!(start.elapsed().as_secs_f64() < 2.0, "{what}: slow");
+    };
+    let bytes = base.as_bytes();
+    for cut in 0..bytes.len() {
+        check(&bytes[..cut], &format!("cut at {cut}"));
+    }
+    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+    let mut rand = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    for k in 0..400 {
+        let mut b = bytes.to_vec();
+        let i = rand() as usize % b.len();
+        match k % 5 {
+            0 => b[i] = rand() as u8,
+            1 => b[i] = b',',
+            2 => b[i] = b'\n',
+            3 => {
+                // a number made huge
+                b.splice(i..i, *b"99999999999999999999");
+            }
+            _ => {
+                let text = base.replacen("part.inp", "fuzz.inp", 1);
+                b = text.into_bytes();
+                let at = i % b.len();
+                b[at] = rand() as u8;
+            }
+        }
+        check(&b, &format!("mutant {k} at byte {i}"));
+    }
+}
