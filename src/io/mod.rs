@@ -1,4 +1,4 @@
-//! Mesh files: VTK legacy and XML, Gmsh, Medit; atomic writes.
+//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus; atomic writes.
 //!
 //! Readers produce a `RawMesh` (every cell in file order, with its shape);
 //! `RawMesh::into_mesh` then splits top-dimensional elements from lower
@@ -17,6 +17,17 @@
 //!   [`write`] replace any input array of the same name); Gmsh keeps the
 //!   `gmsh:physical`/`gmsh:geometrical` cell arrays as element tags and its
 //!   `$PhysicalNames`; Medit keeps nothing but the mesh;
+//! - named sets are `MeshData::node_sets` (vertex ids) and
+//!   `MeshData::element_sets` (element and lower-cell ids; a cell can be in
+//!   several): Abaqus `*NSET`/`*ELSET` read and write them, readers of other
+//!   formats with sets (Exodus node sets) fill the same fields through
+//!   `RawMesh::node_sets`/`cell_sets`. Both are groups for `--fix-group` and
+//!   `--free-group` beside Gmsh's physical groups; a node set fixes nothing
+//!   by itself. VTK/VTU carry them as field arrays `node_set:NAME` and
+//!   `element_set:NAME`; Gmsh and Medit drop them;
+//! - Abaqus keeps its node and element numbers and element types as the
+//!   arrays `abaqus:node_id`, `abaqus:element_id`, `abaqus:type` and
+//!   `abaqus:types`, which the `.inp` writer puts back;
 //! - `cell_data` is written to VTK/VTU only (other formats check its length).
 
 mod abaqus;
