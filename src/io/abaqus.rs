@@ -38,7 +38,8 @@ use super::limits::Budget;
 use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64, is_planar_z0};
 use crate::error::{Error, Location, Result};
 use crate::mesh::data::{
-    ABAQUS_ELEMENT_ID as ELEMENT_ID, ABAQUS_NODE_ID as NODE_ID, ABAQUS_TYPE as TYPE, ABAQUS_TYPES as TYPES, GMSH_PHYSICAL,
+    ABAQUS_ELEMENT_ID as ELEMENT_ID, ABAQUS_NODE_ID as NODE_ID, ABAQUS_TYPE as TYPE, ABAQUS_TYPES as TYPES,
+    GMSH_PHYSICAL,
 };
 use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, NodeSet, ValueType, Values};
 
@@ -231,11 +232,25 @@ impl Sets {
 /// What the data lines after the current keyword are.
 enum Block {
     Skip,
-    Nodes { nset: Option<usize> },
-    Elements { shape: Shape, nv: usize, ty: i64, name: String, elset: Option<usize> },
-    NodeSet { set: usize, generate: bool },
+    Nodes {
+        nset: Option<usize>,
+    },
+    Elements {
+        shape: Shape,
+        nv: usize,
+        ty: i64,
+        name: String,
+        elset: Option<usize>,
+    },
+    NodeSet {
+        set: usize,
+        generate: bool,
+    },
     NodeSetOfElements,
-    ElementSet { set: usize, generate: bool },
+    ElementSet {
+        set: usize,
+        generate: bool,
+    },
     Instance,
 }
 
@@ -396,10 +411,12 @@ impl Reader<'_> {
                     Some(_) => {
                         // *NSET, NSET=A, ELSET=B: the nodes of B's elements
                         let of = param("ELSET")?;
-                        let e = self
-                            .elsets
-                            .find(of)
-                            .ok_or_else(|| at.err(format!("*NSET refers to element set '{}', which is not defined before it", clip(of))))?;
+                        let e = self.elsets.find(of).ok_or_else(|| {
+                            at.err(format!(
+                                "*NSET refers to element set '{}', which is not defined before it",
+                                clip(of)
+                            ))
+                        })?;
                         self.add_element_nodes(at, set, e)?;
                         Block::NodeSetOfElements
                     }
@@ -499,9 +516,7 @@ impl Reader<'_> {
                 // a translation (3 numbers) or a rotation (7) of the instance
                 let moved = fields.iter().any(|f| number(f).is_none_or(|x| x != 0.0));
                 if moved {
-                    Err(at.err(
-                        "the instance is translated or rotated; only an instance placed as its part is read",
-                    ))
+                    Err(at.err("the instance is translated or rotated; only an instance placed as its part is read"))
                 } else {
                     Ok(())
                 }
@@ -519,8 +534,7 @@ impl Reader<'_> {
         let id = label(at, fields[0], "node")?;
         let mut p = [0.0; 3];
         for (k, f) in fields[1..].iter().take(3).enumerate() {
-            p[k] = number(f)
-                .ok_or_else(|| at.err(format!("node {id}: '{}' is not a coordinate", clip(f))))?;
+            p[k] = number(f).ok_or_else(|| at.err(format!("node {id}: '{}' is not a coordinate", clip(f))))?;
         }
         if p.iter().any(|x| !x.is_finite()) {
             return Err(at.err(format!("node {id} has a non-finite coordinate {p:?}")));
@@ -586,7 +600,9 @@ impl Reader<'_> {
         let mut vs = [0u32; 8];
         for (k, &n) in self.pending[1..].iter().enumerate() {
             vs[k] = self.nodes.get(n as u64).ok_or_else(|| {
-                at.err(format!("element {id} refers to node {n}, which no *NODE before it defines"))
+                at.err(format!(
+                    "element {id} refers to node {n}, which no *NODE before it defines"
+                ))
             })?;
         }
         let c = self.raw.shapes.len() as u32;
@@ -638,7 +654,9 @@ impl Reader<'_> {
                 None => 1,
             };
             if last < first {
-                return Err(at.err(format!("GENERATE from {first} down to {last}: the last is below the first")));
+                return Err(at.err(format!(
+                    "GENERATE from {first} down to {last}: the last is below the first"
+                )));
             }
             let count = ((last - first) / step + 1) as usize;
             // every id of the range must exist: a range longer than the ids
@@ -706,9 +724,7 @@ fn label(at: At, f: &str, what: &str) -> Result<i64> {
 
 /// A real number, with a Fortran `D` exponent allowed.
 fn number(f: &str) -> Option<f64> {
-    f.parse()
-        .ok()
-        .or_else(|| f.replace(['d', 'D'], "e").parse().ok())
+    f.parse().ok().or_else(|| f.replace(['d', 'D'], "e").parse().ok())
 }
 
 /// Ids to write: the array's, where every one is positive and none
@@ -740,7 +756,13 @@ fn id_lines(w: &mut dyn Write, ids: impl Iterator<Item = i64>) -> WriteResult {
 fn set_name(name: &str) -> String {
     let s: String = name
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || "_-.".contains(c) { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "_-.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     if s.starts_with(|c: char| c.is_ascii_alphabetic()) {
         s

@@ -601,7 +601,11 @@ pub(crate) fn out_field_arrays(mesh: &Mesh) -> Vec<std::borrow::Cow<'_, DataArra
     let data = &mesh.data;
     let mut out: Vec<std::borrow::Cow<DataArray>> = data.field.iter().map(std::borrow::Cow::Borrowed).collect();
     out.extend(data.node_sets.iter().map(|s| ids(NODE_SET_FIELD, &s.name, &s.vertices)));
-    out.extend(data.element_sets.iter().map(|s| ids(ELEMENT_SET_FIELD, &s.name, &s.elements)));
+    out.extend(
+        data.element_sets
+            .iter()
+            .map(|s| ids(ELEMENT_SET_FIELD, &s.name, &s.elements)),
+    );
     out
 }
 
@@ -778,16 +782,25 @@ impl RawMesh {
                 continue;
             };
             let n = if node.is_some() { np } else { nc };
-            let ids: Vec<u32> = v.iter().map_while(|&i| u32::try_from(i).ok().filter(|&i| (i as usize) < n)).collect();
+            let ids: Vec<u32> = v
+                .iter()
+                .map_while(|&i| u32::try_from(i).ok().filter(|&i| (i as usize) < n))
+                .collect();
             if ids.len() != v.len() {
                 return Err(Error::parse(
                     path,
                     None,
-                    format!("field array '{}' holds an id past the {n} the file has", lex::clip(&a.name)),
+                    format!(
+                        "field array '{}' holds an id past the {n} the file has",
+                        lex::clip(&a.name)
+                    ),
                 ));
             }
             if node.is_some() {
-                self.node_sets.push(NodeSet { name: name.to_string(), vertices: ids });
+                self.node_sets.push(NodeSet {
+                    name: name.to_string(),
+                    vertices: ids,
+                });
             } else {
                 self.cell_sets.push((name.to_string(), ids));
             }
@@ -899,7 +912,12 @@ impl RawMesh {
 
 /// Sets of cells in file order as sets of elements and of lower cells,
 /// given which cells became which (`elem_ids`, `lower_ids`: ascending).
-fn split_cell_sets(sets: Vec<(String, Vec<u32>)>, cells: usize, elem_ids: &[usize], lower_ids: &[usize]) -> Vec<ElementSet> {
+fn split_cell_sets(
+    sets: Vec<(String, Vec<u32>)>,
+    cells: usize,
+    elem_ids: &[usize],
+    lower_ids: &[usize],
+) -> Vec<ElementSet> {
     if sets.is_empty() {
         return Vec::new();
     }
@@ -907,7 +925,10 @@ fn split_cell_sets(sets: Vec<(String, Vec<u32>)>, cells: usize, elem_ids: &[usiz
     const LOWER: u32 = 1 << 31;
     let mut to = vec![u32::MAX; cells];
     elem_ids.iter().enumerate().for_each(|(e, &c)| to[c] = e as u32);
-    lower_ids.iter().enumerate().for_each(|(l, &c)| to[c] = l as u32 | LOWER);
+    lower_ids
+        .iter()
+        .enumerate()
+        .for_each(|(l, &c)| to[c] = l as u32 | LOWER);
     sets.into_iter()
         .map(|(name, cells)| {
             let (lower, elements): (Vec<u32>, Vec<u32>) = cells

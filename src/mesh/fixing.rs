@@ -264,7 +264,11 @@ impl<'m> Group<'m> {
         );
         list.extend(data.element_sets.iter().map(|s| format!("{} (element set)", s.name)));
         list.extend(data.node_sets.iter().map(|s| format!("{} (node set)", s.name)));
-        let known = if list.is_empty() { "none".to_string() } else { list.join(", ") };
+        let known = if list.is_empty() {
+            "none".to_string()
+        } else {
+            list.join(", ")
+        };
         Err(Error::InvalidOption {
             option,
             message: format!("no physical group or set '{group}' in the mesh (its groups: {known})"),

@@ -26,7 +26,13 @@ fn ints(a: &DataArray) -> Vec<i64> {
 }
 
 fn node_ids(m: &Mesh) -> Vec<i64> {
-    ints(m.data.point.iter().find(|a| a.name == ABAQUS_NODE_ID).expect("node ids"))
+    ints(
+        m.data
+            .point
+            .iter()
+            .find(|a| a.name == ABAQUS_NODE_ID)
+            .expect("node ids"),
+    )
 }
 
 fn element_ids(m: &Mesh) -> Vec<i64> {
@@ -36,9 +42,12 @@ fn element_ids(m: &Mesh) -> Vec<i64> {
 /// The node numbers of a node set, ascending.
 fn nset(m: &Mesh, name: &str) -> Vec<i64> {
     let ids = node_ids(m);
-    let s = m.data.node_sets.iter().find(|s| s.name == name).unwrap_or_else(|| {
-        panic!("no node set {name}: {:?}", m.data.node_sets)
-    });
+    let s = m
+        .data
+        .node_sets
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no node set {name}: {:?}", m.data.node_sets));
     let mut out: Vec<i64> = s.vertices.iter().map(|&v| ids[v as usize]).collect();
     out.sort_unstable();
     out
@@ -47,9 +56,12 @@ fn nset(m: &Mesh, name: &str) -> Vec<i64> {
 /// The element numbers of an element set's elements, ascending.
 fn elset(m: &Mesh, name: &str) -> Vec<i64> {
     let ids = element_ids(m);
-    let s = m.data.element_sets.iter().find(|s| s.name == name).unwrap_or_else(|| {
-        panic!("no element set {name}: {:?}", m.data.element_sets)
-    });
+    let s = m
+        .data
+        .element_sets
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no element set {name}: {:?}", m.data.element_sets));
     let mut out: Vec<i64> = s.elements.iter().map(|&e| ids[e as usize]).collect();
     out.sort_unstable();
     out
@@ -224,8 +236,16 @@ fn surfaces_and_lines_among_solids_are_lower_cells() {
 #[test]
 fn parts_instances_and_includes_read_as_one_mesh() {
     let dir = tempfile::tempdir().unwrap();
-    put(dir.path(), "mesh/nodes.inp", "1, 0., 0., 0.\n2, 1., 0., 0.\n*INCLUDE, INPUT=more.inp\n");
-    put(dir.path(), "mesh/more.inp", "** the rest of the nodes\n3, 0., 1., 0.\n4, 0., 0., 1.\n");
+    put(
+        dir.path(),
+        "mesh/nodes.inp",
+        "1, 0., 0., 0.\n2, 1., 0., 0.\n*INCLUDE, INPUT=more.inp\n",
+    );
+    put(
+        dir.path(),
+        "mesh/more.inp",
+        "** the rest of the nodes\n3, 0., 1., 0.\n4, 0., 0., 1.\n",
+    );
     let main = put(
         dir.path(),
         "model.inp",
@@ -251,7 +271,10 @@ fn parts_instances_and_includes_read_as_one_mesh() {
     .to_path_buf();
     // an element set cannot hold node sets: the name is looked up among element sets
     let e = io::read(&main).unwrap_err().to_string();
-    assert!(e.contains("model.inp") && e.contains("line 16") && e.contains("Beam-1.Base"), "{e}");
+    assert!(
+        e.contains("model.inp") && e.contains("line 16") && e.contains("Beam-1.Base"),
+        "{e}"
+    );
     let text = std::fs::read_to_string(&main).unwrap().replace(" Beam-1.Base,", " 1,");
     std::fs::write(&main, text).unwrap();
     let m = io::read(&main).unwrap();
@@ -274,10 +297,17 @@ fn round_trips_through_inp_and_vtu_keep_nodes_elements_and_sets() {
     check_two_hexes(&back);
     assert_eq!(back.data.node_sets, m.data.node_sets);
     for format in [Format::VtuAscii, Format::VtuZlib, Format::VtkBinary] {
-        let out = dir.path().join(format!("two-{format}.{}", if format == Format::VtkBinary { "vtk" } else { "vtu" }));
+        let out = dir.path().join(format!(
+            "two-{format}.{}",
+            if format == Format::VtkBinary { "vtk" } else { "vtu" }
+        ));
         io::write(&out, &m, format, &[]).unwrap();
         let v = io::read(&out).unwrap();
-        assert_eq!((&v.points, &v.conn, &v.kinds), (&m.points, &m.conn, &m.kinds), "{format}");
+        assert_eq!(
+            (&v.points, &v.conn, &v.kinds),
+            (&m.points, &m.conn, &m.kinds),
+            "{format}"
+        );
         assert_eq!(v.data.node_sets, m.data.node_sets, "{format}");
         assert_eq!(v.data.element_sets, m.data.element_sets, "{format}");
         // and from there back to .inp with the file's numbers and types
@@ -309,7 +339,10 @@ fn other_meshes_write_with_default_numbers_types_and_groups() {
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.contains("*NODE\n1, 0.0, 0.0\n"), "{text}");
     assert!(text.contains("*ELEMENT, TYPE=CPS4\n1, "), "{text}");
-    assert!(text.contains("*ELSET, ELSET=left_plate\n1\n*ELSET, ELSET=PHYSICAL9\n2\n"), "{text}");
+    assert!(
+        text.contains("*ELSET, ELSET=left_plate\n1\n*ELSET, ELSET=PHYSICAL9\n2\n"),
+        "{text}"
+    );
     let back = io::read(&out).unwrap();
     assert_eq!((&back.points, &back.conn), (&m.points, &m.conn));
     assert_eq!(elset(&back, "left_plate"), vec![1]);
@@ -330,7 +363,11 @@ fn smooth_fixes_the_vertices_of_a_named_node_or_element_set() {
     let pinned: Vec<usize> = interior[..5].to_vec();
     let ids = node_ids(&m);
     let of_elem = (0..m.num_elements())
-        .find(|&e| m.element(e).iter().all(|&v| !skin[v as usize] && !pinned.contains(&(v as usize))))
+        .find(|&e| {
+            m.element(e)
+                .iter()
+                .all(|&v| !skin[v as usize] && !pinned.contains(&(v as usize)))
+        })
         .expect("an element of interior vertices");
     let mut body = std::fs::read_to_string(&inp).unwrap();
     let list: Vec<String> = pinned.iter().map(|&v| ids[v].to_string()).collect();
@@ -361,7 +398,10 @@ fn smooth_fixes_the_vertices_of_a_named_node_or_element_set() {
     assert!(pinned.iter().any(|&v| after.points[v] != m.points[v]));
     let o = meshsmooth(&["smooth", s(&inp), "-o", s(&out), "--fix-group", "Nowhere"]);
     let t = text(&o);
-    assert!(!o.status.success() && t.contains("Pin (node set)") && t.contains("Core (element set)"), "{t}");
+    assert!(
+        !o.status.success() && t.contains("Pin (node set)") && t.contains("Core (element set)"),
+        "{t}"
+    );
 }
 
 /// `--free-group` on a node set releases the vertices lower cells fixed.
@@ -409,7 +449,12 @@ fn bad_files_are_refused_naming_the_file_and_line() {
         &with("*ELEMENT, TYPE=C3D10\n1, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10\n"),
         &["line 6", "C3D10", "quadratic"],
     );
-    expect_err(d, "pyramid.inp", &with("*ELEMENT, TYPE=C3D5\n"), &["line 6", "C3D5", "pyramid"]);
+    expect_err(
+        d,
+        "pyramid.inp",
+        &with("*ELEMENT, TYPE=C3D5\n"),
+        &["line 6", "C3D5", "pyramid"],
+    );
     expect_err(
         d,
         "missing.inp",
@@ -434,8 +479,18 @@ fn bad_files_are_refused_naming_the_file_and_line() {
         &with("*ELEMENT, TYPE=C3D4\n1, 1, 2, 3"),
         &["line 7", "element 1 of type C3D4 lists 3 nodes; the type has 4"],
     );
-    expect_err(d, "notype.inp", &with("*ELEMENT\n1, 1, 2, 3, 4\n"), &["line 6", "TYPE="]);
-    expect_err(d, "twice.inp", &with("*NODE\n2, 5, 5, 5\n"), &["line 7", "node 2 is defined twice"]);
+    expect_err(
+        d,
+        "notype.inp",
+        &with("*ELEMENT\n1, 1, 2, 3, 4\n"),
+        &["line 6", "TYPE="],
+    );
+    expect_err(
+        d,
+        "twice.inp",
+        &with("*NODE\n2, 5, 5, 5\n"),
+        &["line 7", "node 2 is defined twice"],
+    );
     expect_err(
         d,
         "noset.inp",
@@ -470,8 +525,18 @@ fn bad_files_are_refused_naming_the_file_and_line() {
     // includes: a cycle, a missing file, and an error inside an included file
     put(d, "a.inp", "*INCLUDE, INPUT=b.inp\n");
     put(d, "b.inp", "*NODE\n1, 0, 0, 0\n*INCLUDE, INPUT=a.inp\n");
-    expect_err(d, "top.inp", "*INCLUDE, INPUT=a.inp\n", &["b.inp: line 3", "*INCLUDE cycle", "a.inp includes"]);
-    expect_err(d, "lost.inp", "*INCLUDE, INPUT=nowhere.inp\n", &["line 1", "nowhere.inp: no such file"]);
+    expect_err(
+        d,
+        "top.inp",
+        "*INCLUDE, INPUT=a.inp\n",
+        &["b.inp: line 3", "*INCLUDE cycle", "a.inp includes"],
+    );
+    expect_err(
+        d,
+        "lost.inp",
+        "*INCLUDE, INPUT=nowhere.inp\n",
+        &["line 1", "nowhere.inp: no such file"],
+    );
     put(d, "bad-nodes.inp", "1, 0, 0, 0\n2, 0, zero, 0\n");
     let p = put(d, "outer.inp", "*NODE\n*INCLUDE, INPUT=bad-nodes.inp\n");
     let e = io::read(&p).unwrap_err().to_string();
@@ -520,7 +585,14 @@ fn meshio_reads_our_inp_and_we_read_meshios() {
     assert_eq!(&bottom, &want);
     let back = io::read(&theirs).unwrap();
     assert_eq!((&back.points, &back.conn, &back.kinds), (&m.points, &m.conn, &m.kinds));
-    let mut got = back.data.node_sets.iter().find(|s| s.name == "BOTTOM").unwrap().vertices.clone();
+    let mut got = back
+        .data
+        .node_sets
+        .iter()
+        .find(|s| s.name == "BOTTOM")
+        .unwrap()
+        .vertices
+        .clone();
     got.sort_unstable();
     assert_eq!(got, want);
 }

@@ -332,7 +332,11 @@ fn abaqus_include_trees_chains_and_cycles_are_refused() {
     let leaf = "** padding to make the leaf large\n".repeat((2 << 20) / 34);
     std::fs::write(d.join(format!("tree{levels}.inp")), leaf).unwrap();
     for k in 0..20 {
-        std::fs::write(d.join(format!("chain{k}.inp")), format!("*INCLUDE, INPUT=chain{}.inp\n", k + 1)).unwrap();
+        std::fs::write(
+            d.join(format!("chain{k}.inp")),
+            format!("*INCLUDE, INPUT=chain{}.inp\n", k + 1),
+        )
+        .unwrap();
     }
     std::fs::write(d.join("chain20.inp"), "*NODE\n1, 0, 0, 0\n").unwrap();
     std::fs::write(d.join("self.inp"), "*NODE\n1, 0, 0, 0\n*INCLUDE, INPUT=./self.inp\n").unwrap();
@@ -343,10 +347,20 @@ fn abaqus_include_trees_chains_and_cycles_are_refused() {
     ] {
         let p = d.join(top);
         let run = run_cli(
-            &["quality".as_ref(), p.as_os_str(), "--max-memory".as_ref(), "256M".as_ref()],
+            &[
+                "quality".as_ref(),
+                p.as_os_str(),
+                "--max-memory".as_ref(),
+                "256M".as_ref(),
+            ],
             Duration::from_secs(60),
         );
-        let what = format!("{top}: {} (rss {} KiB, {:.2} s)", run.stderr.trim(), run.max_rss_kib, run.secs);
+        let what = format!(
+            "{top}: {} (rss {} KiB, {:.2} s)",
+            run.stderr.trim(),
+            run.max_rss_kib,
+            run.secs
+        );
         assert_eq!((run.code, run.signal), (Some(1), None), "{what}");
         for n in needles {
             assert!(run.stderr.contains(n), "the error lacks '{n}': {what}");
