@@ -366,7 +366,7 @@ impl Reader<'_> {
             let comma = line.ends_with(',');
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let fields = match fields.split_last() {
-                Some((last, head)) if last.is_empty() => head,
+                Some((&"", head)) => head,
                 _ => &fields[..],
             };
             self.data(at, fields, comma)?;
