@@ -8,7 +8,8 @@
 //! `*NODE`/`*ELEMENT`, and `*INCLUDE` (relative to the including file, at
 //! most [`MAX_INCLUDE_DEPTH`] deep, cycles refused). A part instanced once
 //! with no translation or rotation (what most exporters write) reads as
-//! that part; more parts or instances are refused. Every other keyword
+//! that part, without the assembly's own nodes (reference points) and their
+//! sets; more parts or instances are refused. Every other keyword
 //! (materials, sections, steps, surfaces) is skipped with its data lines.
 //! Quadratic elements, pyramids and types of no known shape are refused
 //! with the type's name, the file and the line.
@@ -284,6 +285,9 @@ struct Reader<'b> {
     pending_line: usize,
     parts: Vec<String>,
     instances: Vec<String>,
+    /// Inside `*ASSEMBLY`, and inside its `*INSTANCE`.
+    in_assembly: bool,
+    in_instance: bool,
     /// The files being read, outermost first: an include of one is a cycle.
     open: Vec<PathBuf>,
 }
@@ -305,6 +309,8 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
         pending_line: 0,
         parts: Vec::new(),
         instances: Vec::new(),
+        in_assembly: false,
+        in_instance: false,
         open: Vec::new(),
     };
     r.file(path, data)?;
@@ -383,7 +389,20 @@ impl Reader<'_> {
                 .filter(|v| !v.is_empty())
                 .ok_or_else(|| at.err(format!("*{} needs {name}=", kw.name)))
         };
+        // nodes of the assembly itself (reference points) and sets of them
+        // are no part of the instance's mesh: their numbers are their own
+        let of_assembly = self.in_assembly && !self.in_instance;
         self.block = match kw.name.as_str() {
+            "ASSEMBLY" | "ENDASSEMBLY" => {
+                self.in_assembly = kw.name == "ASSEMBLY";
+                Block::Skip
+            }
+            "ENDINSTANCE" => {
+                self.in_instance = false;
+                Block::Skip
+            }
+            "NODE" | "ELEMENT" if of_assembly => Block::Skip,
+            "NSET" | "ELSET" if of_assembly && !kw.has("INSTANCE") => Block::Skip,
             "NODE" => Block::Nodes {
                 nset: kw.get("NSET").map(|n| self.nsets.get_or_add(n)),
             },
@@ -455,6 +474,7 @@ impl Reader<'_> {
                     )));
                 }
                 self.instances.push(kw.get("NAME").unwrap_or("").to_string());
+                self.in_instance = true;
                 Block::Instance
             }
             _ => Block::Skip,
@@ -620,10 +640,10 @@ impl Reader<'_> {
     }
 
     fn set_line(&mut self, at: At, fields: &[&str], set: usize, generate: bool, nodes: bool) -> Result<()> {
-        let (what, map) = if nodes {
-            ("node", &self.nodes)
+        let (what, article, map) = if nodes {
+            ("node", "a", &self.nodes)
         } else {
-            ("element", &self.elements)
+            ("element", "an", &self.elements)
         };
         let name = if nodes {
             &self.nsets.names[set]
@@ -682,7 +702,7 @@ impl Reader<'_> {
                 let sets = if nodes { &self.nsets } else { &self.elsets };
                 let other = sets.find(f).ok_or_else(|| {
                     at.err(format!(
-                        "'{}' is neither a {what} number nor a {what} set defined before this line",
+                        "'{}' is neither {article} {what} number nor {article} {what} set defined before this line",
                         clip(f)
                     ))
                 })?;

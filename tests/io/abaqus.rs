@@ -231,7 +231,8 @@ fn surfaces_and_lines_among_solids_are_lower_cells() {
     assert_eq!(back.data.element_sets, m.data.element_sets);
 }
 
-/// A part instanced once in an assembly, its nodes in an included file
+/// A part instanced once in an assembly with a reference point of its own,
+/// the part's nodes in an included file
 /// (which includes another, relative to itself), sets at assembly level.
 #[test]
 fn parts_instances_and_includes_read_as_one_mesh() {
@@ -261,6 +262,10 @@ fn parts_instances_and_includes_read_as_one_mesh() {
 *Assembly, name=Assembly
 *Instance, name=Beam-1, part=Beam
 *End Instance
+*Node
+1, 5., 5., 5.
+*Nset, nset=RP
+1,
 *Nset, nset=Tip, instance=Beam-1
  4,
 *Elset, elset=Everything, instance=Beam-1
@@ -272,7 +277,7 @@ fn parts_instances_and_includes_read_as_one_mesh() {
     // an element set cannot hold node sets: the name is looked up among element sets
     let e = io::read(&main).unwrap_err().to_string();
     assert!(
-        e.contains("model.inp") && e.contains("line 16") && e.contains("Beam-1.Base"),
+        e.contains("model.inp") && e.contains("line 20") && e.contains("Beam-1.Base"),
         "{e}"
     );
     let text = std::fs::read_to_string(&main).unwrap().replace(" Beam-1.Base,", " 1,");
@@ -283,6 +288,8 @@ fn parts_instances_and_includes_read_as_one_mesh() {
     assert_eq!(nset(&m, "Base"), vec![1, 2, 3]);
     assert_eq!(nset(&m, "Tip"), vec![4]);
     assert_eq!(elset(&m, "Everything"), vec![1]);
+    // the assembly's reference point is not a node of the mesh
+    assert!(m.data.node_sets.iter().all(|s| s.name != "RP"));
 }
 
 /// `.inp` to `.inp` and to `.vtu` and back keeps the nodes (numbers and
