@@ -772,7 +772,8 @@ fn id_lines(w: &mut dyn Write, ids: impl Iterator<Item = i64>) -> WriteResult {
     Ok(())
 }
 
-/// A set name Abaqus takes: no commas, no blanks, quotes or line breaks.
+/// A set name Abaqus takes: no commas, blanks, quotes or line breaks, a
+/// letter or an underscore (its internal sets) first.
 fn set_name(name: &str) -> String {
     let s: String = name
         .chars()
@@ -784,7 +785,7 @@ fn set_name(name: &str) -> String {
             }
         })
         .collect();
-    if s.starts_with(|c: char| c.is_ascii_alphabetic()) {
+    if s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
         s
     } else {
         format!("S{s}")
