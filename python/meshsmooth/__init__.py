@@ -558,7 +558,7 @@ def write(
     """Writes a mesh with the library's writers, with the per-cell
     ``inverse_mean_ratio``; refuses (writing nothing) a mesh with inverted
     cells. ``format`` (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2,
-    msh2-binary, msh4, msh4-binary, medit) defaults to the extension's."""
+    msh2-binary, msh4, msh4-binary, medit, abaqus) defaults to the extension's."""
     p = _check_points(points)
     kinds, offsets, conn = _flatten(_check_cells(cells, p))
     _core.write(os.fspath(path), _as3(p), kinds, offsets, conn, format)

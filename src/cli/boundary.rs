@@ -14,10 +14,12 @@ pub struct BoundaryArgs {
     /// feature edge, and an edge turning by more than it makes a corner.
     #[arg(long, value_name = "DEGREES", default_value_t = Boundary::default().feature_angle)]
     pub feature_angle: f64,
-    /// Fix the vertices of a Gmsh physical group (name or number); repeatable.
+    /// Fix the vertices of a group: a Gmsh physical group (name or number), an
+    /// element set or a node set (Abaqus *ELSET, *NSET); repeatable.
     #[arg(long, value_name = "GROUP")]
     pub fix_group: Vec<String>,
-    /// Release the vertices of a Gmsh physical group's boundary cells (fixed by default);
+    /// Release the vertices of a group's boundary cells (fixed by default), or of a
+    /// node set; a group is a Gmsh physical group, an element set or a node set;
     /// repeatable.
     #[arg(long, value_name = "GROUP")]
     pub free_group: Vec<String>,

@@ -441,12 +441,12 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
 }
 
 /// Where a command's time went: the file, the problem's setup, the solve,
-/// the output, the rest (checks, the default targets' tests, reports), and
-/// the whole.
+/// the output, the rest (checks, the default targets' tests, starting a GPU,
+/// untangling, reports), and the whole.
 fn timings(read: f64, info: &Info, write: f64, total: f64) -> String {
     let rest = (total - read - info.setup_seconds - info.seconds - write).max(0.0);
     format!(
-        "time: read {read:.3} s, setup {:.3} s, solve {:.3} s, write {write:.3} s, checks and reports {rest:.3} s; {total:.3} s in all",
+        "time: read {read:.3} s, setup {:.3} s, solve {:.3} s, write {write:.3} s, other {rest:.3} s; {total:.3} s in all",
         info.setup_seconds, info.seconds
     )
 }

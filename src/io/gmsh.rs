@@ -80,7 +80,7 @@ fn shape_of(tag: u64, t: i64) -> std::result::Result<Shape, String> {
 /// sparse numbering) go to a hash map, which keeps memory linear in the
 /// nodes and the hash out of the element loop.
 #[derive(Default)]
-struct TagMap {
+pub(crate) struct TagMap {
     dense: Vec<u32>,
     sparse: HashMap<u64, u32>,
     len: usize,
@@ -90,7 +90,7 @@ impl TagMap {
     const NONE: u32 = u32::MAX;
 
     /// False if `tag` is already there.
-    fn insert(&mut self, tag: u64, id: u32) -> bool {
+    pub(crate) fn insert(&mut self, tag: u64, id: u32) -> bool {
         if !self.sparse.is_empty() && self.sparse.contains_key(&tag) {
             return false;
         }
@@ -114,7 +114,7 @@ impl TagMap {
         true
     }
 
-    fn get(&self, tag: u64) -> Option<u32> {
+    pub(crate) fn get(&self, tag: u64) -> Option<u32> {
         match usize::try_from(tag).ok().and_then(|t| self.dense.get(t)) {
             Some(&id) if id != Self::NONE => Some(id),
             _ if self.sparse.is_empty() => None,
@@ -122,7 +122,7 @@ impl TagMap {
         }
     }
 
-    fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.len
     }
 }

@@ -1,4 +1,4 @@
-//! Mesh files: VTK legacy and XML, Gmsh, Medit; atomic writes.
+//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus; atomic writes.
 //!
 //! Readers produce a `RawMesh` (every cell in file order, with its shape);
 //! `RawMesh::into_mesh` then splits top-dimensional elements from lower
@@ -21,8 +21,20 @@
 //!   [`write`] replace any input array of the same name); Gmsh keeps the
 //!   `gmsh:physical`/`gmsh:geometrical` cell arrays as element tags and its
 //!   `$PhysicalNames`; Medit keeps nothing but the mesh;
+//! - named sets are `MeshData::node_sets` (vertex ids) and
+//!   `MeshData::element_sets` (element and lower-cell ids; a cell can be in
+//!   several): Abaqus `*NSET`/`*ELSET` read and write them, readers of other
+//!   formats with sets (Exodus node sets) fill the same fields through
+//!   `RawMesh::node_sets`/`cell_sets`. Both are groups for `--fix-group` and
+//!   `--free-group` beside Gmsh's physical groups; a node set fixes nothing
+//!   by itself. VTK/VTU carry them as field arrays `node_set:NAME` and
+//!   `element_set:NAME`; Gmsh and Medit drop them;
+//! - Abaqus keeps its node and element numbers and element types as the
+//!   arrays `abaqus:node_id`, `abaqus:element_id`, `abaqus:type` and
+//!   `abaqus:types`, which the `.inp` writer puts back;
 //! - `cell_data` is written to VTK/VTU only (other formats check its length).
 
+mod abaqus;
 mod atomic;
 mod batch;
 mod codec;
@@ -51,7 +63,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, PhysicalName};
+use crate::mesh::{DataArray, ElementKind, ElementSet, LowerKind, Mesh, NodeSet, PhysicalName, ValueType, Values};
 
 /// File formats meshsmooth reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -76,17 +88,19 @@ pub enum Format {
     Msh41Binary,
     /// Medit (`.mesh`), ASCII.
     Medit,
+    /// Abaqus input (`.inp`), ASCII.
+    Abaqus,
 }
 
 /// How much of a file [`Format::of_file`] reads: a VTU file's first array
 /// (and its compressor attribute) sits within the header.
 const HEAD_BYTES: u64 = 64 << 10;
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit)";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus)";
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 10] = [
+    pub const ALL: [Format; 11] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
@@ -97,6 +111,7 @@ impl Format {
         Format::Msh41Ascii,
         Format::Msh41Binary,
         Format::Medit,
+        Format::Abaqus,
     ];
 
     /// Default format for a file name's extension (used for writing; reading
@@ -111,6 +126,7 @@ impl Format {
             Some("vtu") => Ok(Format::VtuAscii),
             Some("msh") => Ok(Format::Msh41Ascii),
             Some("mesh") => Ok(Format::Medit),
+            Some("inp") => Ok(Format::Abaqus),
             _ => Err(Error::Unsupported(format!(
                 "{}: unknown mesh file extension; supported: {EXTENSIONS}",
                 path.display()
@@ -200,6 +216,7 @@ impl Format {
                 })
             }
             Family::Medit => Some(Format::Medit),
+            Family::Abaqus => Some(Format::Abaqus),
         }
     }
 
@@ -221,6 +238,7 @@ impl Format {
             Format::Msh41Ascii => "msh4",
             Format::Msh41Binary => "msh4-binary",
             Format::Medit => "medit",
+            Format::Abaqus => "abaqus",
         }
     }
 
@@ -230,7 +248,7 @@ impl Format {
         match self {
             Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => true,
             Format::Msh22Ascii | Format::Msh22Binary | Format::Msh41Ascii | Format::Msh41Binary => true,
-            Format::Medit => true,
+            Format::Medit | Format::Abaqus => true,
         }
     }
 
@@ -265,6 +283,7 @@ enum Family {
     Vtu,
     Gmsh,
     Medit,
+    Abaqus,
 }
 
 fn sniff(data: &[u8]) -> Option<Family> {
@@ -282,6 +301,9 @@ fn sniff(data: &[u8]) -> Option<Family> {
         Some(Family::Gmsh)
     } else if starts("MeshVersionFormatted") {
         Some(Family::Medit)
+    } else if starts("*") {
+        // a keyword or a `**` comment: no other format starts with one
+        Some(Family::Abaqus)
     } else {
         None
     }
@@ -343,6 +365,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
             Format::VtkAscii | Format::VtkBinary => Family::Vtk,
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => Family::Vtu,
             Format::Medit => Family::Medit,
+            Format::Abaqus => Family::Abaqus,
             _ => Family::Gmsh,
         },
     };
@@ -359,6 +382,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         Family::Vtu => vtu::read(path, &data, &budget)?,
         Family::Gmsh => gmsh::read(path, &data, &budget)?,
         Family::Medit => medit::read(path, &data, &budget)?,
+        Family::Abaqus => abaqus::read(path, &data, &budget)?,
     };
     drop(data);
     let mesh = raw.into_mesh(path)?;
@@ -483,10 +507,11 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[
         Format::Msh41Ascii => gmsh::write41(w, mesh, cell_data, false),
         Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
         Format::Medit => medit::write(w, mesh, cell_data),
+        Format::Abaqus => abaqus::write(w, mesh, cell_data),
     }
 }
 
-/// Gmsh and Medit files have no polyhedral cells: refuse before writing anything.
+/// Gmsh, Medit and Abaqus files have no polyhedral cells: refuse before writing anything.
 fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     let vtk = matches!(
         format,
@@ -494,7 +519,7 @@ fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     );
     match mesh.kinds.iter().position(|&k| k == ElementKind::Polyhedron) {
         Some(e) if !vtk => Err(Error::InvalidArgument(format!(
-            "cannot write {}: element {e} is a polyhedron, which the {format} format (Gmsh, Medit) cannot hold; \
+            "cannot write {}: element {e} is a polyhedron, which the {format} format cannot hold; \
              write VTK (.vtk) or VTK XML (.vtu)",
             path.display()
         ))),
@@ -544,6 +569,34 @@ impl From<Error> for WriteError {
 
 /// What a writer returns.
 pub type WriteResult = std::result::Result<(), WriteError>;
+
+/// Field arrays that carry named sets through VTK/VTU files, which have no
+/// sets: `node_set:NAME` holds a node set's vertex ids, `element_set:NAME`
+/// an element set's element ids (0-based; its lower cells are not written
+/// to VTK/VTU).
+const NODE_SET_FIELD: &str = "node_set:";
+const ELEMENT_SET_FIELD: &str = "element_set:";
+
+/// The field arrays a VTK/VTU writer writes: the input's, then one per set.
+pub(crate) fn out_field_arrays(mesh: &Mesh) -> Vec<std::borrow::Cow<'_, DataArray>> {
+    let ids = |prefix: &str, name: &str, ids: &[u32]| {
+        std::borrow::Cow::Owned(DataArray::new(
+            format!("{prefix}{name}"),
+            ValueType::I64,
+            1,
+            Values::Int(ids.iter().map(|&i| i64::from(i)).collect()),
+        ))
+    };
+    let data = &mesh.data;
+    let mut out: Vec<std::borrow::Cow<DataArray>> = data.field.iter().map(std::borrow::Cow::Borrowed).collect();
+    out.extend(data.node_sets.iter().map(|s| ids(NODE_SET_FIELD, &s.name, &s.vertices)));
+    out.extend(
+        data.element_sets
+            .iter()
+            .map(|s| ids(ELEMENT_SET_FIELD, &s.name, &s.elements)),
+    );
+    out
+}
 
 /// Checked by every writer right before it writes cell data, so a bad array
 /// fails the write midway and exercises the atomic clean-up.
@@ -601,6 +654,11 @@ pub(crate) struct RawMesh {
     pub field_data: Vec<DataArray>,
     pub physical_names: Vec<PhysicalName>,
     pub gmsh_entities: Vec<crate::mesh::data::GmshEntity>,
+    /// Named vertex sets (point ids).
+    pub node_sets: Vec<NodeSet>,
+    /// Named cell sets: every cell's index in file order, split into
+    /// elements and lower cells by [`into_mesh`](Self::into_mesh).
+    pub cell_sets: Vec<(String, Vec<u32>)>,
 }
 
 impl RawMesh {
@@ -685,6 +743,16 @@ impl RawMesh {
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
         mesh.data.gmsh_entities = self.gmsh_entities;
+        mesh.data.node_sets = self.node_sets;
+        mesh.data.element_sets = self
+            .cell_sets
+            .into_iter()
+            .map(|(name, elements)| ElementSet {
+                name,
+                elements,
+                lower: Vec::new(),
+            })
+            .collect();
         let mut fixed = self.fixed;
         if fixed.iter().any(|&f| f) {
             fixed.resize(n, false);
@@ -693,10 +761,50 @@ impl RawMesh {
         Ok(mesh)
     }
 
-    pub fn into_mesh(self, path: &Path) -> Result<Mesh> {
+    /// Takes the sets [`out_field_arrays`] wrote out of the field arrays.
+    fn sets_from_field(&mut self, path: &Path) -> Result<()> {
+        let (np, nc) = (self.points.len(), self.shapes.len());
+        let mut rest = Vec::with_capacity(self.field_data.len());
+        for a in std::mem::take(&mut self.field_data) {
+            let node = a.name.strip_prefix(NODE_SET_FIELD);
+            let cell = a.name.strip_prefix(ELEMENT_SET_FIELD);
+            let (Some(name), Values::Int(v)) = (node.or(cell), &a.values) else {
+                rest.push(a);
+                continue;
+            };
+            let n = if node.is_some() { np } else { nc };
+            let ids: Vec<u32> = v
+                .iter()
+                .map_while(|&i| u32::try_from(i).ok().filter(|&i| (i as usize) < n))
+                .collect();
+            if ids.len() != v.len() {
+                return Err(Error::parse(
+                    path,
+                    None,
+                    format!(
+                        "field array '{}' holds an id past the {n} the file has",
+                        lex::clip(&a.name)
+                    ),
+                ));
+            }
+            if node.is_some() {
+                self.node_sets.push(NodeSet {
+                    name: name.to_string(),
+                    vertices: ids,
+                });
+            } else {
+                self.cell_sets.push((name.to_string(), ids));
+            }
+        }
+        self.field_data = rest;
+        Ok(())
+    }
+
+    pub fn into_mesh(mut self, path: &Path) -> Result<Mesh> {
         if self.points.is_empty() {
             return Err(Error::parse(path, None, "the file has no points"));
         }
+        self.sets_from_field(path)?;
         let has3d = self.shapes.iter().any(|s| matches!(s, Shape::Elem(k) if k.dim() == 3));
         let ncells = self.shapes.len();
         let np = self.points.len();
@@ -778,6 +886,8 @@ impl RawMesh {
         mesh.data.field = self.field_data;
         mesh.data.physical_names = self.physical_names;
         mesh.data.gmsh_entities = self.gmsh_entities;
+        mesh.data.node_sets = self.node_sets;
+        mesh.data.element_sets = split_cell_sets(self.cell_sets, ncells, &elem_ids, &lower_ids);
         if fixed.iter().any(|&f| f) {
             mesh.fixed = fixed;
         }
@@ -790,6 +900,40 @@ impl RawMesh {
         }
         Ok(mesh)
     }
+}
+
+/// Sets of cells in file order as sets of elements and of lower cells,
+/// given which cells became which (`elem_ids`, `lower_ids`: ascending).
+fn split_cell_sets(
+    sets: Vec<(String, Vec<u32>)>,
+    cells: usize,
+    elem_ids: &[usize],
+    lower_ids: &[usize],
+) -> Vec<ElementSet> {
+    if sets.is_empty() {
+        return Vec::new();
+    }
+    // cell -> element id, or lower id with the top bit set
+    const LOWER: u32 = 1 << 31;
+    let mut to = vec![u32::MAX; cells];
+    elem_ids.iter().enumerate().for_each(|(e, &c)| to[c] = e as u32);
+    lower_ids
+        .iter()
+        .enumerate()
+        .for_each(|(l, &c)| to[c] = l as u32 | LOWER);
+    sets.into_iter()
+        .map(|(name, cells)| {
+            let (lower, elements): (Vec<u32>, Vec<u32>) = cells
+                .iter()
+                .filter_map(|&c| to.get(c as usize).copied().filter(|&t| t != u32::MAX))
+                .partition(|&t| t & LOWER != 0);
+            ElementSet {
+                name,
+                elements,
+                lower: lower.into_iter().map(|t| t & !LOWER).collect(),
+            }
+        })
+        .collect()
 }
 
 /// Shortest text that parses back to exactly `x` (`{:?}` switches to

@@ -862,7 +862,8 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], bina
     writeln!(w, "written by meshsmooth")?;
     writeln!(w, "{}", if binary { "BINARY" } else { "ASCII" })?;
     writeln!(w, "DATASET UNSTRUCTURED_GRID")?;
-    write_field(w, &mesh.data.field.iter().collect::<Vec<_>>(), binary)?;
+    let field = super::out_field_arrays(mesh);
+    write_field(w, &field.iter().map(|a| &**a).collect::<Vec<_>>(), binary)?;
     writeln!(w, "POINTS {n} double")?;
     if binary {
         let mut buf = Vec::with_capacity(24 * n);

@@ -1481,9 +1481,10 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
     )?;
     writeln!(w, "  <UnstructuredGrid>")?;
     let mut o = Out { w, enc };
-    if !mesh.data.field.is_empty() {
+    let field = super::out_field_arrays(mesh);
+    if !field.is_empty() {
         writeln!(o.w, "    <FieldData>")?;
-        for a in &mesh.data.field {
+        for a in &field {
             o.array("      ", a)?;
         }
         writeln!(o.w, "    </FieldData>")?;

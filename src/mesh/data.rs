@@ -191,6 +191,41 @@ pub const GMSH_PHYSICAL: &str = "gmsh:physical";
 /// The cell array of Gmsh's elementary (geometrical entity) tags.
 pub const GMSH_ELEMENTARY: &str = "gmsh:geometrical";
 
+/// A named set of vertices (an Abaqus `*NSET`; an Exodus node set). Being
+/// in a set fixes nothing: `--fix-group NAME` fixes its vertices,
+/// `--free-group NAME` releases them from the lower cells that fixed them.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct NodeSet {
+    /// The set's name.
+    pub name: String,
+    /// Its vertices (0-based point ids, ascending, no repeats).
+    pub vertices: Vec<u32>,
+}
+
+/// A named set of cells (an Abaqus `*ELSET`): unlike a Gmsh physical tag,
+/// of which a cell has one, a cell can be in any number of sets. A group
+/// name given to `--fix-group`/`--free-group` stands for its cells as it
+/// stands for the cells of a physical group of that name.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ElementSet {
+    /// The set's name.
+    pub name: String,
+    /// Its elements (`Mesh::kinds` order, ascending, no repeats).
+    pub elements: Vec<u32>,
+    /// Its lower cells (`Mesh::lower` order, ascending, no repeats).
+    pub lower: Vec<u32>,
+}
+
+/// The point array of an Abaqus file's node numbers (written back to `.inp`).
+pub const ABAQUS_NODE_ID: &str = "abaqus:node_id";
+/// The cell array of an Abaqus file's element numbers.
+pub const ABAQUS_ELEMENT_ID: &str = "abaqus:element_id";
+/// The cell array of each cell's index into [`ABAQUS_TYPES`].
+pub const ABAQUS_TYPE: &str = "abaqus:type";
+/// The field array of the Abaqus element type names (`C3D8R`) that
+/// [`ABAQUS_TYPE`] indexes.
+pub const ABAQUS_TYPES: &str = "abaqus:types";
+
 /// Everything of a file beyond the geometry and the topology.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MeshData {
@@ -208,6 +243,12 @@ pub struct MeshData {
     /// Gmsh 4.1 `$Entities` (empty when the input had none).
     #[serde(default)]
     pub gmsh_entities: Vec<GmshEntity>,
+    /// Named vertex sets (Abaqus `*NSET`).
+    #[serde(default)]
+    pub node_sets: Vec<NodeSet>,
+    /// Named cell sets (Abaqus `*ELSET`).
+    #[serde(default)]
+    pub element_sets: Vec<ElementSet>,
 }
 
 impl MeshData {
@@ -219,6 +260,35 @@ impl MeshData {
             && self.field.is_empty()
             && self.physical_names.is_empty()
             && self.gmsh_entities.is_empty()
+            && self.node_sets.is_empty()
+            && self.element_sets.is_empty()
+    }
+
+    /// The sets restricted to the vertices `keep` of `points` and the
+    /// lower cells `lower` of `cells` (both ascending), renumbered in that
+    /// order: what is not kept leaves its sets.
+    pub fn keep_in_sets(&mut self, points: usize, keep: &[usize], cells: usize, lower: &[usize]) {
+        fn renumber(ids: &mut Vec<u32>, local: &[u32]) {
+            ids.retain_mut(|v| {
+                *v = local.get(*v as usize).copied().unwrap_or(u32::MAX);
+                *v != u32::MAX
+            });
+        }
+        fn local(n: usize, kept: &[usize]) -> Vec<u32> {
+            let mut local = vec![u32::MAX; n];
+            for (l, &v) in kept.iter().enumerate() {
+                local[v] = l as u32;
+            }
+            local
+        }
+        if !self.node_sets.is_empty() {
+            let map = local(points, keep);
+            self.node_sets.iter_mut().for_each(|s| renumber(&mut s.vertices, &map));
+        }
+        if !self.element_sets.is_empty() && lower.len() != cells {
+            let map = local(cells, lower);
+            self.element_sets.iter_mut().for_each(|s| renumber(&mut s.lower, &map));
+        }
     }
 
     /// The element array called `name`, if any.
@@ -290,6 +360,22 @@ impl MeshData {
             }
         } else if lower == 0 && !self.lower.is_empty() {
             return Err(Error::InvalidMesh("lower-cell arrays but no lower cells".into()));
+        }
+        let past = |what: &str, name: &str, id: u32, n: usize| {
+            Error::InvalidMesh(format!("{what} set '{name}' holds {id}, but there are {n}"))
+        };
+        for s in &self.node_sets {
+            if let Some(&v) = s.vertices.iter().find(|&&v| v as usize >= points) {
+                return Err(past("node", &s.name, v, points));
+            }
+        }
+        for s in &self.element_sets {
+            if let Some(&e) = s.elements.iter().find(|&&e| e as usize >= elements) {
+                return Err(past("element", &s.name, e, elements));
+            }
+            if let Some(&c) = s.lower.iter().find(|&&c| c as usize >= lower) {
+                return Err(past("element", &s.name, c, lower));
+            }
         }
         Ok(())
     }

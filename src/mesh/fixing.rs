@@ -1,5 +1,6 @@
 //! Which vertices stay fixed, from what the file holds: Gmsh physical groups
-//! (by name or number), point-data arrays, lists of vertex ids. Applied to
+//! (by name or number) and named element and node sets (Abaqus `*ELSET`,
+//! `*NSET`; a node set fixes nothing until a rule names it), point-data arrays, lists of vertex ids. Applied to
 //! `Mesh::fixed` before a problem is built; each rule reports how many
 //! vertices it fixed (or released).
 //!
@@ -9,9 +10,11 @@
 //! are facets on the skin (faces of a volume mesh, lines of a planar one)
 //! describe the boundary rather than fix it, so they release theirs too
 //! (internal interfaces stay fixed); a vertex also on another lower cell, or
-//! flagged by a `fixed` point array, stays fixed.
+//! flagged by a `fixed` point array, stays fixed. A node set given to
+//! `free_groups` releases its vertices whatever lower cells hold them (but
+//! not those a `fixed` array flags).
 
-use super::data::{DataArray, GMSH_PHYSICAL, Values};
+use super::data::{DataArray, ElementSet, GMSH_PHYSICAL, NodeSet, Values};
 use super::{LowerKind, Mesh};
 use crate::error::{Error, Result};
 use std::collections::BTreeSet;
@@ -71,27 +74,24 @@ impl FixRules {
         } else {
             &[LowerKind::Line]
         };
-        let freed_tags: Vec<(String, BTreeSet<i64>)> = self
+        let freed: Vec<(String, Group)> = self
             .free_groups
             .iter()
-            .map(|g| Ok((g.clone(), group_tags(mesh, g, "free_groups")?)))
+            .map(|g| Ok((g.clone(), Group::resolve(mesh, g, "free_groups")?)))
             .collect::<Result<_>>()?;
-        if !freed_tags.is_empty() || self.release_facets {
+        if !freed.is_empty() || self.release_facets {
             let skin = if self.release_facets {
                 super::topology::skin_vertices(mesh)
             } else {
                 vec![false; n]
             };
-            let lower_tag = mesh.data.lower_array(GMSH_PHYSICAL);
-            let tag = |i: usize| lower_tag.map(|a| a.get_i64(i));
+            let freed_lower: Vec<Vec<bool>> = freed.iter().map(|(_, g)| g.lower_cells(mesh)).collect();
             let released_by = |i: usize, kind: LowerKind, vs: &[u32]| -> Option<usize> {
-                if let Some(t) = tag(i)
-                    && let Some(k) = freed_tags.iter().position(|(_, tags)| tags.contains(&t))
-                {
+                if let Some(k) = freed_lower.iter().position(|l| l[i]) {
                     return Some(k);
                 }
                 let on_skin = vs.iter().all(|&v| skin[v as usize]);
-                (self.release_facets && facet_kinds.contains(&kind) && on_skin).then_some(freed_tags.len())
+                (self.release_facets && facet_kinds.contains(&kind) && on_skin).then_some(freed.len())
             };
             let mut keep = vec![false; n];
             if let Some(a) = mesh.data.point.iter().find(|a| a.name == "fixed") {
@@ -99,6 +99,7 @@ impl FixRules {
                     *k = nonzero(a, v);
                 }
             }
+            let flagged = keep.clone();
             let mut released: Vec<Option<usize>> = vec![None; n];
             for (i, (kind, vs)) in mesh.lower.iter().enumerate() {
                 match released_by(i, *kind, vs) {
@@ -108,7 +109,7 @@ impl FixRules {
                     None => vs.iter().for_each(|&v| keep[v as usize] = true),
                 }
             }
-            let mut counts = vec![0usize; freed_tags.len() + 1];
+            let mut counts = vec![0usize; freed.len() + 1];
             for v in 0..n {
                 if let Some(k) = released[v]
                     && !keep[v]
@@ -118,38 +119,34 @@ impl FixRules {
                     counts[k] += 1;
                 }
             }
-            for (k, (g, _)) in freed_tags.iter().enumerate() {
+            // a node set names its vertices: they are released whatever
+            // lower cells hold them, unless a `fixed` array flags them
+            for (k, (_, g)) in freed.iter().enumerate() {
+                for &v in g.node_sets.iter().flat_map(|s| &s.vertices) {
+                    let v = v as usize;
+                    if fixed[v] && !flagged[v] {
+                        fixed[v] = false;
+                        counts[k] += 1;
+                    }
+                }
+            }
+            for (k, (g, _)) in freed.iter().enumerate() {
                 report.push(RuleCount {
                     option: "free_groups",
                     value: format!("{g} (released)"),
                     vertices: counts[k],
                 });
             }
-            if self.release_facets && counts[freed_tags.len()] > 0 {
+            if self.release_facets && counts[freed.len()] > 0 {
                 report.push(RuleCount {
                     option: "boundary",
                     value: "slide (boundary faces of the file released)".into(),
-                    vertices: counts[freed_tags.len()],
+                    vertices: counts[freed.len()],
                 });
             }
         }
         for g in &self.fix_groups {
-            let tags = group_tags(mesh, g, "fix_groups")?;
-            let mut hit = vec![false; n];
-            if let Some(a) = mesh.data.cell_array(GMSH_PHYSICAL) {
-                for e in 0..mesh.num_elements() {
-                    if tags.contains(&a.get_i64(e)) {
-                        mesh.element(e).iter().for_each(|&v| hit[v as usize] = true);
-                    }
-                }
-            }
-            if let Some(a) = mesh.data.lower_array(GMSH_PHYSICAL) {
-                for (i, (_, vs)) in mesh.lower.iter().enumerate() {
-                    if tags.contains(&a.get_i64(i)) {
-                        vs.iter().for_each(|&v| hit[v as usize] = true);
-                    }
-                }
-            }
+            let hit = Group::resolve(mesh, g, "fix_groups")?.vertices(mesh);
             report.push(mark(&mut fixed, &hit, "fix_groups", g.clone()));
         }
         for name in &self.fixed_arrays {
@@ -216,20 +213,48 @@ fn mark(fixed: &mut [bool], hit: &[bool], option: &'static str, value: String) -
     }
 }
 
-/// The physical tags a group name or number stands for.
-fn group_tags(mesh: &Mesh, group: &str, option: &'static str) -> Result<BTreeSet<i64>> {
-    let mut present: BTreeSet<i64> = BTreeSet::new();
-    for a in [
-        mesh.data.cell_array(GMSH_PHYSICAL),
-        mesh.data.lower_array(GMSH_PHYSICAL),
-    ]
-    .into_iter()
-    .flatten()
-    {
-        present.extend((0..a.tuples()).map(|i| a.get_i64(i)));
-    }
-    let names = &mesh.data.physical_names;
-    let known = || {
+/// What a group name (or physical number) stands for: the physical tags
+/// of that name or number, and the element and node sets of that name.
+struct Group<'m> {
+    tags: BTreeSet<i64>,
+    element_sets: Vec<&'m ElementSet>,
+    node_sets: Vec<&'m NodeSet>,
+}
+
+impl<'m> Group<'m> {
+    fn resolve(mesh: &'m Mesh, group: &str, option: &'static str) -> Result<Group<'m>> {
+        let mut present: BTreeSet<i64> = BTreeSet::new();
+        for a in [
+            mesh.data.cell_array(GMSH_PHYSICAL),
+            mesh.data.lower_array(GMSH_PHYSICAL),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            present.extend((0..a.tuples()).map(|i| a.get_i64(i)));
+        }
+        let data = &mesh.data;
+        let names = &data.physical_names;
+        let tags: BTreeSet<i64> = match group.trim().parse::<i64>() {
+            Ok(t) => [t].into_iter().filter(|t| present.contains(t)).collect(),
+            Err(_) => names.iter().filter(|p| p.name == group).map(|p| p.tag as i64).collect(),
+        };
+        // set names as the file spells them, else in any case (Abaqus's
+        // names are case-insensitive)
+        let named = |name: &str| name == group;
+        let any_case = |name: &str| name.eq_ignore_ascii_case(group);
+        let pick = |same: &dyn Fn(&str) -> bool| Group {
+            tags: tags.clone(),
+            element_sets: data.element_sets.iter().filter(|s| same(&s.name)).collect(),
+            node_sets: data.node_sets.iter().filter(|s| same(&s.name)).collect(),
+        };
+        let mut found = pick(&named);
+        if found.element_sets.is_empty() && found.node_sets.is_empty() {
+            found = pick(&any_case);
+        }
+        if !found.tags.is_empty() || !found.element_sets.is_empty() || !found.node_sets.is_empty() {
+            return Ok(found);
+        }
         let mut list: Vec<String> = names.iter().map(|p| format!("{} ({})", p.name, p.tag)).collect();
         list.extend(
             present
@@ -237,23 +262,57 @@ fn group_tags(mesh: &Mesh, group: &str, option: &'static str) -> Result<BTreeSet
                 .filter(|t| !names.iter().any(|p| p.tag as i64 == **t))
                 .map(|t| t.to_string()),
         );
-        if list.is_empty() {
+        list.extend(data.element_sets.iter().map(|s| format!("{} (element set)", s.name)));
+        list.extend(data.node_sets.iter().map(|s| format!("{} (node set)", s.name)));
+        let known = if list.is_empty() {
             "none".to_string()
         } else {
             list.join(", ")
-        }
-    };
-    let tags: BTreeSet<i64> = match group.trim().parse::<i64>() {
-        Ok(t) => [t].into_iter().filter(|t| present.contains(t)).collect(),
-        Err(_) => names.iter().filter(|p| p.name == group).map(|p| p.tag as i64).collect(),
-    };
-    if tags.is_empty() {
-        return Err(Error::InvalidOption {
+        };
+        Err(Error::InvalidOption {
             option,
-            message: format!("no physical group '{group}' in the mesh (its groups: {})", known()),
-        });
+            message: format!("no physical group or set '{group}' in the mesh (its groups: {known})"),
+        })
     }
-    Ok(tags)
+
+    /// Per lower cell, whether the group holds it.
+    fn lower_cells(&self, mesh: &Mesh) -> Vec<bool> {
+        let mut hit = vec![false; mesh.lower.len()];
+        if let Some(a) = mesh.data.lower_array(GMSH_PHYSICAL) {
+            for (i, h) in hit.iter_mut().enumerate() {
+                *h = self.tags.contains(&a.get_i64(i));
+            }
+        }
+        for s in &self.element_sets {
+            s.lower.iter().for_each(|&c| hit[c as usize] = true);
+        }
+        hit
+    }
+
+    /// Per vertex, whether a cell or node set of the group holds it.
+    fn vertices(&self, mesh: &Mesh) -> Vec<bool> {
+        let mut hit = vec![false; mesh.num_points()];
+        let mut cover = |vs: &[u32]| vs.iter().for_each(|&v| hit[v as usize] = true);
+        if let Some(a) = mesh.data.cell_array(GMSH_PHYSICAL) {
+            for e in 0..mesh.num_elements() {
+                if self.tags.contains(&a.get_i64(e)) {
+                    cover(mesh.element(e));
+                }
+            }
+        }
+        for s in &self.element_sets {
+            s.elements.iter().for_each(|&e| cover(mesh.element(e as usize)));
+        }
+        for (c, in_group) in self.lower_cells(mesh).into_iter().enumerate() {
+            if in_group {
+                cover(&mesh.lower[c].1);
+            }
+        }
+        for s in &self.node_sets {
+            cover(&s.vertices);
+        }
+        hit
+    }
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@ pub mod sweep_order;
 #[doc(hidden)]
 pub mod topology;
 
-pub use data::{DataArray, MeshData, PhysicalName, ValueType, Values};
+pub use data::{DataArray, ElementSet, MeshData, NodeSet, PhysicalName, ValueType, Values};
 pub use element::ElementKind;
 pub use polyhedron::Faces;
 
@@ -249,6 +249,7 @@ impl Mesh {
         if lower.len() != self.lower.len() {
             data.lower = data.lower.iter().map(|a| a.select(&lower)).collect();
         }
+        data.keep_in_sets(self.points.len(), keep, self.lower.len(), &lower);
         Mesh {
             points: keep.iter().map(|&v| self.points[v]).collect(),
             kinds: self.kinds.clone(),

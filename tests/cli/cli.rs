@@ -418,7 +418,7 @@ fn smooth_says_where_its_time_went() {
         .lines()
         .find(|l| l.starts_with("time: "))
         .unwrap_or_else(|| panic!("{all}"));
-    // "time: read R s, setup S s, solve T s, write W s, checks and reports C s; A s in all"
+    // "time: read R s, setup S s, solve T s, write W s, other O s; A s in all"
     let numbers: Vec<f64> = line
         .split(|c: char| !(c.is_ascii_digit() || c == '.'))
         .filter(|t| !t.is_empty() && t.contains('.'))

@@ -381,6 +381,7 @@ fn no_panics_on_truncated_or_corrupted_files() {
             Format::VtkAscii | Format::VtkBinary => "vtk",
             Format::VtuAscii | Format::VtuBinary => "vtu",
             Format::Medit => "mesh",
+            Format::Abaqus => "inp",
             _ => "msh",
         };
         let src = dir.path().join(format!("src.{ext}"));
@@ -423,6 +424,7 @@ fn bombs_and_their_mutants_stay_bounded() {
         bombs::lzma_bomb(1025, 1025 * bombs::CHUNK_ZEROS),
     ));
     corpus.push(("zlib_1g.vtu".into(), bombs::zlib_conn_1g()));
+    corpus.extend(bombs::abaqus_bombs().into_iter().map(|(n, b, _)| (n.to_string(), b)));
     let dir = tempfile::tempdir().unwrap();
     let mut seed = 0x5851_f42d_4c95_7f2du64;
     let mut rand = move || {

@@ -290,6 +290,85 @@ pub fn zlib_conn_1g() -> Vec<u8> {
     out.into_bytes()
 }
 
+/// Abaqus files that ask for more than they hold: a GENERATE range of
+/// 10^15 node numbers, and a set naming a 1000-node set 200000 times
+/// (800 MB of members from 0.6 MB of text).
+pub fn abaqus_bombs() -> Vec<(&'static str, Vec<u8>, &'static str)> {
+    let mut nodes = String::from("*NODE, NSET=A\n");
+    for i in 1..=1000 {
+        nodes.push_str(&format!("{i}, {i}., 0., 0.\n"));
+    }
+    let range = format!("{nodes}*NSET, NSET=R, GENERATE\n1, 1000000000000000, 1\n");
+    let many = format!("{nodes}*NSET, NSET=B\n{}\n", "A, ".repeat(200_000));
+    vec![
+        ("generate.inp", range.into_bytes(), "covers 1000000000000000 nodes"),
+        ("amplified.inp", many.into_bytes(), "set 'B'"),
+    ]
+}
+
+#[test]
+fn abaqus_ranges_and_set_references_past_the_budget_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes, needle) in abaqus_bombs() {
+        let p = dir.path().join(name);
+        std::fs::write(&p, &bytes).unwrap();
+        refused(&p, Some("256M"), &[needle, "line"]);
+    }
+}
+
+/// Includes: a binary tree of 12 levels whose leaves are 2 MiB (8 GiB
+/// read in all) ends at the budget; a chain 20 files deep at the depth
+/// limit; a file that includes itself at once.
+#[test]
+fn abaqus_include_trees_chains_and_cycles_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let levels = 12;
+    for k in 0..levels {
+        let next = format!("tree{}.inp", k + 1);
+        let body = format!("*INCLUDE, INPUT={next}\n*INCLUDE, INPUT={next}\n");
+        std::fs::write(d.join(format!("tree{k}.inp")), body).unwrap();
+    }
+    let leaf = "** padding to make the leaf large\n".repeat((2 << 20) / 34);
+    std::fs::write(d.join(format!("tree{levels}.inp")), leaf).unwrap();
+    for k in 0..20 {
+        std::fs::write(
+            d.join(format!("chain{k}.inp")),
+            format!("*INCLUDE, INPUT=chain{}.inp\n", k + 1),
+        )
+        .unwrap();
+    }
+    std::fs::write(d.join("chain20.inp"), "*NODE\n1, 0, 0, 0\n").unwrap();
+    std::fs::write(d.join("self.inp"), "*NODE\n1, 0, 0, 0\n*INCLUDE, INPUT=./self.inp\n").unwrap();
+    for (top, needles) in [
+        ("tree0.inp", &["memory budget", "*INCLUDE of"][..]),
+        ("chain0.inp", &["chain15.inp: line 1", "more than 16 files deep"][..]),
+        ("self.inp", &["self.inp: line 3", "*INCLUDE cycle"][..]),
+    ] {
+        let p = d.join(top);
+        let run = run_cli(
+            &[
+                "quality".as_ref(),
+                p.as_os_str(),
+                "--max-memory".as_ref(),
+                "256M".as_ref(),
+            ],
+            Duration::from_secs(60),
+        );
+        let what = format!(
+            "{top}: {} (rss {} KiB, {:.2} s)",
+            run.stderr.trim(),
+            run.max_rss_kib,
+            run.secs
+        );
+        assert_eq!((run.code, run.signal), (Some(1), None), "{what}");
+        for n in needles {
+            assert!(run.stderr.contains(n), "the error lacks '{n}': {what}");
+        }
+        assert!(run.max_rss_kib < 1 << 20 && run.secs < 5.0, "{what}");
+    }
+}
+
 #[test]
 fn declared_sizes_past_the_data_are_refused() {
     let dir = tempfile::tempdir().unwrap();

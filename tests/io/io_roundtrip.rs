@@ -197,7 +197,8 @@ fn every_format_round_trips_every_mesh() {
     let dir = tempfile::tempdir().unwrap();
     for (name, m) in test_meshes() {
         for f in Format::ALL {
-            if f == Format::Medit && !is_grouped(&m) {
+            // Medit and Abaqus write one block per kind: interleaved kinds come back grouped
+            if matches!(f, Format::Medit | Format::Abaqus) && !is_grouped(&m) {
                 continue;
             }
             let path = dir.path().join(format!("{name}-{f}.{}", ext(f)));
@@ -218,6 +219,16 @@ fn every_format_round_trips_every_mesh() {
                 | Format::VtuBinary
                 | Format::VtuZlib
                 | Format::Medit => assert_eq!(got.lower, m.lower, "{ctx}: lower"),
+                // Abaqus has no point element: the fixed flags of points travel as a node set
+                Format::Abaqus => {
+                    let cells: Vec<_> = m
+                        .lower
+                        .iter()
+                        .filter(|(k, _)| *k != LowerKind::Vertex)
+                        .cloned()
+                        .collect();
+                    assert_eq!(got.lower, cells, "{ctx}: lower");
+                }
                 _ => {
                     // Gmsh keeps lower cells and adds point cells for other fixed vertices.
                     assert_eq!(got.lower[..m.lower.len()], m.lower[..], "{ctx}: lower");

@@ -191,7 +191,8 @@ fn gmsh_views_survive_msh_and_vtu_round_trips() {
             let ext = match f {
                 Format::VtkAscii | Format::VtkBinary => "vtk",
                 Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
-                Format::Medit => continue,
+                // neither holds arrays of values
+                Format::Medit | Format::Abaqus => continue,
                 _ => "msh",
             };
             let out = dir.path().join(format!("views-{version}.{f}.{ext}"));

@@ -7,6 +7,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod abaqus;
 mod bad_input_io;
 mod bombs;
 mod interop;
