@@ -31,7 +31,7 @@ pub fn fixed_line(fixed: &Fixed, vertices: usize, sliding: bool) -> String {
     if fixed.skin > 0 {
         why.push(if sliding {
             format!(
-                "{} on the boundary (corners and marked vertices; the rest slide)",
+                "{} on the boundary (with --boundary slide only corners and marked vertices stay)",
                 fixed.skin
             )
         } else {

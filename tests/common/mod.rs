@@ -331,3 +331,14 @@ pub fn box_with_unused() -> (Mesh, Vec<usize>) {
 pub fn bits(p: &[f64; 3]) -> [u64; 3] {
     p.map(f64::to_bits)
 }
+
+/// A xorshift64 stream: the same pseudo-random numbers on every run, for
+/// the fuzz tests' mutants.
+pub fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    }
+}

@@ -10,6 +10,7 @@ use meshsmooth::io::{self, Format};
 use meshsmooth::mesh::data::{ABAQUS_ELEMENT_ID, ABAQUS_NODE_ID, ABAQUS_TYPE, ABAQUS_TYPES};
 use meshsmooth::mesh::{DataArray, ElementKind, LowerKind, Mesh, Values};
 
+use crate::common;
 use crate::common::cli::{meshsmooth, s, text};
 
 fn put(dir: &Path, name: &str, content: &str) -> PathBuf {
@@ -628,13 +629,7 @@ fn prefixes_and_mutants_read_or_fail_cleanly() {
     for cut in 0..bytes.len() {
         check(&bytes[..cut], &format!("cut at {cut}"));
     }
-    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-    let mut rand = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
-    };
+    let mut rand = common::xorshift(0x9e37_79b9_7f4a_7c15u64);
     for k in 0..400 {
         let mut b = bytes.to_vec();
         let i = rand() as usize % b.len();

@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use meshsmooth::io::{self, CellData, Format};
 use meshsmooth::mesh::{ElementKind, LowerKind, Mesh};
 
+use crate::common;
+
 fn small_tets() -> Mesh {
     let mut m = Mesh::new(vec![
         [0.0, 0.0, 0.0],
@@ -369,13 +371,7 @@ fn failed_write_keeps_previous_content() {
 fn no_panics_on_truncated_or_corrupted_files() {
     let m = small_tets();
     let dir = tempfile::tempdir().unwrap();
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut rand = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
-    };
+    let mut rand = common::xorshift(0x2545_f491_4f6c_dd1du64);
     for f in Format::ALL {
         let ext = match f {
             Format::VtkAscii | Format::VtkBinary => "vtk",
@@ -426,13 +422,7 @@ fn bombs_and_their_mutants_stay_bounded() {
     corpus.push(("zlib_1g.vtu".into(), bombs::zlib_conn_1g()));
     corpus.extend(bombs::abaqus_bombs().into_iter().map(|(n, b, _)| (n.to_string(), b)));
     let dir = tempfile::tempdir().unwrap();
-    let mut seed = 0x5851_f42d_4c95_7f2du64;
-    let mut rand = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
-    };
+    let mut rand = common::xorshift(0x5851_f42d_4c95_7f2du64);
     let mut worst = (0, String::new());
     for (name, bytes) in &corpus {
         let p = dir.path().join(name);
@@ -695,13 +685,7 @@ fn truncated_or_corrupted_compressed_vtu_is_refused() {
         files.push((f.into(), std::fs::read(data.join(f)).unwrap()));
     }
     let start = std::time::Instant::now();
-    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-    let mut rand = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
-    };
+    let mut rand = common::xorshift(0x9e37_79b9_7f4a_7c15u64);
     for (name, bytes) in &files {
         let p = dir.path().join("cut.vtu");
         let full = String::from_utf8_lossy(bytes);

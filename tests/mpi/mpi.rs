@@ -384,7 +384,7 @@ fn sliding_boundary_on_two_ranks_matches_one_process() {
             let one = smooth_with(None, input, dir.path(), method, "metis", &slide);
             let two = smooth_with(Some(2), input, dir.path(), method, "metis", &slide);
             assert!(two.stdout.contains("mpi (2 ranks)"), "{what}: not partitioned");
-            assert!(two.stdout.contains("--boundary slide"), "{what}: {}", two.stdout);
+            assert!(two.stdout.contains("slide on boundary faces"), "{what}: {}", two.stdout);
             // the boundary slid: the fixed-boundary problem's fixed vertices moved
             let p = Problem::new(&mesh).unwrap();
             let slid = p
