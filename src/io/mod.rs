@@ -12,7 +12,7 @@
 //!   their cell arrays cover both, the lower cells' values from
 //!   `MeshData::lower`, and where there are none (the `cell_data` quality
 //!   arrays, which measure elements only) NaN for floats, 0 for integers
-//!   and "" for strings. `.pvtu` pieces hold elements only. VTK/VTU carry
+//!   and "" for strings; `.pvtu` pieces hold them too. VTK/VTU carry
 //!   `fixed` as point data; Gmsh stores fixed vertices not covered by lower
 //!   cells as point elements (type 15), which read back as lower `Vertex`
 //!   cells; Medit stores them as RequiredVertices and groups elements by kind;

@@ -2,9 +2,10 @@
 //! `.vtu` pieces, one per part of a partitioned run.
 //!
 //! Written pieces hold the elements one part owns (an element belongs to the
-//! owner of its first vertex, as in a partitioned solve) and the vertices
-//! those use, so the pieces together hold every element once; vertices on the
-//! interfaces appear in each piece that uses them, as ParaView writes them.
+//! owner of its first vertex, as in a partitioned solve), the lower cells it
+//! owns by the same rule, and the vertices those use, so the pieces together
+//! hold every cell once; vertices on the interfaces appear in each piece
+//! that uses them, as ParaView writes them.
 //! Each piece carries `GlobalPointIds` and `GlobalCellIds` (VTK's names for
 //! global ids): the numbers of its points and cells in the whole mesh.
 //!
@@ -281,11 +282,35 @@ fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf], keep_ids: bool) -> Res
         }
     }
     let cell_rows: Vec<usize> = cells.iter().map(|&(i, e)| cell_start[i] + e).collect();
+    // lower cells likewise: by their global cell ids where every piece with some has them
+    let mut lower: Vec<(usize, usize)> = Vec::new();
+    for (i, piece) in pieces.iter().enumerate() {
+        let ghost = piece.data.lower_array(GHOST);
+        lower.extend(
+            (0..piece.lower.len())
+                .filter(|&c| ghost.is_none_or(|g| g.get_i64(c) & DUPLICATE_CELL == 0))
+                .map(|c| (i, c)),
+        );
+    }
+    let lower_ids = |i: usize| {
+        pieces[i]
+            .data
+            .lower_array(GLOBAL_CELL_IDS)
+            .filter(|a| a.components == 1 && matches!(a.values, Values::Int(_)))
+    };
+    if lower.iter().all(|&(i, _)| lower_ids(i).is_some()) {
+        lower.sort_by_key(|&(i, c)| lower_ids(i).map(|a| a.get_i64(c)));
+    }
     // points no kept cell uses are artefacts of the split (VTK's piece
     // extraction keeps them, and the ghost cells dropped used some): dropped
     let mut used = vec![false; first.len()];
     for &(i, e) in &cells {
         for &v in pieces[i].element(e) {
+            used[local[i][v as usize] as usize] = true;
+        }
+    }
+    for &(i, c) in &lower {
+        for &v in &pieces[i].lower[c].1 {
             used[local[i][v as usize] as usize] = true;
         }
     }
@@ -322,6 +347,13 @@ fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf], keep_ids: bool) -> Res
             mesh.push_element(piece.kinds[e], &verts);
         }
     }
+    mesh.lower = lower
+        .iter()
+        .map(|&(i, c)| {
+            let (kind, vs) = &pieces[i].lower[c];
+            (*kind, vs.iter().map(|&v| local[i][v as usize]).collect())
+        })
+        .collect();
     if pieces.iter().any(|p| !p.fixed.is_empty()) {
         mesh.fixed = first
             .iter()
@@ -363,9 +395,36 @@ fn merge(path: &Path, pieces: &[Mesh], names: &[PathBuf], keep_ids: bool) -> Res
     mesh.data.point = concat_select(&point_arrays, &point_rows);
     mesh.data.cell = concat_select(&cell_arrays, &cell_rows);
     mesh.data.field = pieces[0].data.field.clone();
+    if !lower.is_empty() {
+        // the arrays of the pieces that have lower cells, end to end
+        let with: Vec<usize> = (0..pieces.len()).filter(|&i| !pieces[i].lower.is_empty()).collect();
+        let mut start = vec![0usize; pieces.len()];
+        let mut at = 0;
+        for &i in &with {
+            start[i] = at;
+            at += pieces[i].lower.len();
+        }
+        let of = |m: &Mesh| -> Vec<DataArray> { m.data.lower.iter().filter(|a| a.name != GHOST).cloned().collect() };
+        let per_piece: Vec<Vec<DataArray>> = with.iter().map(|&i| of(&pieces[i])).collect();
+        let shape = |a: &[DataArray]| -> Vec<(String, ValueType, usize)> {
+            a.iter().map(|a| (a.name.clone(), a.ty, a.components)).collect()
+        };
+        if let Some(k) = per_piece.iter().position(|a| shape(a) != shape(&per_piece[0])) {
+            return Err(err(
+                with[k],
+                "its lower-cell arrays differ from those of the other pieces".into(),
+            ));
+        }
+        let rows: Vec<usize> = lower.iter().map(|&(i, c)| start[i] + c).collect();
+        mesh.data.lower = concat_select(&per_piece, &rows);
+    }
     if !keep_ids {
         drop_counting_ids(&mut mesh.data.point, &POINT_ID_NAMES);
         drop_counting_ids(&mut mesh.data.cell, &[GLOBAL_CELL_IDS]);
+        // the lower cells' ids counted on from the elements': gone with theirs
+        if mesh.data.cell_array(GLOBAL_CELL_IDS).is_none() {
+            mesh.data.lower.retain(|a| a.name != GLOBAL_CELL_IDS);
+        }
     }
     Ok(mesh)
 }
@@ -502,6 +561,11 @@ pub fn write_pieces_with(
     for e in 0..mesh.num_elements() {
         elems[owner[mesh.element(e)[0] as usize] as usize].push(e);
     }
+    // lower cells go with their first vertex too
+    let mut lowers: Vec<Vec<usize>> = vec![Vec::new(); parts];
+    for (c, (_, vs)) in mesh.lower.iter().enumerate() {
+        lowers[owner[vs[0] as usize] as usize].push(c);
+    }
     let mut used = vec![false; mesh.num_points()];
     for &v in &mesh.conn {
         used[v as usize] = true;
@@ -510,10 +574,11 @@ pub fn write_pieces_with(
     let mut paths = Vec::with_capacity(parts);
     let mut first_piece = None;
     let mut failed = None;
-    for (r, elems) in elems.iter().enumerate() {
+    for (r, (elems, lower)) in elems.iter().zip(&lowers).enumerate() {
         let mut verts: Vec<usize> = elems
             .iter()
             .flat_map(|&e| mesh.element(e).iter().map(|&v| v as usize))
+            .chain(lower.iter().flat_map(|&c| mesh.lower[c].1.iter().map(|&v| v as usize)))
             .chain((0..mesh.num_points()).filter(|&v| !used[v] && owner[v] as usize == r))
             .collect();
         verts.sort_unstable();
@@ -522,7 +587,7 @@ pub fn write_pieces_with(
         if verts.is_empty() {
             continue;
         }
-        let piece = piece_mesh(mesh, &verts, elems);
+        let piece = piece_mesh(mesh, &verts, elems, lower);
         let data: Vec<Vec<f64>> = cell_data
             .iter()
             .map(|c| elems.iter().map(|&e| c.values[e]).collect())
@@ -558,10 +623,18 @@ pub fn write_pieces_with(
     Ok(paths)
 }
 
-/// The part of `mesh` on vertices `verts` and elements `elems` (both
-/// ascending), with their global ids.
-fn piece_mesh(mesh: &Mesh, verts: &[usize], elems: &[usize]) -> Mesh {
+/// The part of `mesh` on vertices `verts`, elements `elems` and lower
+/// cells `lower` (all ascending), with their global ids (a lower cell's
+/// global cell id counts on after the elements', as in a whole file).
+fn piece_mesh(mesh: &Mesh, verts: &[usize], elems: &[usize], lower: &[usize]) -> Mesh {
     let mut piece = mesh.cut(verts, elems);
+    if !lower.is_empty() {
+        let local: HashMap<u32, u32> = verts.iter().enumerate().map(|(l, &v)| (v as u32, l as u32)).collect();
+        piece.lower = lower
+            .iter()
+            .map(|&c| (mesh.lower[c].0, mesh.lower[c].1.iter().map(|v| local[v]).collect()))
+            .collect();
+    }
     let ids = |name: &str, rows: &[usize]| {
         DataArray::new(
             name,
@@ -586,6 +659,18 @@ fn piece_mesh(mesh: &Mesh, verts: &[usize], elems: &[usize]) -> Mesh {
         .map(|a| a.select(elems))
         .chain([ids(GLOBAL_CELL_IDS, elems)])
         .collect();
+    if !lower.is_empty() {
+        let ne = mesh.num_elements();
+        let rows: Vec<usize> = lower.iter().map(|&c| ne + c).collect();
+        piece.data.lower = mesh
+            .data
+            .lower
+            .iter()
+            .filter(|a| a.name != GLOBAL_CELL_IDS)
+            .map(|a| a.select(lower))
+            .chain([ids(GLOBAL_CELL_IDS, &rows)])
+            .collect();
+    }
     piece.data.field = mesh.data.field.clone();
     piece
 }

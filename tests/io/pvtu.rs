@@ -354,3 +354,44 @@ fn pieces_written_by_vtk_merge_into_the_whole_mesh() {
         );
     }
 }
+
+#[test]
+fn lower_cells_and_their_arrays_travel_through_the_pieces() {
+    // meshio's tet box: 1577 tets and 708 boundary triangles with gmsh:physical
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop/meshio_tetbox_vtu_zlib.vtu");
+    let m = io::read(&src).unwrap();
+    assert_eq!((m.num_elements(), m.lower.len()), (1577, 708));
+    let path = dir.path().join("whole.vtu");
+    io::write(&path, &m, Format::VtuBinary, &[]).unwrap();
+    let want = io::read(&path).unwrap();
+    assert_eq!(want.lower, m.lower);
+    for partitioner in partitioners() {
+        for parts in 1..=4 {
+            let owner = mesh_owners(&m, parts, partitioner).unwrap();
+            let index = dir.path().join(format!("lower{parts}.pvtu"));
+            io::write_pieces(&index, &m, &owner, parts, Format::VtuZlib, &[]).unwrap();
+            let got = io::read(&index).unwrap();
+            let ctx = format!("{parts} pieces by {partitioner:?}");
+            assert_eq!(got.lower, m.lower, "{ctx}");
+            assert_eq!(got.data.lower, want.data.lower, "{ctx}");
+            assert_eq!(got, want, "{ctx}");
+            // each triangle in exactly one piece, with the physical tag it had
+            let mut seen = 0;
+            for r in 0..parts {
+                let piece = io::piece_path(&index, r);
+                if let Ok(p) = io::read_pvtu_piece(&piece) {
+                    seen += p.lower.len();
+                    let ids = p.data.lower_array(GLOBAL_CELL_IDS).unwrap();
+                    let tags = p.data.lower_array("gmsh:physical").unwrap();
+                    let whole_tags = m.data.lower_array("gmsh:physical").unwrap();
+                    for c in 0..p.lower.len() {
+                        let global = ids.get_i64(c) as usize - m.num_elements();
+                        assert_eq!(tags.get_i64(c), whole_tags.get_i64(global), "{ctx}");
+                    }
+                }
+            }
+            assert_eq!(seen, 708, "{ctx}");
+        }
+    }
+}
