@@ -668,25 +668,81 @@ fn quarters(eigen: &[(Vec3, Mat3)]) -> Vec<Mat3> {
 /// neighbours, and every smoothing run with the default target pays for
 /// the detection); the thresholds of [`Intent::keeps_input`] were measured
 /// with it.
-fn mean_regularise(mesh: &Mesh, nb: &Csr, mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
+fn mean_regularise(mesh: &Mesh, nb: &Neighbours<'_>, mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
     for _ in 0..passes {
         vals = (0..mesh.num_elements())
             .into_par_iter()
             .map(|e| {
-                let js = nb.of(e);
                 let mut m = [[0.0; 3]; 3];
-                for &j in js {
+                let mut count = 0;
+                nb.visit(e, |j| {
+                    count += 1;
                     for r in 0..3 {
                         for c in 0..3 {
                             m[r][c] += vals[j as usize][r][c];
                         }
                     }
-                }
-                m.map(|row| row.map(|x| x / js.len() as f64))
+                });
+                m.map(|row| row.map(|x| x / count as f64))
             })
             .collect();
     }
     vals
+}
+
+/// The elements sharing a vertex with an element (itself included), in
+/// ascending order, merged on the fly from the vertices' sorted element
+/// lists: stored for every element they would take about 70 ids per
+/// tetrahedron (3 GB for 10M tetrahedra), whose allocation dominated the
+/// default targets' test on large meshes.
+struct Neighbours<'a> {
+    mesh: &'a Mesh,
+    ve: Csr,
+}
+
+impl<'a> Neighbours<'a> {
+    fn of(mesh: &'a Mesh) -> Neighbours<'a> {
+        Neighbours {
+            mesh,
+            ve: vertex_elements(mesh),
+        }
+    }
+
+    /// Calls `f` with each neighbour of element `e` once, ascending.
+    fn visit(&self, e: usize, mut f: impl FnMut(u32)) {
+        const MOST: usize = 8;
+        let vs = self.mesh.element(e);
+        if vs.len() > MOST {
+            // polyhedra: rare, and not worth a merge of many lists
+            let mut all: Vec<u32> = vs
+                .iter()
+                .flat_map(|&v| self.ve.of(v as usize).iter().copied())
+                .collect();
+            all.sort_unstable();
+            all.dedup();
+            return all.into_iter().for_each(f);
+        }
+        let mut heads: [&[u32]; MOST] = [&[]; MOST];
+        for (h, &v) in heads.iter_mut().zip(vs) {
+            *h = self.ve.of(v as usize);
+        }
+        let heads = &mut heads[..vs.len()];
+        // each round takes the smallest head and advances every list it heads
+        while let Some(j) = heads.iter().filter_map(|h| h.first().copied()).min() {
+            for h in heads.iter_mut() {
+                if h.first() == Some(&j) {
+                    *h = &h[1..];
+                }
+            }
+            f(j);
+        }
+    }
+
+    /// The neighbours of `e` into `out` (cleared first).
+    fn collect(&self, e: usize, out: &mut Vec<u32>) {
+        out.clear();
+        self.visit(e, |j| out.push(j));
+    }
 }
 
 /// Each element's centroid, and the elements sharing a vertex with it.
@@ -718,7 +774,7 @@ fn centroids(mesh: &Mesh, points: &[Vec3]) -> Vec<Vec3> {
 /// of thicknesses between it and its neighbours one cell away along its
 /// thin axis (1 or more; the geometric mean over those neighbours): a
 /// boundary layer's growth rate. Read from the eigen-decompositions of log G.
-fn layer_growths(mesh: &Mesh, points: &[Vec3], nb: &Csr, eigen: &[(Vec3, Mat3)]) -> Vec<f64> {
+fn layer_growths(mesh: &Mesh, points: &[Vec3], nb: &Neighbours<'_>, eigen: &[(Vec3, Mat3)]) -> Vec<f64> {
     let n = mesh.dim();
     let centroid = centroids(mesh, points);
     let quarter = quarters(eigen);
@@ -741,7 +797,9 @@ fn layer_growths(mesh: &Mesh, points: &[Vec3], nb: &Csr, eigen: &[(Vec3, Mat3)])
             if others.iter().any(|&o| o - l[k] < 2.0 * ANISOTROPIC_ASPECT.ln()) {
                 return None;
             }
-            let nbs = nb.of(e);
+            let mut nbs = Vec::new();
+            nb.collect(e, &mut nbs);
+            let nbs = &nbs[..];
             let local = logical_offsets(e, nbs, &centroid, &quarter, eigen, n);
             let ratios: Vec<f64> = nbs
                 .iter()
@@ -1339,7 +1397,7 @@ pub fn intent_of(mesh: &Mesh, shapes: &Shapes<'_>) -> Intent {
         .par_iter()
         .map(|e| compose(e, |l| l.max(f64::MIN_POSITIVE).ln()))
         .collect();
-    let nb = element_neighbours(mesh, &vertex_elements(mesh));
+    let nb = Neighbours::of(mesh);
     let smoothed_logs = mean_regularise(mesh, &nb, logs, INTENT_PASSES);
     let log_eigen: Vec<(Vec3, Mat3)> = smoothed_logs.par_iter().map(sym_eigen).collect();
     // the regularised G's eigenvalues: exp of its log's
