@@ -673,17 +673,23 @@ fn mean_regularise(mesh: &Mesh, nb: &Neighbours<'_>, mut vals: Vec<Mat3>, passes
         vals = (0..mesh.num_elements())
             .into_par_iter()
             .map(|e| {
-                let mut m = [[0.0; 3]; 3];
+                // a mean of symmetric matrices: the upper triangle, mirrored
+                const UPPER: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+                let mut sum = [0.0; 6];
                 let mut count = 0;
                 nb.visit(e, |j| {
                     count += 1;
-                    for r in 0..3 {
-                        for c in 0..3 {
-                            m[r][c] += vals[j as usize][r][c];
-                        }
+                    let v = &vals[j as usize];
+                    for (s, &(r, c)) in sum.iter_mut().zip(&UPPER) {
+                        *s += v[r][c];
                     }
                 });
-                m.map(|row| row.map(|x| x / count as f64))
+                let mut m = [[0.0; 3]; 3];
+                for (&s, &(r, c)) in sum.iter().zip(&UPPER) {
+                    m[r][c] = s / count as f64;
+                    m[c][r] = m[r][c];
+                }
+                m
             })
             .collect();
     }
