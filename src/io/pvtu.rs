@@ -643,33 +643,21 @@ fn piece_mesh(mesh: &Mesh, verts: &[usize], elems: &[usize], lower: &[usize]) ->
             Values::Int(rows.iter().map(|&i| i as i64).collect()),
         )
     };
-    piece.data.point = mesh
-        .data
-        .point
-        .iter()
-        .filter(|a| !POINT_ID_NAMES.contains(&a.name.as_str()))
-        .map(|a| a.select(verts))
-        .chain([ids(GLOBAL_POINT_IDS, verts)])
-        .collect();
-    piece.data.cell = mesh
-        .data
-        .cell
-        .iter()
-        .filter(|a| a.name != GLOBAL_CELL_IDS)
-        .map(|a| a.select(elems))
-        .chain([ids(GLOBAL_CELL_IDS, elems)])
-        .collect();
+    // the arrays at `rows` (but any id arrays), then the global ids `ids_of`
+    let select = |arrays: &[DataArray], drop: &[&str], rows: &[usize], id: &str, ids_of: &[usize]| -> Vec<DataArray> {
+        arrays
+            .iter()
+            .filter(|a| !drop.contains(&a.name.as_str()))
+            .map(|a| a.select(rows))
+            .chain([ids(id, ids_of)])
+            .collect()
+    };
+    piece.data.point = select(&mesh.data.point, &POINT_ID_NAMES, verts, GLOBAL_POINT_IDS, verts);
+    piece.data.cell = select(&mesh.data.cell, &[GLOBAL_CELL_IDS], elems, GLOBAL_CELL_IDS, elems);
     if !lower.is_empty() {
         let ne = mesh.num_elements();
         let rows: Vec<usize> = lower.iter().map(|&c| ne + c).collect();
-        piece.data.lower = mesh
-            .data
-            .lower
-            .iter()
-            .filter(|a| a.name != GLOBAL_CELL_IDS)
-            .map(|a| a.select(lower))
-            .chain([ids(GLOBAL_CELL_IDS, &rows)])
-            .collect();
+        piece.data.lower = select(&mesh.data.lower, &[GLOBAL_CELL_IDS], lower, GLOBAL_CELL_IDS, &rows);
     }
     piece.data.field = mesh.data.field.clone();
     piece
