@@ -1211,6 +1211,49 @@ mod tests {
     }
 
     #[test]
+    fn closed_form_eigenvalues_match_the_jacobi_ones() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut r = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let sorted = |mut l: Vec3| {
+            l.sort_by(f64::total_cmp);
+            l
+        };
+        let mut cases: Vec<Mat3> = vec![
+            IDENTITY,
+            [[2.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 1.0]],
+            // a stretched 2D element's G (z set to 1), and a near-degenerate pair
+            [[9.0, 3.0, 0.0], [3.0, 1.5, 0.0], [0.0, 0.0, 1.0]],
+            [[1.0, 1e-9, 0.0], [1e-9, 1.0, 0.0], [0.0, 0.0, 3.0]],
+        ];
+        for k in 0..2000 {
+            // A A^T + shift: symmetric positive definite, aspects up to about 1e4
+            let a: Mat3 = std::array::from_fn(|_| std::array::from_fn(|_| r()));
+            let mut m = mul(&a, &transpose(&a));
+            for (i, row) in m.iter_mut().enumerate() {
+                row[i] += 1e-8 * (k % 7) as f64;
+            }
+            cases.push(m.map(|row| row.map(|x| x * 1e3f64.powi(k % 5 - 2))));
+        }
+        for m in &cases {
+            let (want, got) = (sorted(sym_eigen(m).0), sorted(sym_eigenvalues(m)));
+            let scale = want[2].abs().max(f64::MIN_POSITIVE);
+            for i in 0..3 {
+                assert!((want[i] - got[i]).abs() <= 1e-8 * scale, "{m:?}: {want:?} vs {got:?}");
+            }
+            // the aspect the gate reads
+            for n in [2, 3] {
+                let (a, b) = (aspect(&sym_eigen(m).0, n), aspect(&sym_eigenvalues(m), n));
+                assert!(a == b || (a - b).abs() <= 1e-6 * a, "{m:?} n = {n}: {a} vs {b}");
+            }
+        }
+    }
+
+    #[test]
     fn eigen_decomposition_reconstructs() {
         let m = [[4.0, 1.0, 0.5], [1.0, 3.0, -0.2], [0.5, -0.2, 0.2]];
         let back = sym_fn(&m, |l| l);
@@ -1357,30 +1400,56 @@ pub fn raw_anisotropic_share(mesh: &Mesh, points: &[Vec3]) -> Result<f64> {
     Ok(Shapes::of(mesh, points)?.raw_share(mesh.dim()))
 }
 
-/// Each element's G (see [`element_metrics`]) at oriented points, and its
-/// eigen-decomposition, computed once for the default target's tests.
+/// Each element's G (see [`element_metrics`]) at oriented points, computed
+/// once for the default target's tests.
 pub struct Shapes<'a> {
     pts: Cow<'a, [Vec3]>,
-    eigen: Vec<(Vec3, Mat3)>,
+    g: Vec<Mat3>,
 }
 
 impl<'a> Shapes<'a> {
     /// The shapes of `mesh` at `points`.
     pub fn of(mesh: &Mesh, points: &'a [Vec3]) -> Result<Shapes<'a>> {
         let pts = crate::metric::oriented(mesh, points);
-        let eigen = element_metrics(mesh, &pts, false)?.par_iter().map(sym_eigen).collect();
-        Ok(Shapes { pts, eigen })
+        let g = element_metrics(mesh, &pts, false)?;
+        Ok(Shapes { pts, g })
     }
 
-    /// [`raw_anisotropic_share`].
+    /// [`raw_anisotropic_share`], from closed-form eigenvalues: the gate
+    /// every default smooth passes through, where a threshold on the aspect
+    /// needs no eigenvectors and no last bits.
     pub fn raw_share(&self, n: usize) -> f64 {
         let stretched = self
-            .eigen
+            .g
             .par_iter()
-            .filter(|(l, _)| aspect(l, n) >= ANISOTROPIC_ASPECT)
+            .filter(|m| aspect(&sym_eigenvalues(m), n) >= ANISOTROPIC_ASPECT)
             .count();
-        stretched as f64 / self.eigen.len().max(1) as f64
+        stretched as f64 / self.g.len().max(1) as f64
     }
+}
+
+/// The eigenvalues of a symmetric 3x3 matrix in closed form (the
+/// trigonometric solution of the characteristic cubic), in no set order:
+/// about ten times cheaper than [`sym_eigen`], to a relative accuracy of
+/// about 1e-8 where two eigenvalues nearly coincide.
+fn sym_eigenvalues(m: &Mat3) -> Vec3 {
+    let off = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
+    if off == 0.0 {
+        return [m[0][0], m[1][1], m[2][2]];
+    }
+    let q = (m[0][0] + m[1][1] + m[2][2]) / 3.0;
+    let d = [m[0][0] - q, m[1][1] - q, m[2][2] - q];
+    let p = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * off) / 6.0).sqrt();
+    if p == 0.0 {
+        return [q; 3];
+    }
+    let b = |i: usize, j: usize| if i == j { d[i] / p } else { m[i][j] / p };
+    let det = b(0, 0) * (b(1, 1) * b(2, 2) - b(1, 2) * b(2, 1)) - b(0, 1) * (b(1, 0) * b(2, 2) - b(1, 2) * b(2, 0))
+        + b(0, 2) * (b(1, 0) * b(2, 1) - b(1, 1) * b(2, 0));
+    let phi = (det / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
+    let hi = q + 2.0 * p * phi.cos();
+    let lo = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    [hi, 3.0 * q - hi - lo, lo]
 }
 
 /// The [`Intent`] of `mesh` at `points` (inverted elements are left out).
@@ -1394,12 +1463,12 @@ pub fn intent(mesh: &Mesh, points: &[Vec3]) -> Result<Intent> {
 pub fn intent_of(mesh: &Mesh, shapes: &Shapes<'_>) -> Intent {
     let n = mesh.dim();
     let pts = &shapes.pts;
+    let eigen: Vec<(Vec3, Mat3)> = shapes.g.par_iter().map(sym_eigen).collect();
     let compose = |(l, v): &(Vec3, Mat3), f: fn(f64) -> f64| -> Mat3 {
         let fl = l.map(f);
         std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| v[i][k] * fl[k] * v[j][k]).sum()))
     };
-    let logs: Vec<Mat3> = shapes
-        .eigen
+    let logs: Vec<Mat3> = eigen
         .par_iter()
         .map(|e| compose(e, |l| l.max(f64::MIN_POSITIVE).ln()))
         .collect();
@@ -1425,7 +1494,7 @@ pub fn intent_of(mesh: &Mesh, shapes: &Shapes<'_>) -> Intent {
         a.par_sort_unstable_by(f64::total_cmp);
         a
     };
-    let raw: Vec<Vec3> = shapes.eigen.iter().map(|(l, _)| *l).collect();
+    let raw: Vec<Vec3> = eigen.iter().map(|(l, _)| *l).collect();
     let share = |a: &[f64]| a.iter().filter(|&&x| x >= ANISOTROPIC_ASPECT).count() as f64 / a.len().max(1) as f64;
     let (raw, reg) = (pick(&raw), pick(&smooth));
     if reg.is_empty() {
