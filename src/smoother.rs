@@ -30,9 +30,9 @@ use crate::metric::corner_model::Template;
 use crate::metric::smetric::MetricKind;
 use crate::metric_report::{self, MetricSummary, SpacingDisplacement};
 use crate::problem::boundary::{VertexClass, classify};
-use crate::problem::targets::{LayerChange, first_layer_change};
+use crate::problem::targets::{LayerChange, first_layer_change_on_skin};
 use crate::problem::{Boundary, BoundaryMode, Ordering, ProblemOptions, Target};
-use crate::report::{QualityReport, quality_report, quality_report_on_skin};
+use crate::report::{QualityReport, quality_report_on_skin};
 use crate::solve::newton::NewtonParams;
 use crate::solve::pcg::{NegativeCurvature, Preconditioner};
 use crate::solve::{self, Device, Info, Method, Params, Record, UntangleInfo, UntangleParams};
@@ -674,12 +674,14 @@ impl Smoother {
             crate::problem::check(mesh, &mesh.points, &options)?;
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
             let unused = ruled.unused;
-            let start = s.start(mesh, &options, ruled, None, note);
+            // the skin is topology: the same before and after untangling
+            let skin = crate::mesh::topology::skin_vertices(mesh);
+            let start = s.start(mesh, &skin, &options, ruled, None, note);
             observer(Event::Start(&start));
             let inverted = metric::inverted_elements(mesh, &mesh.points);
             let untangled = s.untangle_phase(mesh, &inverted, &options, backend.device(), observer)?;
             Ok(UntangleReport {
-                quality: with_unused(quality_report(mesh, &mesh.points), unused),
+                quality: with_unused(quality_report_on_skin(mesh, &mesh.points, &skin), unused),
                 start,
                 untangled,
             })
@@ -750,9 +752,11 @@ impl Smoother {
         })
     }
 
+    /// `skin`: the mesh's skin vertices ([`skin_vertices`](crate::mesh::topology::skin_vertices)).
     fn start(
         &self,
         mesh: &Mesh,
+        skin: &[bool],
         options: &ProblemOptions,
         ruled: Ruled,
         targets: Option<String>,
@@ -773,15 +777,14 @@ impl Smoother {
                 corners: count(VertexClass::Corner),
             }
         });
-        let skin = crate::mesh::topology::skin_vertices(mesh);
         let held = |v: usize| {
             class
                 .as_ref()
                 .is_none_or(|c| c[v] == VertexClass::Corner || mesh.is_fixed(v))
         };
         Start {
-            quality: with_unused(quality_report_on_skin(mesh, &mesh.points, &skin), ruled.unused),
-            fixed: Fixed::count(&skin, mesh, &ruled.file_fixed, held, ruled.unused),
+            quality: with_unused(quality_report_on_skin(mesh, &mesh.points, skin), ruled.unused),
+            fixed: Fixed::count(skin, mesh, &ruled.file_fixed, held, ruled.unused),
             rules: ruled.counts,
             targets,
             sliding,
@@ -856,7 +859,9 @@ impl Smoother {
         }
         let (backend, note) = self.backend(&[self.method, untangle_method(self.method)])?;
         let unused = ruled.unused;
-        let start = self.start(mesh, &options, ruled, targets, note);
+        // the skin is topology: one for the reports before and after
+        let skin = crate::mesh::topology::skin_vertices(mesh);
+        let start = self.start(mesh, &skin, &options, ruled, targets, note);
         if !observer(Event::Start(&start)) {
             return Err(Error::InvalidArgument("cancelled before the run began".into()));
         }
@@ -895,10 +900,10 @@ impl Smoother {
         };
         Ok(Report {
             untangled,
-            quality: with_unused(quality_report(mesh, &mesh.points), unused),
+            quality: with_unused(quality_report_on_skin(mesh, &mesh.points, &skin), unused),
             displacement: metric_report::displacement_percent(mesh, &begin, &mesh.points),
             metric,
-            first_layer: first_layer_change(mesh, &begin, &mesh.points),
+            first_layer: first_layer_change_on_skin(mesh, &skin, &begin, &mesh.points),
             #[cfg(feature = "mpi")]
             ranks: cluster.and_then(|c| c.report()),
             start,

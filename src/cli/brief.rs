@@ -2,6 +2,7 @@
 //! the quality before and after in a few plain lines (`-v` prints the full
 //! reports instead).
 
+use meshsmooth::mesh::fixing::RuleCount;
 use meshsmooth::metric_report::{MetricSummary, SpacingDisplacement};
 use meshsmooth::report::{QualityReport, num};
 use meshsmooth::smoother::{Fixed, Start};
@@ -53,6 +54,16 @@ pub fn fixed_line(fixed: &Fixed, vertices: usize, sliding: bool) -> String {
     format!("fixed {} of {vertices} vertices: {}", fixed.total(), why.join("; "))
 }
 
+/// What one fixed-vertex rule did, in a line.
+pub fn rule(c: &RuleCount) -> String {
+    format!(
+        "  {} {}: {} vertices",
+        super::device::flag(c.option),
+        c.value,
+        c.vertices
+    )
+}
+
 /// The lines printed as the run starts (after the notes).
 pub fn start(start: &Start) -> String {
     let q = &start.quality;
@@ -60,14 +71,7 @@ pub fn start(start: &Start) -> String {
         mesh_line(q),
         fixed_line(&start.fixed, q.vertices, start.sliding.is_some()),
     ];
-    out.extend(start.rules.iter().map(|c| {
-        format!(
-            "  {} {}: {} vertices",
-            super::device::flag(c.option),
-            c.value,
-            c.vertices
-        )
-    }));
+    out.extend(start.rules.iter().map(rule));
     if let Some(s) = &start.sliding {
         out.push(format!(
             "{} vertices slide on boundary faces, {} along feature edges; {} corners fixed (feature angle {}°)",

@@ -1,7 +1,6 @@
 //! The subcommands.
 
 use super::brief;
-use super::device;
 use super::outputs;
 use super::progress::{Log, Progress};
 use super::{DemoArgs, ObjectiveArgs, QualityArgs, SmoothArgs, UntangleArgs};
@@ -157,7 +156,7 @@ impl Printer {
                             brief::fixed_line(&start.fixed, start.quality.vertices, start.sliding.is_some())
                         );
                         for c in &start.rules {
-                            println!("{} {}: {} vertices", device::flag(c.option), c.value, c.vertices);
+                            println!("{}", brief::rule(c));
                         }
                         if let Some(note) = &start.targets {
                             println!("{note}\n");

@@ -698,9 +698,10 @@ fn mean_regularise(mesh: &Mesh, nb: &Neighbours<'_>, mut vals: Vec<Mat3>, passes
 
 /// The elements sharing a vertex with an element (itself included), in
 /// ascending order, merged on the fly from the vertices' sorted element
-/// lists: stored for every element they would take about 70 ids per
-/// tetrahedron (3 GB for 10M tetrahedra), whose allocation dominated the
-/// default targets' test on large meshes.
+/// lists. The default targets' test, which runs on every smooth, reads
+/// them without storing them: stored they take about 70 ids per
+/// tetrahedron (3 GB for 10M tetrahedra), and that allocation dominated
+/// the test on large meshes.
 struct Neighbours<'a> {
     mesh: &'a Mesh,
     ve: Csr,
@@ -749,14 +750,17 @@ impl<'a> Neighbours<'a> {
         out.clear();
         self.visit(e, |j| out.push(j));
     }
+
+    /// Every element's neighbours, stored: for the targets' regularisation,
+    /// which reads them many rounds over.
+    fn stored(&self) -> Csr {
+        crate::mesh::topology::build_par(self.mesh.num_elements(), |e, out| self.visit(e, |j| out.push(j)))
+    }
 }
 
 /// Each element's centroid, and the elements sharing a vertex with it.
 fn neighbourhoods(mesh: &Mesh, points: &[Vec3]) -> (Vec<Vec3>, Csr) {
-    (
-        centroids(mesh, points),
-        element_neighbours(mesh, &vertex_elements(mesh)),
-    )
+    (centroids(mesh, points), Neighbours::of(mesh).stored())
 }
 
 /// Each element's centroid.
@@ -871,18 +875,6 @@ fn matched_eigenvalues(axes: &Mat3, eigen: &(Vec3, Mat3)) -> Mat3 {
         out[a][a] = l[b];
     }
     out
-}
-
-/// Elements sharing a vertex with each element (itself included), sorted.
-fn element_neighbours(mesh: &Mesh, ve: &Csr) -> Csr {
-    crate::mesh::topology::build_par(mesh.num_elements(), |e, out| {
-        // `out` holds the chunk's earlier entries too: sort only this one's
-        let from = out.len();
-        for &v in mesh.element(e) {
-            out.extend_from_slice(ve.of(v as usize));
-        }
-        crate::mesh::topology::sort_dedup_tail(out, from);
-    })
 }
 
 /// The least-squares affine fit of `vals` over the elements `nb` (centroids
@@ -1089,8 +1081,12 @@ fn in_plane(l: &Vec3, n: usize) -> impl Iterator<Item = f64> + '_ {
 /// thickness away) is its first-layer vertex, and the height is the
 /// distance between the two. `None` where no wall has a stretched layer.
 pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Option<LayerChange> {
+    first_layer_change_on_skin(mesh, &crate::mesh::topology::skin_vertices(mesh), before, after)
+}
+
+/// [`first_layer_change`] with the mesh's skin vertices at hand.
+pub fn first_layer_change_on_skin(mesh: &Mesh, skin: &[bool], before: &[Vec3], after: &[Vec3]) -> Option<LayerChange> {
     let n = mesh.dim();
-    let skin = crate::mesh::topology::skin_vertices(mesh);
     let ve = vertex_elements(mesh);
     // (aspect, thickness) of the elements at the walls, the only ones read:
     // thickness is the smallest principal length (in 2D among the in-plane axes)
