@@ -4,18 +4,26 @@
 
 use serde::Serialize;
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct Finding {
     pub claim: &'static str,
-    /// Cases that bear it out, of how many.
+    /// Cases that bear it out, of how many. Where a finding compares timed
+    /// runs, a case bears it out only when a rank test over the repeats says
+    /// so (see `stats`).
     pub holds: usize,
     pub of: usize,
+    /// Cases that the test says go the other way (0 where there is no test).
+    pub against: usize,
+    /// The numbers behind the count, for the reader.
+    pub note: String,
 }
 
 impl Finding {
-    /// "reproduced" (every case), "in part" (some) or "not reproduced" (none).
+    /// "reproduced" (every case), "in part" (some), "not reproduced" (none)
+    /// or "not measured" (no case: the run lacks what the finding needs).
     pub fn verdict(&self) -> &'static str {
         match self.holds {
+            _ if self.of == 0 => "not measured",
             0 => "not reproduced",
             h if h == self.of => "reproduced",
             _ => "in part",
@@ -25,10 +33,18 @@ impl Finding {
 
 /// The "## Findings" section of a study's Markdown.
 pub fn markdown(intro: &str, findings: &[Finding]) -> String {
-    let mut s = format!("\n## Findings\n\n{intro}\n\n| finding | cases that bear it out | verdict |\n|---|---:|---|\n");
+    let notes = findings.iter().any(|f| !f.note.is_empty());
+    let mut s = if notes {
+        format!(
+            "\n## Findings\n\n{intro}\n\n| finding | cases that bear it out | numbers | verdict |\n|---|---:|---|---|\n"
+        )
+    } else {
+        format!("\n## Findings\n\n{intro}\n\n| finding | cases that bear it out | verdict |\n|---|---:|---|\n")
+    };
     for f in findings {
+        let note = if notes { format!(" {} |", f.note) } else { String::new() };
         s.push_str(&format!(
-            "| {} | {} of {} | {} |\n",
+            "| {} | {} of {} |{note} {} |\n",
             f.claim,
             f.holds,
             f.of,

@@ -431,7 +431,12 @@ impl NewtonStudy {
         };
         let t50 = |r: &MethodRun| r.t50;
         let t100 = |r: &MethodRun| r.t100;
-        let make = |claim: &'static str, (holds, of): (usize, usize)| Finding { claim, holds, of };
+        let make = |claim: &'static str, (holds, of): (usize, usize)| Finding {
+            claim,
+            holds,
+            of,
+            ..Default::default()
+        };
         vec![
             make(
                 "Newton reaches T100 first on the ducts (Table 2)",
