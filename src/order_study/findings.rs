@@ -232,7 +232,7 @@ pub fn findings(st: &OrderStudy) -> Vec<Finding> {
     let mut top = Count::default();
     for scheme in ["N", "-N"] {
         if let Some(r) = overall.iter().find(|r| r.scheme == scheme) {
-            top.add(r.rank <= 5, format!("{scheme} {}th", r.rank));
+            top.add(r.rank <= 5, format!("{scheme} ranks {}", r.rank));
         }
     }
     if top.of > 0 {

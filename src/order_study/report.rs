@@ -266,7 +266,7 @@ pub fn markdown(st: &OrderStudy) -> String {
          - Different: the optimiser is this library's sequential BCD (safeguarded Newton steps per \
          vertex), not Mesquite's feasible Newton; the baseline is {} rather than five minutes; the \
          paper's ranking by eye over histograms is a mean rank here; static GRVM's first relative \
-         movement is a second Jacobi trial's over the first (see the orderings chapter).\n\
+         movement is a second Jacobi trial's over the first (see the book's Vertex orderings chapter).\n\
          - Not done: Figure 6 (TT against frequency; Table 4 has its numbers for -GRVM); the \
          seventh trend (no pattern with mesh size), which a count cannot confirm; repeats of the \
          random schemes with fresh seeds (a repeat reruns the same order, so only time varies).\n",

@@ -511,7 +511,7 @@ fn svg_curves(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
                     .map(|a| {
                         let a = a.unwrap();
                         (
-                            String::from_utf8(a.key.as_ref().to_vec()).unwrap(),
+                            a.key.as_ref().to_string(),
                             a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
                                 .unwrap()
                                 .into_owned(),
@@ -519,8 +519,8 @@ fn svg_curves(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
                     })
                     .collect();
                 match e.name().as_ref() {
-                    b"rect" if attrs.get("class").map(String::as_str) == Some("frame") => frame = Some(attrs),
-                    b"polyline" => lines.push(attrs),
+                    "rect" if attrs.get("class").map(String::as_str) == Some("frame") => frame = Some(attrs),
+                    "polyline" => lines.push(attrs),
                     _ => {}
                 }
             }
