@@ -259,3 +259,80 @@ pub fn findings(st: &OrderStudy) -> Vec<Finding> {
         top.finding("N and -N rank among the five best schemes overall (Table 7)"),
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::sweep_order::SweepOrder;
+    use crate::order_study::Case;
+
+    /// One main case: every scheme static in 1.0-1.2 s, every sweep in
+    /// `dynamic` (three repeats each).
+    fn study(dynamic: [f64; 3]) -> OrderStudy {
+        let case = Case {
+            name: "SQI 100".into(),
+            slug: "sqi-100".into(),
+            experiment: Experiment::Main,
+            mesh: "SQI".into(),
+            size: 100,
+            free_vertices: 100,
+            inner_iterations: 1,
+            baseline_seconds: 1.0,
+            baseline_sweeps: 10,
+            initial_objective: 2.0,
+            target: 1.0,
+            strategies: vec!["static".into(), "every 1".into()],
+        };
+        let mut rows = Vec::new();
+        for (strategy, tt) in [("static", [1.0, 1.1, 1.2]), ("every 1", dynamic)] {
+            for o in SweepOrder::all() {
+                rows.push(StudyRow {
+                    case: 0,
+                    scheme: o.paper_name(),
+                    strategy: strategy.into(),
+                    sweeps: 10,
+                    reached: true,
+                    objective: 1.0,
+                    cot: tt.to_vec(),
+                    rt: vec![0.0; 3],
+                    tt: tt.to_vec(),
+                    cot_rank: 1,
+                    rt_rank: 1,
+                    tt_rank: 1,
+                    sweeps_rank: 1,
+                    curve: Vec::new(),
+                });
+            }
+        }
+        OrderStudy {
+            repeats: 3,
+            baseline: "10 sweeps".into(),
+            cases: vec![case],
+            rows,
+        }
+    }
+
+    fn find<'a>(f: &'a [Finding], claim: &str) -> &'a Finding {
+        f.iter().find(|f| f.claim.contains(claim)).unwrap()
+    }
+
+    #[test]
+    fn a_faster_strategy_counts_only_where_every_repeat_is_ahead() {
+        let f = findings(&study([2.0, 2.1, 2.2]));
+        let d = find(&f, "static strategy");
+        assert_eq!((d.holds, d.against, d.of, d.verdict()), (20, 0, 20, "reproduced"));
+        // 2.2 within the static repeats' range: no longer significant
+        let f = findings(&study([1.15, 2.1, 2.2]));
+        let d = find(&f, "static strategy");
+        assert_eq!((d.holds, d.against, d.of, d.verdict()), (0, 0, 20, "not reproduced"));
+        // equal times: neither way
+        let r = find(&f, "Reversing");
+        assert_eq!((r.holds, r.against, r.of), (0, 0, 10));
+        // dynamic medians 2.1 against static 1.1: each group within a factor of two
+        let x = find(&f, "factor of two");
+        assert_eq!((x.holds, x.of), (2, 2));
+        // no experiment beside the main one: its findings are not measured
+        assert_eq!(find(&f, "inaccurate target").verdict(), "not measured");
+        assert_eq!(find(&f, "red-black").of, 0);
+    }
+}

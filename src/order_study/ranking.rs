@@ -205,8 +205,8 @@ mod tests {
             cases: Vec::new(),
             rows: Vec::new(),
         };
-        // N ranks 1, 1, 3; -N ranks 2, 2, 1
-        for (n, minus) in [(1, 2), (1, 2), (3, 1)] {
+        // N ranks 1, 1, 4 (mean 2); -N ranks 2, 2, 1 (mean 5/3)
+        for (n, minus) in [(1, 2), (1, 2), (4, 1)] {
             let mut a = row(1.0, true);
             a.scheme = "N".into();
             a.tt_rank = n;
@@ -218,7 +218,7 @@ mod tests {
         let o = overall(&st, |r| r.tt_rank, &PAPER_TABLE7);
         assert_eq!(o.len(), 2);
         assert_eq!((o[0].scheme.as_str(), o[0].mode, o[0].second_mode), ("-N", 2, Some(1)));
-        assert_eq!((o[1].scheme.as_str(), o[1].best, o[1].worst), ("N", 1, 3));
+        assert_eq!((o[1].scheme.as_str(), o[1].best, o[1].worst), ("N", 1, 4));
         assert!((o[0].mean_rank - 5.0 / 3.0).abs() < 1e-12);
         // the paper has N before -N: reversed, rho = -1
         assert_eq!(spearman_with_paper(&o), -1.0);
