@@ -267,16 +267,19 @@ impl OrderStudy {
                 claim: "The static strategy takes less total time than reordering every k sweeps (scheme by scheme)",
                 holds: dynamic.0,
                 of: dynamic.1,
+                ..Default::default()
             },
             Finding {
                 claim: "N or -N is among the five best schemes under the static strategy",
                 holds: n_best as usize,
                 of: 1,
+                ..Default::default()
             },
             Finding {
                 claim: "A distance scheme takes less total time than its base scheme (static)",
                 holds: distance.0,
                 of: distance.1,
+                ..Default::default()
             },
         ]
     }

@@ -446,7 +446,8 @@ pub enum GenerateCommand {
     Box(BoxArgs),
     /// A planar grid of NX x NY squares: quadrilaterals or triangles (each square split into 2).
     Grid(GridArgs),
-    /// A duct (a 4 x 1 x 1 box of tetrahedra) with N cells across, for the size study.
+    /// A duct (a 4 x 1 x 1 box of tetrahedra) as the Newton study uses: unstructured, by
+    /// Gmsh (needs gmsh on the PATH), or Kuhn-split cubes (--kuhn).
     Duct(DuctArgs),
     /// The 2D horseshoe family of the vertex-reordering paper, with its semi-annulus reference.
     Horseshoe(HorseshoeArgs),
@@ -526,7 +527,15 @@ pub struct GridArgs {
 
 #[derive(Args, Debug)]
 pub struct DuctArgs {
-    #[arg(long, default_value_t = 8)]
+    /// About this many vertices in the unstructured duct (Gmsh's Delaunay mesh; 4200 is the
+    /// Newton paper's Duct12).
+    #[arg(long, default_value_t = 4200, conflicts_with = "kuhn")]
+    pub vertices: usize,
+    /// Kuhn-split cubes instead, all tetrahedra alike (already optimal: perturb it).
+    #[arg(long)]
+    pub kuhn: bool,
+    /// Cubes across the Kuhn-split duct.
+    #[arg(long, default_value_t = 8, requires = "kuhn")]
     pub cells_across: usize,
     #[command(flatten)]
     pub perturb: PerturbArgs,
