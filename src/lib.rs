@@ -39,6 +39,10 @@ pub mod problem;
 pub mod report;
 pub mod smoother;
 pub mod solve;
+// The studies' statistics (feature `studies`): for the tool and the benches, not a library API.
+#[doc(hidden)]
+#[cfg(feature = "studies")]
+pub mod stats;
 
 pub use error::{Error, Result};
 pub use mesh::{ElementKind, Mesh};

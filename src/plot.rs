@@ -1,6 +1,8 @@
-//! A small SVG chart of solver histories (objective and gradient norm
-//! against time, as in Figures 2-3 of the Newton paper). Plain SVG text keeps
-//! the tool free of font and rendering dependencies.
+//! Small SVG charts: solver histories (objective and gradient norm against
+//! time, as in Figures 2-3 of the Newton paper), time-ratio curves, and
+//! plain curves on linear axes (objective against time per ordering, as in
+//! Figure 5 of the reordering paper). Plain SVG text keeps the tool free of
+//! font and rendering dependencies.
 
 use crate::solve::History;
 use std::fmt::Write;
@@ -214,6 +216,133 @@ pub fn ratios_svg(title: &str, levels: &[f64], series: &[(String, Vec<Option<f64
     svg
 }
 
+/// Ten distinguishable colours (a pair of curves may share one, told apart
+/// by dashing).
+const PALETTE: [&str; 10] = [
+    "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+];
+
+/// One curve of [`curves_svg`].
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// The legend's entry.
+    pub name: String,
+    /// Index into a ten-colour palette (taken modulo 10).
+    pub color: usize,
+    /// Drawn dashed.
+    pub dashed: bool,
+    /// (x, y) in data units; non-finite points are left out.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Curves of y against x on linear axes (x from 0), one polyline each with
+/// a `data-series` attribute naming it, and a legend on the right. The plot
+/// frame (`class="frame"`) carries its data ranges as `data-x` and `data-y`
+/// ("low high"), so that a reader can map the points back to data.
+pub fn curves_svg(title: &str, x_label: &str, y_label: &str, curves: &[Curve]) -> String {
+    let finite = |&(x, y): &(f64, f64)| x.is_finite() && y.is_finite();
+    let pts = || curves.iter().flat_map(|c| c.points.iter().filter(|p| finite(p)));
+    let xhi = pts().map(|p| p.0).fold(0.0, f64::max).max(1e-9);
+    let (mut ylo, mut yhi) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
+    if !(yhi > ylo) {
+        let mid = if ylo.is_finite() { ylo } else { 0.0 };
+        (ylo, yhi) = (mid - 0.5, mid + 0.5);
+    }
+    let (left, top, width, height) = (PAD + 20.0, 20.0, W - PAD - 10.0, H - PAD);
+    let sx = |x: f64| left + width * x / xhi;
+    let sy = |y: f64| top + height * (1.0 - (y - ylo) / (yhi - ylo));
+    let legend_rows = curves.len().div_ceil(2);
+    let total_h = (H + 40.0).max(40.0 + 14.0 * legend_rows as f64);
+    let mut svg = String::new();
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{}" height="{total_h}" font-family="sans-serif" font-size="11">"#,
+        W + 20.0 + 190.0
+    );
+    let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="14" text-anchor="middle" font-weight="bold">{}</text>"#,
+        left + width / 2.0,
+        escape(title)
+    );
+    let _ = writeln!(
+        svg,
+        r#"<rect class="frame" x="{left}" y="{top}" width="{width}" height="{height}" fill="none" stroke="black" data-x="0 {xhi}" data-y="{ylo} {yhi}"/>"#
+    );
+    for k in 0..=4 {
+        let y = ylo + (yhi - ylo) * k as f64 / 4.0;
+        let x = xhi * k as f64 / 4.0;
+        let _ = writeln!(
+            svg,
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            left - 4.0,
+            sy(y) + 4.0,
+            short(y, yhi - ylo)
+        );
+        let _ = writeln!(
+            svg,
+            r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+            sx(x),
+            top + height + 16.0,
+            short(x, xhi)
+        );
+    }
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+        left + width / 2.0,
+        top + height + 32.0,
+        escape(x_label)
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text transform="translate(12,{}) rotate(-90)" text-anchor="middle">{}</text>"#,
+        top + height / 2.0,
+        escape(y_label)
+    );
+    for (i, c) in curves.iter().enumerate() {
+        let color = PALETTE[c.color % PALETTE.len()];
+        let dash = if c.dashed { r#" stroke-dasharray="5,3""# } else { "" };
+        let points: Vec<String> = c
+            .points
+            .iter()
+            .filter(|p| finite(p))
+            .map(|&(x, y)| format!("{:.3},{:.3}", sx(x), sy(y)))
+            .collect();
+        let _ = writeln!(
+            svg,
+            r#"<polyline data-series="{}" fill="none" stroke="{color}" stroke-width="1.2"{dash} points="{}"/>"#,
+            escape(&c.name),
+            points.join(" ")
+        );
+        // two legend columns
+        let (lx, ly) = (W + 20.0 + 95.0 * (i % 2) as f64, 30.0 + 14.0 * (i / 2) as f64);
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{lx}" y1="{y}" x2="{}" y2="{y}" stroke="{color}" stroke-width="1.5"{dash}/>"#,
+            lx + 18.0,
+            y = ly - 4.0
+        );
+        let _ = writeln!(svg, r#"<text x="{}" y="{ly}">{}</text>"#, lx + 22.0, escape(&c.name));
+    }
+    svg.push_str("</svg>\n");
+    svg
+}
+
+/// An axis label with as many digits as the axis span needs.
+fn short(v: f64, span: f64) -> String {
+    let digits = (2.0 - span.abs().max(1e-12).log10().floor()).clamp(0.0, 10.0) as usize;
+    format!("{v:.digits$}")
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -249,5 +378,36 @@ mod tests {
         assert_eq!(svg.matches("<polyline").count(), 4);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert!(!svg.contains("NaN") && !svg.contains("inf"));
+    }
+
+    #[test]
+    fn curves_keep_their_data_behind_the_frames_ranges() {
+        let curves = vec![
+            Curve {
+                name: "N".into(),
+                color: 0,
+                dashed: false,
+                points: vec![(0.0, 2.0), (0.5, 1.5), (1.0, 1.25)],
+            },
+            Curve {
+                name: "-N".into(),
+                color: 0,
+                dashed: true,
+                points: vec![(0.0, 2.0), (0.8, 1.0), (f64::NAN, 3.0)],
+            },
+        ];
+        let svg = curves_svg("t", "seconds", "F", &curves);
+        assert_eq!(svg.matches("<polyline").count(), 2);
+        assert!(
+            svg.contains(r#"data-x="0 1""#) && svg.contains(r#"data-y="1 2""#),
+            "{svg}"
+        );
+        // (0.8, 1.0): four fifths across the frame, on its bottom edge
+        let (left, width, bottom) = (PAD + 20.0, W - PAD - 10.0, 20.0 + H - PAD);
+        assert!(
+            svg.contains(&format!("{:.3},{:.3}", left + 0.8 * width, bottom)),
+            "{svg}"
+        );
+        assert!(svg.contains("stroke-dasharray") && !svg.contains("NaN"));
     }
 }

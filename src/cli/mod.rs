@@ -76,9 +76,10 @@ pub enum Command {
 #[cfg(feature = "studies")]
 #[derive(Subcommand, Debug)]
 pub enum StudyCommand {
-    /// The vertex-reordering study: a baseline (N, static) for a fixed time sets the target
-    /// objective; every scheme under every strategy (static, dynamic every K) then runs the
-    /// sequential BCD sweep to it. Writes a Markdown table and CSV of COT/RT/TT and ranks.
+    /// The vertex-reordering study: per horseshoe mesh, size and experiment, a baseline (N,
+    /// static) sets the target objective; every scheme under every strategy (static, dynamic
+    /// every K) then runs the sequential BCD sweep to it, repeatedly. Writes Markdown (the
+    /// paper's tables and findings with a rank test), CSV and SVG figures of F against time.
     Order(OrderStudyArgs),
     /// The Newton vs coordinate descent study: ducts of growing size, heterogeneous clipped
     /// cubes, small and large perturbations of an optimal duct; Newton and BCD on each, with
@@ -103,31 +104,60 @@ pub struct NewtonStudyArgs {
 #[cfg(feature = "studies")]
 #[derive(Args, Debug)]
 pub struct OrderStudyArgs {
-    /// Output folder (order-study.md, order-study.csv).
+    /// Output folder (order-study.md, order-study.csv, order-study-runs.csv,
+    /// order-study-curves.csv, order-*.svg).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// The small study: about 1000 free vertices, a 0.25 s baseline (the options below
-    /// override it where given).
+    /// The small study: the five meshes at about 200 free vertices, a 25-sweep baseline
+    /// (the options below override it where given).
     #[arg(long)]
     pub quick: bool,
-    /// The horseshoe mesh (default sqiv).
-    #[arg(long, value_enum)]
-    pub kind: Option<HorseshoeKind>,
-    /// About this many free vertices (default 1000 with --quick, else 20000).
-    #[arg(long)]
-    pub free: Option<usize>,
-    /// Seconds the baseline runs (default 0.25 with --quick, else 10).
-    #[arg(long, value_name = "SECONDS")]
+    /// Horseshoe meshes (default all five: sqi, sqii, sqiv, uti, utiv).
+    #[arg(long, alias = "kind", value_enum, value_delimiter = ',')]
+    pub meshes: Vec<HorseshoeKind>,
+    /// About this many free vertices, one mesh of each type per size (default 200 with
+    /// --quick, else 20000,40000,80000).
+    #[arg(long, alias = "free", value_delimiter = ',')]
+    pub sizes: Vec<usize>,
+    /// Seconds the baseline runs (default 10 without --quick).
+    #[arg(long, value_name = "SECONDS", conflicts_with = "baseline_sweeps")]
     pub baseline: Option<f64>,
+    /// Sweeps the baseline runs instead: the same targets on any machine (default 25
+    /// with --quick).
+    #[arg(long, value_name = "SWEEPS")]
+    pub baseline_sweeps: Option<usize>,
     /// Dynamic strategies to run besides the static one.
     #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2, 5, 10])]
     pub every: Vec<usize>,
+    /// Runs of each scheme and strategy: times are their medians, and findings need a
+    /// rank test over them (at least 3).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// The experiments besides static/dynamic (default all; "none" for none).
+    #[arg(long, value_delimiter = ',')]
+    pub experiments: Vec<ExperimentArg>,
     /// Newton steps per vertex visit.
     #[arg(long, default_value_t = 1)]
     pub inner_iterations: usize,
-    /// Seed of the random orders.
+    /// Seed of the random orders and of the perturbed mesh.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+}
+
+/// `--experiments`: the paper's experiments 6.3, 6.6, 6.7, 6.8, or none.
+#[cfg(feature = "studies")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExperimentArg {
+    /// 6.3: a perturbed initial mesh.
+    Perturbed,
+    /// 6.6: one more Newton step per visit.
+    Inner,
+    /// 6.7: a target from a baseline a fifth as long.
+    Inaccurate,
+    /// 6.8: the quadrilateral meshes renumbered red-black.
+    RedBlack,
+    /// None of them.
+    None,
 }
 
 #[derive(Args, Debug)]

@@ -1,9 +1,9 @@
 //! `meshsmooth study order` and `meshsmooth study newton-bcd`: the papers'
 //! studies, written as Markdown, CSV (and SVG).
 
-use super::{NewtonStudyArgs, OrderStudyArgs};
+use super::{ExperimentArg, NewtonStudyArgs, OrderStudyArgs};
 use meshsmooth::newton_study::{Crossing, NewtonStudyOptions, newton_study};
-use meshsmooth::order_study::{OrderStudyOptions, order_study};
+use meshsmooth::order_study::{Baseline, Experiment, OrderStudyOptions, order_study};
 use meshsmooth::{Error, Result, io};
 use std::time::Duration;
 
@@ -11,17 +11,16 @@ pub fn order(a: &OrderStudyArgs) -> Result<()> {
     let mut opts = if a.quick {
         OrderStudyOptions::quick()
     } else {
-        OrderStudyOptions {
-            free: 20000,
-            baseline: Duration::from_secs(10),
-            ..OrderStudyOptions::quick()
-        }
+        OrderStudyOptions::full()
     };
-    if let Some(k) = a.kind {
-        opts.kind = k;
+    if !a.meshes.is_empty() {
+        opts.meshes = a.meshes.clone();
     }
-    if let Some(n) = a.free {
-        opts.free = n;
+    if !a.sizes.is_empty() {
+        if a.sizes.contains(&0) {
+            return Err(Error::InvalidArgument("--sizes takes counts of at least 1".into()));
+        }
+        opts.sizes = a.sizes.clone();
     }
     if let Some(t) = a.baseline {
         if !(t.is_finite() && t > 0.0) {
@@ -29,39 +28,67 @@ pub fn order(a: &OrderStudyArgs) -> Result<()> {
                 "--baseline must be a positive number of seconds, got {t}"
             )));
         }
-        opts.baseline = Duration::from_secs_f64(t);
+        opts.baseline = Baseline::Seconds(Duration::from_secs_f64(t));
     }
-    if a.every.contains(&0) || a.inner_iterations == 0 {
+    if let Some(k) = a.baseline_sweeps {
+        if k == 0 {
+            return Err(Error::InvalidArgument("--baseline-sweeps must be at least 1".into()));
+        }
+        opts.baseline = Baseline::Sweeps(k);
+    }
+    if a.every.contains(&0) || a.inner_iterations == 0 || a.repeats == 0 {
         return Err(Error::InvalidArgument(
-            "--every and --inner-iterations take whole numbers of at least 1".into(),
+            "--every, --inner-iterations and --repeats take whole numbers of at least 1".into(),
         ));
+    }
+    if !a.experiments.is_empty() {
+        opts.experiments = a
+            .experiments
+            .iter()
+            .filter_map(|e| match e {
+                ExperimentArg::Perturbed => Some(Experiment::Perturbed),
+                ExperimentArg::Inner => Some(Experiment::InnerIterations),
+                ExperimentArg::Inaccurate => Some(Experiment::Inaccurate),
+                ExperimentArg::RedBlack => Some(Experiment::RedBlack),
+                ExperimentArg::None => None,
+            })
+            .collect();
     }
     opts.every = a.every.clone();
     opts.inner_iterations = a.inner_iterations;
+    opts.repeats = a.repeats;
     opts.seed = a.seed;
     std::fs::create_dir_all(&a.output).map_err(|e| Error::io(&a.output, e))?;
-    let study = order_study(&opts, &mut |r| {
+    let study = order_study(&opts, &mut |c, r| {
         eprintln!(
-            "{:<8} {:<9} {:>6} sweeps  COT {:.3} s  RT {:.4} s  TT {:.3} s{}",
+            "{:<22} {:<8} {:<9} {:>6} sweeps  COT {:.4} s  RT {:.4} s  TT {:.4} s{}",
+            c.name,
             r.scheme,
             r.strategy,
             r.sweeps,
-            r.cot,
-            r.rt,
-            r.tt,
+            r.cot_median(),
+            r.rt_median(),
+            r.tt_median(),
             if r.reached { "" } else { "  (target not reached)" }
         );
     })?;
-    let md = a.output.join("order-study.md");
-    let csv = a.output.join("order-study.csv");
-    io::write_atomic(&md, |w| Ok(w.write_all(study.to_markdown().as_bytes())?))?;
-    io::write_atomic(&csv, |w| Ok(w.write_all(study.to_csv().as_bytes())?))?;
+    let mut files = vec![
+        ("order-study.md".to_string(), study.to_markdown()),
+        ("order-study.csv".to_string(), study.to_csv()),
+        ("order-study-runs.csv".to_string(), study.runs_csv()),
+        ("order-study-curves.csv".to_string(), study.curves_csv()),
+    ];
+    files.extend(study.figures());
+    for (name, text) in &files {
+        io::write_atomic(&a.output.join(name), |w| Ok(w.write_all(text.as_bytes())?))?;
+    }
     println!(
-        "target F {:.8} (baseline N, {:.3} s); wrote {} and {}",
-        study.target,
-        study.baseline_seconds,
-        md.display(),
-        csv.display()
+        "{} cases, {} rows of {} repeats; wrote {} files to {}",
+        study.cases.len(),
+        study.rows.len(),
+        study.repeats,
+        files.len(),
+        a.output.display()
     );
     Ok(())
 }

@@ -483,6 +483,7 @@ impl NewtonStudy {
             of,
             numbers,
             cause,
+            ..Default::default()
         };
         let at_90 = LEVELS.iter().position(|&l| l == 90.0).unwrap_or(8);
         let subsets = cases(Suite::Subset);

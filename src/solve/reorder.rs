@@ -17,8 +17,12 @@
 //! dynamic run) no vertex has moved yet: the movement is then the one a
 //! visit would make from the start positions, each vertex's visit computed
 //! with the others at the start (a Jacobi trial; nothing moves). That trial
-//! is also the "first movement" GRVM divides by, so a static GRVM order has
-//! every key equal to 1 and is the input order by the tie rule.
+//! is also the "first movement" GRVM divides by. GRVM's own static key needs
+//! a second movement to divide: the trial movement from the trial positions
+//! (every vertex where its first trial put it, all at once), over the first
+//! trial's. A vertex whose patch those positions invert makes no second move
+//! (key 0). Without that second trial every static GRVM key would be 1 and
+//! GRVM would be N.
 
 use crate::backend::cpu::bcd::{Patch, visit};
 use crate::backend::cpu::project_boundary::constrain_block;
@@ -116,9 +120,17 @@ impl Reorder {
     /// `ls` and `inner` are the sweep's, for the trial movement.
     pub fn initial(&mut self, p: &Problem, x: &[Vec3], ls: &LineSearch, inner: usize) {
         let t = Instant::now();
-        if matches!(self.scheme.scheme.key(), Key::AbsoluteMove | Key::RelativeMove) {
-            self.first_move = trial_moves(p, x, ls, inner);
-            self.last_move = self.first_move.clone();
+        match self.scheme.scheme.key() {
+            Key::AbsoluteMove => {
+                self.first_move = trial_moves(p, x, ls, inner);
+                self.last_move = self.first_move.clone();
+            }
+            Key::RelativeMove => {
+                let y = trial_positions(p, x, ls, inner);
+                self.first_move = moves_between(p, x, &y);
+                self.last_move = trial_moves(p, &y, ls, inner);
+            }
+            _ => {}
         }
         self.reorder(p, x);
         self.seconds += t.elapsed().as_secs_f64();
@@ -172,13 +184,28 @@ fn norm(a: &Vec3) -> f64 {
 /// Per free vertex: the distance one visit (`inner` Newton steps) would move
 /// it from `x`, the others held at `x`.
 pub fn trial_moves(p: &Problem, x: &[Vec3], ls: &LineSearch, inner: usize) -> Vec<f64> {
+    moves_between(p, x, &trial_positions(p, x, ls, inner))
+}
+
+/// `x` with every free vertex where one visit from `x` (the others held at
+/// `x`) would put it: a Jacobi step, which may invert elements that no
+/// single visit would.
+pub fn trial_positions(p: &Problem, x: &[Vec3], ls: &LineSearch, inner: usize) -> Vec<Vec3> {
     let mut patch = Patch::default();
+    let mut y = x.to_vec();
+    for &v in &p.free_vertices {
+        y[v as usize] = visit(p, x, v as usize, ls, inner, &mut patch);
+    }
+    y
+}
+
+/// Per free vertex: how far it lies from `x` in `y`.
+fn moves_between(p: &Problem, x: &[Vec3], y: &[Vec3]) -> Vec<f64> {
     p.free_vertices
         .iter()
         .map(|&v| {
-            let v = v as usize;
-            let y = visit(p, x, v, ls, inner, &mut patch);
-            norm(&[y[0] - x[v][0], y[1] - x[v][1], y[2] - x[v][2]])
+            let (a, b) = (x[v as usize], y[v as usize]);
+            norm(&[b[0] - a[0], b[1] - a[1], b[2] - a[2]])
         })
         .collect()
 }
