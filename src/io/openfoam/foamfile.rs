@@ -559,7 +559,13 @@ impl<'a> Lexer<'a> {
         let line = self.tok_line;
         let conn = self.labels(What::list("face point"), limit, false)?;
         let bad = |msg: String| Error::parse(self.path, Some(Location::Line(line)), msg);
-        if offsets.first().is_some_and(|&o| o != 0) {
+        if offsets.is_empty() {
+            if !conn.is_empty() {
+                return Err(bad(format!("{} face points but no face offsets", conn.len())));
+            }
+            return Ok((vec![0], conn));
+        }
+        if offsets[0] != 0 {
             return Err(bad(format!("the first face offset is {}, not 0", offsets[0])));
         }
         if let Some(f) = offsets.windows(2).position(|w| w[1] < w[0]) {

@@ -118,6 +118,18 @@ pub(crate) fn read(dir: &Path, budget: &Budget) -> Result<Mesh> {
             ),
         ));
     }
+    // a cell has 4 faces or more, a face 2 cells at most
+    let max_cells = nf / 2;
+    if let Some(f) = owner.iter().position(|&c| c as usize >= max_cells) {
+        return Err(Error::parse(
+            &owner_path,
+            None,
+            format!(
+                "owner {f} is cell {}, but {nf} faces close at most {max_cells} cells",
+                owner[f]
+            ),
+        ));
+    }
     let (neighbour_path, mut neighbour) = label_file(dir, "neighbour", budget, true)?;
     // the old format lists every face, -1 for the boundary ones
     if neighbour.len() == nf
@@ -139,6 +151,16 @@ pub(crate) fn read(dir: &Path, budget: &Budget) -> Result<Mesh> {
             format!(
                 "neighbour has {} entries but faces has only {nf} faces",
                 neighbour.len()
+            ),
+        ));
+    }
+    if let Some(f) = neighbour.iter().position(|&c| c as usize >= max_cells) {
+        return Err(Error::parse(
+            &neighbour_path,
+            None,
+            format!(
+                "neighbour {f} is cell {}, but {nf} faces close at most {max_cells} cells",
+                neighbour[f]
             ),
         ));
     }
