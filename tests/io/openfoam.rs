@@ -998,3 +998,69 @@ fn cases_go_through_the_python_interface_paths() {
     assert_eq!(poly.patches[0].name, "defaultFaces");
     assert_eq!(poly.patches[0].faces, 96);
 }
+
+/// Names under `dir` (recursively), sorted.
+fn names(dir: &Path) -> Vec<String> {
+    snapshot_names(dir, dir)
+}
+
+fn snapshot_names(root: &Path, dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        out.push(p.strip_prefix(root).unwrap().display().to_string());
+        if p.is_dir() && !p.is_symlink() {
+            out.extend(snapshot_names(root, &p));
+        }
+    }
+    out.sort();
+    out
+}
+
+#[cfg(unix)]
+#[test]
+fn a_write_replaces_a_case_whole_or_leaves_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in");
+    case_files(&input);
+    let m = io::read(&input).unwrap();
+    let out = dir.path().join("out");
+    io::write(&out, &m, Format::OpenFoam, &[]).unwrap();
+    let first = names(&out);
+    assert!(first.contains(&"constant/polyMesh/points".to_string()), "{first:?}");
+    // written again with other points: replaced, nothing left beside it
+    let mut moved = m.clone();
+    moved.points[31][0] += 0.01;
+    io::write(&out, &moved, Format::OpenFoamBinary, &[]).unwrap();
+    assert_eq!(names(&out), first);
+    assert_eq!(io::read(&out).unwrap().points, moved.points);
+    assert_eq!(Format::of_file(&out), Some(Format::OpenFoamBinary));
+    // a FIFO where a file would go is never replaced: nothing changes
+    let fifo_case = dir.path().join("fifo");
+    std::fs::create_dir_all(fifo_case.join("constant/polyMesh")).unwrap();
+    common::fifo(&fifo_case.join("constant/polyMesh/points"));
+    let before = names(&fifo_case);
+    let e = io::write(&fifo_case, &m, Format::OpenFoam, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("points") && e.contains("never replaces"), "{e}");
+    assert_eq!(names(&fifo_case), before);
+    // a link to a polyMesh folder: the folder it leads to is replaced, the link stays
+    let real = dir.path().join("real");
+    std::fs::create_dir_all(&real).unwrap();
+    let linked = dir.path().join("linked");
+    std::fs::create_dir_all(linked.join("constant")).unwrap();
+    std::os::unix::fs::symlink(&real, linked.join("constant/polyMesh")).unwrap();
+    io::write(&linked.join("case.foam"), &m, Format::OpenFoam, &[]).unwrap();
+    assert!(
+        std::fs::symlink_metadata(linked.join("constant/polyMesh"))
+            .unwrap()
+            .is_symlink()
+    );
+    assert!(linked.join("case.foam").is_file());
+    assert_eq!(io::read(&linked).unwrap().points, m.points);
+    assert!(dir.path().join("real").exists());
+    // a stream cannot hold a case
+    let e = io::write_to(&mut Vec::new(), Path::new("-"), &m, Format::OpenFoam, &[]).unwrap_err();
+    assert!(e.to_string().contains("folder"), "{e}");
+}

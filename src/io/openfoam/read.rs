@@ -36,8 +36,12 @@ fn load(path: &Path, gz: bool, budget: &Budget) -> Result<Vec<u8>> {
         .take(left.saturating_add(1))
         .read_to_end(&mut out)
         .map_err(|e| Error::parse(path, None, format!("cannot decompress the file: {e}")))?;
+    let what = format_args!("{name} decompressed");
+    if out.len() as u64 > left {
+        return Err(budget.over(what, out.len() as u64));
+    }
     budget.release(data.len() as u64);
-    budget.charge(format_args!("{name} decompressed"), out.len() as u64)?;
+    budget.charge(what, out.len() as u64)?;
     Ok(out)
 }
 
