@@ -14,8 +14,10 @@ pub struct Finding {
     pub of: usize,
     /// Cases that the test says go the other way (0 where there is no test).
     pub against: usize,
-    /// The numbers behind the count, for the reader.
-    pub note: String,
+    /// The run's numbers behind the count ("lead 2.1, 2.8, 3.5"), or empty.
+    pub numbers: String,
+    /// Why it may not hold here, said when it does not.
+    pub cause: &'static str,
 }
 
 impl Finding {
@@ -31,24 +33,22 @@ impl Finding {
     }
 }
 
-/// The "## Findings" section of a study's Markdown.
+/// The "## Findings" section of a study's Markdown: the verdict in the third
+/// column, then the numbers and, for a finding that does not hold in every
+/// case, its likely cause.
 pub fn markdown(intro: &str, findings: &[Finding]) -> String {
-    let notes = findings.iter().any(|f| !f.note.is_empty());
-    let mut s = if notes {
-        format!(
-            "\n## Findings\n\n{intro}\n\n| finding | cases that bear it out | numbers | verdict |\n|---|---:|---|---|\n"
-        )
-    } else {
-        format!("\n## Findings\n\n{intro}\n\n| finding | cases that bear it out | verdict |\n|---|---:|---|\n")
-    };
+    let mut s = format!(
+        "\n## Findings\n\n{intro}\n\n| finding | cases that bear it out | verdict | numbers | likely cause where it fails |\n|---|---:|---|---|---|\n"
+    );
     for f in findings {
-        let note = if notes { format!(" {} |", f.note) } else { String::new() };
+        let cause = if f.holds == f.of { "" } else { f.cause };
         s.push_str(&format!(
-            "| {} | {} of {} |{note} {} |\n",
+            "| {} | {} of {} | {} | {} | {cause} |\n",
             f.claim,
             f.holds,
             f.of,
-            f.verdict()
+            f.verdict(),
+            f.numbers
         ));
     }
     s

@@ -235,6 +235,22 @@ def test_read_write_round_trip(tmp_path, tet_box):
         ms.read(tmp_path / "missing.vtu")
 
 
+def test_openfoam_case_round_trip(tmp_path, tet_box):
+    points, tets, _ = tet_box
+    case = tmp_path / "case"
+    ms.write(case, points, tets, format="openfoam")
+    assert (case / "constant" / "polyMesh" / "faces").is_file()
+    (case / "case.foam").touch()
+    for path in [case, case / "case.foam", case / "constant" / "polyMesh"]:
+        p, cells, fixed = ms.read(path)
+        np.testing.assert_array_equal(p, points)
+        assert [t for t, _ in cells] == ["tetra"]
+        # each cell is rebuilt from its faces: the same points, maybe in another order
+        np.testing.assert_array_equal(np.sort(cells[0][1], axis=1), np.sort(tets, axis=1))
+        # the boundary faces (one patch) fix their points
+        assert fixed is not None and 0 < fixed.sum() < len(points)
+
+
 def test_gpu_device_matches_cpu(tet_box):
     usable = [d for d in ms.devices() if d["compute"]]
     if not usable:

@@ -134,8 +134,13 @@ fn make(g: &GenerateCommand) -> Result<(Mesh, Option<Mesh>)> {
             Ok((mesh, None))
         }
         GenerateCommand::Duct(a) => {
-            positive(&[a.cells_across], "--cells-across")?;
-            let mut mesh = generate::duct(a.cells_across);
+            let mut mesh = if a.kuhn {
+                positive(&[a.cells_across], "--cells-across")?;
+                generate::duct(a.cells_across)
+            } else {
+                positive(&[a.vertices], "--vertices")?;
+                generate::unstructured_duct(generate::duct_size_for(a.vertices))?
+            };
             perturb(&mut mesh, &a.perturb)?;
             Ok((mesh, None))
         }

@@ -222,7 +222,8 @@ pub struct SmoothArgs {
     /// Write the iteration history as CSV (iteration, seconds, objective, gradient norm).
     #[arg(long, value_name = "FILE.csv")]
     pub history: Option<PathBuf>,
-    /// Output format: vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary, medit, abaqus.
+    /// Output format: vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary, medit, abaqus,
+    /// openfoam, openfoam-binary (-o then names a case folder).
     #[arg(long)]
     pub format: Option<String>,
     /// Write the bare mesh: drop the input's point, cell and field arrays and Gmsh groups
@@ -476,7 +477,8 @@ pub enum GenerateCommand {
     Box(BoxArgs),
     /// A planar grid of NX x NY squares: quadrilaterals or triangles (each square split into 2).
     Grid(GridArgs),
-    /// A duct (a 4 x 1 x 1 box of tetrahedra) with N cells across, for the size study.
+    /// A duct (a 4 x 1 x 1 box of tetrahedra) as the Newton study uses: unstructured, by
+    /// Gmsh (needs gmsh on the PATH), or Kuhn-split cubes (--kuhn).
     Duct(DuctArgs),
     /// The 2D horseshoe family of the vertex-reordering paper, with its semi-annulus reference.
     Horseshoe(HorseshoeArgs),
@@ -556,7 +558,15 @@ pub struct GridArgs {
 
 #[derive(Args, Debug)]
 pub struct DuctArgs {
-    #[arg(long, default_value_t = 8)]
+    /// About this many vertices in the unstructured duct (Gmsh's Delaunay mesh; 4200 is the
+    /// Newton paper's Duct12).
+    #[arg(long, default_value_t = 4200, conflicts_with = "kuhn")]
+    pub vertices: usize,
+    /// Kuhn-split cubes instead, all tetrahedra alike (already optimal: perturb it).
+    #[arg(long)]
+    pub kuhn: bool,
+    /// Cubes across the Kuhn-split duct.
+    #[arg(long, default_value_t = 8, requires = "kuhn")]
     pub cells_across: usize,
     #[command(flatten)]
     pub perturb: PerturbArgs,

@@ -53,7 +53,7 @@ pub(super) fn check(input: Option<&Path>, outputs: &[(&str, &Path)]) -> Result<(
             on_stdout = Some(flag);
             continue;
         }
-        if let Some(input) = input.filter(|i| io::same_target(path, i)) {
+        if let Some(input) = input.filter(|i| io::same_target(path, i) || io::same_case(path, i)) {
             return Err(refuse(format!(
                 "{flag} {} is the input mesh {}; meshsmooth never overwrites its input: give {flag} a file of its own",
                 path.display(),
@@ -66,12 +66,20 @@ pub(super) fn check(input: Option<&Path>, outputs: &[(&str, &Path)]) -> Result<(
                 path.display()
             )));
         }
-        if !io::is_stream(path) {
+        if !io::is_stream(path) && !is_case(path, input) {
             check_file(flag, path)?;
         }
         files.push((flag, path));
     }
     Ok(())
+}
+
+/// Whether `path` is an OpenFOAM case to write (a folder, checked when it
+/// is staged): an existing case or `.foam` marker, or any folder when the
+/// input is a case.
+fn is_case(path: &Path, input: Option<&Path>) -> bool {
+    let foam_input = || input.and_then(Format::of_file).is_some_and(Format::is_openfoam);
+    Format::from_path(path).is_ok_and(Format::is_openfoam) || (path.is_dir() && foam_input())
 }
 
 /// A file output: not a directory, its directory there and writable.
@@ -132,7 +140,7 @@ pub(super) fn mesh_format(flag: &str, path: &Path, name: Option<&str>, input: Op
     if name.is_none() && (path.as_os_str() == "-" || (path.extension().is_none() && is_stdout(path))) {
         return Err(refuse(format!(
             "{flag} {} names standard output, which has no extension to tell the mesh format: \
-             give --format (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary or medit)",
+             give --format (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary, medit or abaqus)",
             path.display()
         )));
     }

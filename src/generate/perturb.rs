@@ -172,10 +172,12 @@ const MAX_HALVINGS: u32 = 30;
 
 /// Moves the free vertices (not on the skin, not user-fixed) of a valid mesh.
 ///
-/// Vertices move one at a time in a seeded random order; a move that would
-/// give any incident element a non-positive corner determinant is halved
-/// until it does not (at most 30 times, then the vertex stays). So a mesh
-/// without inverted elements stays without them. Planar meshes move in x and
+/// Random moves are made one vertex at a time in a seeded random order; a
+/// move that would give any incident element a non-positive corner
+/// determinant is halved until it does not (at most 30 times, then the
+/// vertex stays). Shifts and oscillations move every selected vertex
+/// together in increments of a quarter edge, each vertex taking (or halving)
+/// its increment only where its elements stay valid. Either way a mesh without inverted elements stays without them. Planar meshes move in x and
 /// y only. The result depends only on the mesh, the options and the seed.
 pub fn perturb(mesh: &mut Mesh, opts: &PerturbOptions) -> Result<PerturbStats> {
     perturb_with(mesh, opts, true)
@@ -243,25 +245,48 @@ fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions, guard: bool) -> Resu
     let (lo, hi) = crate::mesh::frame::bounding_box(&mesh.points);
     let planar = mesh.dim() == 2;
     let ve = vertex_elements(mesh);
+    let displacements: Vec<[f64; 3]> = order
+        .iter()
+        .map(|&v| {
+            let mut d = displacement(&p, mesh.points[v], h[v], &lo, &hi, &mut rng);
+            if planar {
+                d[2] = 0.0;
+            }
+            d
+        })
+        .collect();
+    if matches!(p, Perturbation::Random { .. } | Perturbation::RandomShortest { .. }) {
+        Ok(one_at_a_time(mesh, &order, displacements, &ve, guard))
+    } else {
+        Ok(together(mesh, &order, &displacements, &h, &ve, guard))
+    }
+}
+
+fn valid_around(mesh: &Mesh, ve: &crate::mesh::topology::Csr, v: usize) -> bool {
+    ve.of(v)
+        .iter()
+        .all(|&e| element_min_det(mesh, &mesh.points, e as usize) > 0.0)
+}
+
+/// Random moves, vertex by vertex: each independent move is halved until
+/// its own elements are valid.
+fn one_at_a_time(
+    mesh: &mut Mesh,
+    order: &[usize],
+    displacements: Vec<[f64; 3]>,
+    ve: &crate::mesh::topology::Csr,
+    guard: bool,
+) -> PerturbStats {
     let mut stats = PerturbStats {
         selected: order.len(),
         ..Default::default()
     };
-    for v in order {
+    for (&v, mut d) in order.iter().zip(displacements) {
         let x0 = mesh.points[v];
-        let mut d = displacement(&p, x0, h[v], &lo, &hi, &mut rng);
-        if planar {
-            d[2] = 0.0;
-        }
         let mut placed = false;
         for halvings in 0..=MAX_HALVINGS {
             mesh.points[v] = std::array::from_fn(|i| x0[i] + d[i]);
-            if !guard
-                || ve
-                    .of(v)
-                    .iter()
-                    .all(|&e| element_min_det(mesh, &mesh.points, e as usize) > 0.0)
-            {
+            if !guard || valid_around(mesh, ve, v) {
                 stats.moved += 1;
                 stats.backtracked += (halvings > 0) as usize;
                 placed = true;
@@ -274,7 +299,67 @@ fn perturb_oriented(mesh: &mut Mesh, opts: &PerturbOptions, guard: bool) -> Resu
             stats.untouched += 1;
         }
     }
-    Ok(stats)
+    stats
+}
+
+/// A displacement field (a shift, an oscillation) moves every selected
+/// vertex together, as the Newton paper's translational and oscillatory
+/// perturbations do, in small increments (a quarter of a local edge each):
+/// in each increment every vertex, in the seeded order, takes its share of
+/// the field unless that would invert one of its elements, then tries half
+/// of it, and so on (the paper's node-by-node backtracking). Neighbours
+/// that move together keep their elements, so vertices pile up against the
+/// fixed boundary: a larger shift squeezes more elements, harder, instead of
+/// being halved into the same small move everywhere.
+fn together(
+    mesh: &mut Mesh,
+    order: &[usize],
+    displacements: &[[f64; 3]],
+    h: &[f64],
+    ve: &crate::mesh::topology::Csr,
+    guard: bool,
+) -> PerturbStats {
+    let x0: Vec<[f64; 3]> = order.iter().map(|&v| mesh.points[v]).collect();
+    let norm = |d: &[f64; 3]| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let steps = order
+        .iter()
+        .zip(displacements)
+        .map(|(&v, d)| {
+            if h[v] > 0.0 {
+                (4.0 * norm(d) / h[v]).ceil() as usize
+            } else {
+                1
+            }
+        })
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    // the share of its move each vertex has made
+    let mut t = vec![0.0f64; order.len()];
+    for _ in 0..steps {
+        for (k, &v) in order.iter().enumerate() {
+            let mut dt = (1.0 - t[k]).min(1.0 / steps as f64);
+            for _ in 0..=MAX_HALVINGS.min(8) {
+                if dt <= 0.0 {
+                    break;
+                }
+                mesh.points[v] = std::array::from_fn(|i| x0[k][i] + (t[k] + dt) * displacements[k][i]);
+                if !guard || valid_around(mesh, ve, v) {
+                    t[k] += dt;
+                    break;
+                }
+                dt *= 0.5;
+            }
+            mesh.points[v] = std::array::from_fn(|i| x0[k][i] + t[k] * displacements[k][i]);
+        }
+    }
+    let full = |x: f64| x >= 1.0 - 1e-12;
+    PerturbStats {
+        selected: order.len(),
+        moved: t.iter().filter(|&&x| x > 0.0).count(),
+        backtracked: t.iter().filter(|&&x| x > 0.0 && !full(x)).count(),
+        untouched: t.iter().filter(|&&x| x == 0.0).count(),
+    }
 }
 
 /// Fisher-Yates over `u64` draws, so the order does not depend on `usize` width.

@@ -12,7 +12,8 @@
 //! - a directory is refused.
 //!
 //! [`stage`] and [`Staged::commit`] split a write in two, so that several
-//! outputs can be written all or nothing.
+//! outputs can be written all or nothing; [`stage_dir`] does the same for a
+//! directory (an OpenFOAM polyMesh), written whole beside its target.
 
 use std::fs::{self, OpenOptions};
 use std::io::{BufWriter, Write};
@@ -70,7 +71,17 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResul
 #[must_use = "a staged output is deleted unless committed"]
 pub struct Staged {
     path: PathBuf,
-    pending: Option<(tempfile::NamedTempFile, PathBuf)>,
+    pending: Option<Pending>,
+}
+
+/// What [`Staged::commit`] renames into place.
+enum Pending {
+    /// A temporary file and the file it replaces.
+    File(tempfile::NamedTempFile, PathBuf),
+    /// A temporary directory, the directory it becomes (replacing one
+    /// there), and an empty file to create afterwards if missing (an
+    /// OpenFOAM case's `.foam` marker).
+    Dir(tempfile::TempDir, PathBuf, Option<PathBuf>),
 }
 
 impl Staged {
@@ -89,11 +100,146 @@ impl Staged {
 
     /// Puts the output in place (renames the temporary file over its target).
     pub fn commit(self) -> Result<()> {
-        if let Some((tmp, target)) = self.pending {
-            tmp.persist(&target).map_err(|e| Error::io(&self.path, e.error))?;
+        match self.pending {
+            None => Ok(()),
+            Some(Pending::File(tmp, target)) => {
+                tmp.persist(&target).map_err(|e| Error::io(&self.path, e.error))?;
+                Ok(())
+            }
+            Some(Pending::Dir(tmp, target, marker)) => {
+                let tmp = tmp.keep();
+                let put = replace_dir(&tmp, &target).map_err(|e| Error::io(&self.path, e));
+                if put.is_err() {
+                    let _ = fs::remove_dir_all(&tmp);
+                }
+                put?;
+                if let Some(m) = marker.filter(|m| fs::symlink_metadata(m).is_err()) {
+                    fs::File::create(&m).map_err(|e| Error::io(&m, e))?;
+                }
+                Ok(())
+            }
         }
-        Ok(())
     }
+}
+
+/// Puts the directory `new` in the place of `target`: at once where
+/// `target` is a directory the kernel can exchange it with (the old one
+/// then deleted), else by moving the old one aside first.
+fn replace_dir(new: &Path, target: &Path) -> std::io::Result<()> {
+    if fs::symlink_metadata(target).is_err() {
+        return fs::rename(new, target);
+    }
+    if exchange(new, target)? {
+        // `new` now holds the old directory
+        return fs::remove_dir_all(new);
+    }
+    let aside = new.with_extension("old");
+    fs::rename(target, &aside)?;
+    if let Err(e) = fs::rename(new, target) {
+        let _ = fs::rename(&aside, target);
+        return Err(e);
+    }
+    fs::remove_dir_all(&aside)
+}
+
+/// Swaps two directories in one step (Linux's `renameat2` with
+/// `RENAME_EXCHANGE`); false where the system or file system cannot.
+#[cfg(target_os = "linux")]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<bool> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = |p: &Path| std::ffi::CString::new(p.as_os_str().as_bytes()).map_err(std::io::Error::other);
+    let (a, b) = (c(a)?, c(b)?);
+    // SAFETY: two valid NUL-terminated paths; the call only renames
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_renameat2,
+            libc::AT_FDCWD,
+            a.as_ptr(),
+            libc::AT_FDCWD,
+            b.as_ptr(),
+            libc::RENAME_EXCHANGE,
+        )
+    };
+    if r == 0 {
+        return Ok(true);
+    }
+    match std::io::Error::last_os_error().raw_os_error() {
+        Some(libc::ENOSYS | libc::EINVAL | libc::EOPNOTSUPP) => Ok(false),
+        _ => Err(std::io::Error::last_os_error()),
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn exchange(_: &Path, _: &Path) -> std::io::Result<bool> {
+    Ok(false)
+}
+
+/// A directory written whole beside `target` by `fill` (given the
+/// temporary directory to fill) and put in its place by [`Staged::commit`]:
+/// the directory-valued twin of [`stage`]. A link at `target` is followed
+/// (the link stays); anything there but a directory is refused, and so is
+/// an entry of the old directory that `keep` names and that is not a
+/// regular file (a device or FIFO is never replaced). `marker`: an empty
+/// file created after the commit if missing. `path` is what errors call
+/// the output.
+pub(crate) fn stage_dir(
+    path: &Path,
+    target: &Path,
+    keep: &[&str],
+    marker: Option<PathBuf>,
+    fill: impl FnOnce(&Path) -> Result<()>,
+) -> Result<Staged> {
+    let target = resolve_links(target)?;
+    match fs::metadata(&target) {
+        Ok(m) if !m.is_dir() => {
+            return Err(Error::io(
+                &target,
+                std::io::Error::new(std::io::ErrorKind::NotADirectory, "is not a directory"),
+            ));
+        }
+        Ok(_) => {
+            for name in keep {
+                let p = target.join(name);
+                if let Ok(m) = fs::symlink_metadata(&p)
+                    && !m.is_file()
+                {
+                    return Err(Error::io(
+                        &p,
+                        std::io::Error::other(
+                            "is not a regular file; meshsmooth never replaces a device, FIFO, socket or link",
+                        ),
+                    ));
+                }
+            }
+        }
+        Err(_) => {}
+    }
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(not_found(
+            path,
+            format!("output directory {} does not exist", dir.display()),
+        ));
+    }
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".meshsmooth-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(fs::Permissions::from_mode(0o777));
+    }
+    let tmp = builder.tempdir_in(dir).map_err(|e| Error::io(path, e))?;
+    fill(tmp.path())?;
+    if let Ok(m) = fs::metadata(&target) {
+        fs::set_permissions(tmp.path(), m.permissions()).map_err(|e| Error::io(path, e))?;
+    }
+    Ok(Staged {
+        path: path.to_path_buf(),
+        pending: Some(Pending::Dir(tmp, target, marker)),
+    })
 }
 
 /// Whether `path` is written through rather than replaced: it exists
@@ -170,7 +316,7 @@ pub fn stage(path: &Path, fill: impl FnOnce(&mut dyn Write) -> WriteResult) -> R
     tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
     Ok(Staged {
         path: path.to_path_buf(),
-        pending: Some((tmp, target)),
+        pending: Some(Pending::File(tmp, target)),
     })
 }
 

@@ -1,4 +1,4 @@
-//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus; atomic writes.
+//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus, OpenFOAM; atomic writes.
 //!
 //! Readers produce a `RawMesh` (every cell in file order, with its shape);
 //! `RawMesh::into_mesh` then splits top-dimensional elements from lower
@@ -32,6 +32,9 @@
 //! - Abaqus keeps its node and element numbers and element types as the
 //!   arrays `abaqus:node_id`, `abaqus:element_id`, `abaqus:type` and
 //!   `abaqus:types`, which the `.inp` writer puts back;
+//! - an OpenFOAM case (a folder) keeps its faces, patches and zones in
+//!   `MeshData::polymesh`, which only the OpenFOAM writer puts back; its
+//!   patches are physical groups and its zones sets (see `openfoam`);
 //! - `cell_data` is written to VTK/VTU only (other formats check its length).
 
 mod abaqus;
@@ -43,6 +46,7 @@ mod input;
 mod lex;
 mod limits;
 mod medit;
+mod openfoam;
 mod pvtu;
 mod smoothed;
 mod vtk;
@@ -51,6 +55,7 @@ mod vtu;
 
 pub use atomic::{Staged, is_stream, same_file, same_target, stage, write_atomic};
 pub use limits::ReadLimits;
+pub use openfoam::same_case;
 pub use pvtu::{
     GLOBAL_CELL_IDS, GLOBAL_POINT_IDS, LocalPieces, PieceWriter, merge_pieces, merge_share, piece_error, piece_path,
     piece_paths, point_ids, write_index, write_pieces, write_pieces_with,
@@ -90,17 +95,21 @@ pub enum Format {
     Medit,
     /// Abaqus input (`.inp`), ASCII.
     Abaqus,
+    /// OpenFOAM polyMesh case (a folder), ASCII.
+    OpenFoam,
+    /// OpenFOAM polyMesh case, binary.
+    OpenFoamBinary,
 }
 
 /// How much of a file [`Format::of_file`] reads: a VTU file's first array
 /// (and its compressor attribute) sits within the header.
 const HEAD_BYTES: u64 = 64 << 10;
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus)";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), an OpenFOAM case folder or its .foam file";
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 11] = [
+    pub const ALL: [Format; 13] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
@@ -112,15 +121,27 @@ impl Format {
         Format::Msh41Binary,
         Format::Medit,
         Format::Abaqus,
+        Format::OpenFoam,
+        Format::OpenFoamBinary,
     ];
 
     /// Default format for a file name's extension (used for writing; reading
     /// also looks at the content).
     pub fn from_path(path: &Path) -> Result<Format> {
+        if openfoam::is_case_output(path) {
+            return Ok(Format::OpenFoam);
+        }
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(|e| e.to_ascii_lowercase());
+        if path.is_dir() {
+            return Err(Error::Unsupported(format!(
+                "{} is a folder but not an OpenFOAM case (it has no constant folder): give a file name, \
+                 or the format openfoam to write a case there",
+                path.display()
+            )));
+        }
         match ext.as_deref() {
             Some("vtk") => Ok(Format::VtkAscii),
             Some("vtu") => Ok(Format::VtuAscii),
@@ -141,8 +162,14 @@ impl Format {
     /// where the input's encoding is unknown (a `.pvtu` index, a file that
     /// cannot be read).
     pub fn following(path: &Path, input: &Path) -> Result<Format> {
-        let default = Format::from_path(path)?;
-        let Some(from) = Format::of_file(input) else {
+        let from = Format::of_file(input);
+        // a new case folder has no extension to tell
+        let foam = matches!(from, Some(Format::OpenFoam | Format::OpenFoamBinary));
+        let default = match Format::from_path(path) {
+            Err(_) if foam && path.extension().is_none() => Format::OpenFoam,
+            other => other?,
+        };
+        let Some(from) = from else {
             return Ok(default);
         };
         let (binary, compressed) = (from.is_binary(), from == Format::VtuZlib);
@@ -152,6 +179,7 @@ impl Format {
             Format::VtuAscii if binary => Format::VtuBinary,
             Format::Msh41Ascii if matches!(from, Format::Msh22Ascii | Format::Msh22Binary) => from,
             Format::Msh41Ascii if binary => Format::Msh41Binary,
+            Format::OpenFoam if binary => Format::OpenFoamBinary,
             other => other,
         })
     }
@@ -160,8 +188,18 @@ impl Format {
     pub fn is_binary(self) -> bool {
         matches!(
             self,
-            Format::VtkBinary | Format::VtuBinary | Format::VtuZlib | Format::Msh22Binary | Format::Msh41Binary
+            Format::VtkBinary
+                | Format::VtuBinary
+                | Format::VtuZlib
+                | Format::Msh22Binary
+                | Format::Msh41Binary
+                | Format::OpenFoamBinary
         )
+    }
+
+    /// Whether the format is an OpenFOAM case (a folder, not a file).
+    pub fn is_openfoam(self) -> bool {
+        matches!(self, Format::OpenFoam | Format::OpenFoamBinary)
     }
 
     /// The format a mesh file is in, from its first bytes (`None` for a
@@ -173,6 +211,9 @@ impl Format {
     /// [`Format::VtuBinary`].
     pub fn of_file(path: &Path) -> Option<Format> {
         use std::io::Read;
+        if let Some(f) = openfoam::format_of(path) {
+            return Some(f);
+        }
         if !std::fs::metadata(path).ok()?.is_file() {
             return None;
         }
@@ -239,6 +280,8 @@ impl Format {
             Format::Msh41Binary => "msh4-binary",
             Format::Medit => "medit",
             Format::Abaqus => "abaqus",
+            Format::OpenFoam => "openfoam",
+            Format::OpenFoamBinary => "openfoam-binary",
         }
     }
 
@@ -249,6 +292,7 @@ impl Format {
             Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => true,
             Format::Msh22Ascii | Format::Msh22Binary | Format::Msh41Ascii | Format::Msh41Binary => true,
             Format::Medit | Format::Abaqus => true,
+            Format::OpenFoam | Format::OpenFoamBinary => true,
         }
     }
 
@@ -354,6 +398,11 @@ fn read_piece(path: &Path, limits: &ReadLimits) -> Result<Mesh> {
 }
 
 fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Mesh> {
+    if let Some(dir) = openfoam::polymesh_dir(path) {
+        let mesh = openfoam::read_case(path, &dir, limits)?;
+        mesh.validate().map_err(|e| in_file(path, e))?;
+        return Ok(mesh);
+    }
     let budget = limits::Budget::new(path, limits);
     let data = input::read_file(path, &budget)?;
     if data.iter().all(|b| b.is_ascii_whitespace()) {
@@ -463,6 +512,10 @@ pub fn write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -
 /// [`Staged::commit`] (see [`stage`]).
 pub fn stage_write(path: &Path, mesh: &Mesh, format: Format, cell_data: &[CellData]) -> Result<Staged> {
     check_writable(path, mesh, format)?;
+    if format.is_openfoam() {
+        check_cell_data(mesh, cell_data)?;
+        return openfoam::stage(path, mesh, format.is_binary());
+    }
     stage(path, |w| encode(w, mesh, format, cell_data))
 }
 
@@ -476,6 +529,12 @@ pub fn write_to(
     cell_data: &[CellData],
 ) -> Result<()> {
     check_writable(name, mesh, format)?;
+    if format.is_openfoam() {
+        return Err(Error::InvalidArgument(format!(
+            "cannot write {} as OpenFOAM: a polyMesh is a folder of files, not one stream; give a case folder",
+            name.display()
+        )));
+    }
     let mut buffered = std::io::BufWriter::with_capacity(1 << 20, w);
     match encode(&mut buffered, mesh, format, cell_data).and_then(|()| Ok(std::io::Write::flush(&mut buffered)?)) {
         Ok(()) => Ok(()),
@@ -508,6 +567,9 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[
         Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
         Format::Medit => medit::write(w, mesh, cell_data),
         Format::Abaqus => abaqus::write(w, mesh, cell_data),
+        Format::OpenFoam | Format::OpenFoamBinary => Err(WriteError::Other(Error::InvalidArgument(
+            "an OpenFOAM case is a folder: it is written by stage_write, not to a stream".into(),
+        ))),
     }
 }
 
@@ -516,11 +578,11 @@ fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
     let vtk = matches!(
         format,
         Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib
-    );
+    ) || format.is_openfoam();
     match mesh.kinds.iter().position(|&k| k == ElementKind::Polyhedron) {
         Some(e) if !vtk => Err(Error::InvalidArgument(format!(
             "cannot write {}: element {e} is a polyhedron, which the {format} format cannot hold; \
-             write VTK (.vtk) or VTK XML (.vtu)",
+             write VTK (.vtk), VTK XML (.vtu) or an OpenFOAM case",
             path.display()
         ))),
         _ => Ok(()),

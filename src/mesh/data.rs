@@ -249,6 +249,11 @@ pub struct MeshData {
     /// Named cell sets (Abaqus `*ELSET`).
     #[serde(default)]
     pub element_sets: Vec<ElementSet>,
+    /// The faces, owners, neighbours, patches and zones of an OpenFOAM
+    /// polyMesh the mesh was read from (shared: copies of the mesh for a
+    /// run do not copy it).
+    #[serde(default)]
+    pub polymesh: Option<std::sync::Arc<super::polymesh::PolyMesh>>,
 }
 
 impl MeshData {
@@ -262,6 +267,7 @@ impl MeshData {
             && self.gmsh_entities.is_empty()
             && self.node_sets.is_empty()
             && self.element_sets.is_empty()
+            && self.polymesh.is_none()
     }
 
     /// The sets restricted to the vertices `keep` of `points` and the

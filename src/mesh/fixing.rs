@@ -9,7 +9,8 @@
 //! cells of those groups, and with a sliding boundary the lower cells that
 //! are facets on the skin (faces of a volume mesh, lines of a planar one)
 //! describe the boundary rather than fix it, so they release theirs too
-//! (internal interfaces stay fixed); a vertex also on another lower cell, or
+//! (internal interfaces stay fixed, and so do the faces of an OpenFOAM
+//! patch of type `wall`); a vertex also on another lower cell, or
 //! flagged by a `fixed` point array, stays fixed. A node set given to
 //! `free_groups` releases its vertices whatever lower cells hold them (but
 //! not those a `fixed` array flags).
@@ -86,12 +87,19 @@ impl FixRules {
                 vec![false; n]
             };
             let freed_lower: Vec<Vec<bool>> = freed.iter().map(|(_, g)| g.lower_cells(mesh)).collect();
+            // an OpenFOAM wall keeps its vertices when the boundary slides
+            // (naming it in free_groups releases it)
+            let walls = match &mesh.data.polymesh {
+                Some(p) if self.release_facets => p.wall_lower_cells(mesh.lower.len()),
+                _ => Vec::new(),
+            };
             let released_by = |i: usize, kind: LowerKind, vs: &[u32]| -> Option<usize> {
                 if let Some(k) = freed_lower.iter().position(|l| l[i]) {
                     return Some(k);
                 }
                 let on_skin = vs.iter().all(|&v| skin[v as usize]);
-                (self.release_facets && facet_kinds.contains(&kind) && on_skin).then_some(freed.len())
+                let wall = walls.get(i).copied().unwrap_or(false);
+                (self.release_facets && facet_kinds.contains(&kind) && on_skin && !wall).then_some(freed.len())
             };
             let mut keep = vec![false; n];
             if let Some(a) = mesh.data.point.iter().find(|a| a.name == "fixed") {

@@ -8,6 +8,7 @@ pub mod frame;
 pub mod order;
 pub mod plane;
 pub mod polyhedron;
+pub mod polymesh;
 pub mod sweep_order;
 // Public only for the integration tests and benches: mesh topology internals.
 #[doc(hidden)]
@@ -250,6 +251,8 @@ impl Mesh {
             data.lower = data.lower.iter().map(|a| a.select(&lower)).collect();
         }
         data.keep_in_sets(self.points.len(), keep, self.lower.len(), &lower);
+        // its faces name the points as they were numbered
+        data.polymesh = None;
         Mesh {
             points: keep.iter().map(|&v| self.points[v]).collect(),
             kinds: self.kinds.clone(),

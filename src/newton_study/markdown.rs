@@ -120,10 +120,10 @@ pub(super) fn markdown(st: &NewtonStudy) -> String {
     let ducts: Vec<&Case> = st.suite(Suite::Ducts).collect();
     let _ = writeln!(
         s,
-        "## Problem size: ducts (Tables 1-2, Figures 2-3)\n\nKuhn-split 4×1×1 ducts (their own \
-         optimum, inverse mean ratio 1.3228 everywhere), every interior vertex moved randomly by up \
-         to 0.2 of its mean edge length. The paper's CUBIT ducts start at average 1.2, max 2.1-4.9; \
-         element volumes are in each mesh's own units.\n\n**Table 1**\n\n| mesh | V | E | imr avg | \
+        "## Problem size: ducts (Tables 1-2, Figures 2-3)\n\nUnstructured 4×1×1 tetrahedral ducts \
+         meshed by Gmsh's Delaunay mesher (`generate::unstructured_duct`), optimised as generated, \
+         as the paper's CUBIT ducts were (average 1.2, max 2.1-4.9); element volumes are in each \
+         mesh's own units.\n\n**Table 1**\n\n| mesh | V | E | imr avg | \
          median | σn | max | volume avg | median | σn |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for (c, (name, v, e, p)) in ducts.iter().zip(paper::TABLE1) {
@@ -227,10 +227,11 @@ pub(super) fn markdown(st: &NewtonStudy) -> String {
     let _ = writeln!(
         s,
         "\n## Initial configuration: small perturbations (Table 5, Figure 6)\n\nThe optimal mesh is \
-         the unperturbed Kuhn duct ({} vertices; the paper perturbs its optimised DuctBig). The \
-         paper's lengths are in units of its mean edge length 3.6; ours are in each vertex's mean \
-         edge length (column \"applied\"; `generate::perturb`, moves shortened until nothing \
-         inverts). Its random r is in [0, 1]³, ours in [-1, 1]³ at half the amplitude; its \
+         an unstructured duct ({} vertices) optimised by Newton to |∇F| < 1e-9, as the paper \
+         perturbs its optimised DuctBig. The paper's lengths are in units of its mean edge length \
+         3.6; ours are in each vertex's mean edge length (column \"applied\"; `generate::perturb`: \
+         random moves vertex by vertex, shifts and oscillations all vertices together, each move \
+         backtracked where it would invert an element). Its random r is in [0, 1]³, ours in [-1, 1]³ at half the amplitude; its \
          oscillation wavelengths (63-628, i.e. 17-174 edge lengths) are kept in edge lengths \
          along the duct.\n\n**Table 5** (setup counted)\n\n| perturbation | applied | {TIMES_HEAD} | \
          improvement at the crossover |\n|---|---|---:|---:|---:|---:|---:|---:|---:|",

@@ -49,10 +49,11 @@ impl Tally {
             holds: self.faster,
             of: self.faster + self.slower + self.undecided,
             against: self.slower,
-            note: format!(
+            numbers: format!(
                 "{} faster, {} slower, {} undecided (Mann-Whitney, p <= {ALPHA})",
                 self.faster, self.slower, self.undecided
             ),
+            cause: "the schemes' times differ by less than their spread over the repeats, or the other way",
         }
     }
 }
@@ -78,7 +79,8 @@ impl Count {
             holds: self.holds,
             of: self.of,
             against: 0,
-            note: self.items.join("; "),
+            numbers: self.items.join("; "),
+            ..Default::default()
         }
     }
 }

@@ -209,9 +209,12 @@ fn an_output_keeps_the_encoding_of_its_input() {
             Format::VtkAscii | Format::VtkBinary => "vtk",
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
             Format::Medit => "mesh",
+            Format::Abaqus => "inp",
+            // a case folder
+            Format::OpenFoam | Format::OpenFoamBinary => "",
             _ => "msh",
         };
-        let path = dir.path().join(format!("as-{}.{ext}", f.name()));
+        let path = dir.path().join(format!("as-{}.{ext}", f.name()).trim_end_matches('.'));
         io::write(&path, &mesh, f, &[]).unwrap();
         assert_eq!(Format::of_file(&path), Some(f), "{}", f.name());
     }

@@ -223,3 +223,34 @@ fn perturbation_text_rejects_bad_input() {
         assert!(err.contains("perturbation"), "{text}: {err}");
     }
 }
+
+/// The study's duct is unstructured (a spread of shapes like the paper's
+/// CUBIT ducts), and a shift moves the vertices together: a larger NE shift
+/// squeezes the elements at the wall harder instead of saturating (on the
+/// default duct of `generate duct`; a narrower one fills up sooner).
+#[test]
+fn unstructured_duct_has_a_spread_and_large_shifts_do_not_saturate() {
+    let duct = meshsmooth::generate::unstructured_duct(meshsmooth::generate::duct_size_for(4200)).unwrap();
+    let n = duct.num_points();
+    assert!((3800..4600).contains(&n), "{n} vertices");
+    let q = meshsmooth::report::quality_report(&duct, &duct.points);
+    assert!(
+        q.eta.sigma_n > 0.05 && q.eta.avg > 1.05 && q.eta.avg < 1.5,
+        "{:?}",
+        q.eta
+    );
+    let worst = |alpha: f64| {
+        let mut m = duct.clone();
+        perturb(&mut m, &opts(Perturbation::ShiftNe { alpha }, 1.0, 1)).unwrap();
+        assert!(
+            meshsmooth::metric::inverted_elements(&m, &m.points).is_empty(),
+            "shift {alpha}"
+        );
+        meshsmooth::report::quality_report(&m, &m.points).eta.max
+    };
+    let (w5, w15) = (worst(5.0), worst(15.0));
+    assert!(
+        w15 >= 2.0 * w5,
+        "worst eta {w5} after shift-ne:5, {w15} after shift-ne:15"
+    );
+}

@@ -372,7 +372,8 @@ fn no_panics_on_truncated_or_corrupted_files() {
     let m = small_tets();
     let dir = tempfile::tempdir().unwrap();
     let mut rand = common::xorshift(0x2545_f491_4f6c_dd1du64);
-    for f in Format::ALL {
+    // an OpenFOAM case is a folder of files: its mutants are in `openfoam`
+    for f in Format::ALL.into_iter().filter(|f| !f.is_openfoam()) {
         let ext = match f {
             Format::VtkAscii | Format::VtkBinary => "vtk",
             Format::VtuAscii | Format::VtuBinary => "vtu",

@@ -518,3 +518,99 @@ fn an_input_truncated_while_it_is_read_is_an_error_not_a_signal() {
     }
     assert!(errors > 0, "no run saw the file cut short");
 }
+
+/// OpenFOAM cases with one file that asks for more than it holds:
+/// 256M points declared in a few bytes (ASCII and binary), owners given as
+/// a uniform list of 10^9 labels, a zone of 256M cells, and `faces.gz`
+/// that inflates to 320 MiB (20 gzip members of 16 MiB of zeros each).
+/// Each case is the hand-made box of `openfoam` with that file replaced.
+/// Each case with its bomb file and what its error says.
+pub fn openfoam_bombs(root: &Path) -> Vec<(std::path::PathBuf, std::path::PathBuf, &'static str)> {
+    let header = |format: &str, class: &str, object: &str| {
+        format!("FoamFile\n{{\n    format {format};\n    class {class};\n    object {object};\n}}\n")
+    };
+    let mut member = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    member.write_all(&vec![0u8; 16 << 20]).unwrap();
+    let member = member.finish().unwrap();
+    let files: Vec<(&str, &str, Vec<u8>, &str)> = vec![
+        (
+            "points-ascii",
+            "points",
+            format!("{}268435456\n(\n(0 0 0)\n)\n", header("ascii", "vectorField", "points")).into_bytes(),
+            "268435456 declared",
+        ),
+        (
+            "points-binary",
+            "points",
+            format!("{}268435456\n(\0\0\0\0)\n", header("binary", "vectorField", "points")).into_bytes(),
+            "268435456 declared",
+        ),
+        (
+            "owner-uniform",
+            "owner",
+            format!("{}1000000000{{0}}\n", header("ascii", "labelList", "owner")).into_bytes(),
+            "memory budget",
+        ),
+        (
+            "zone",
+            "cellZones",
+            format!(
+                "{}1\n(\nz\n{{\n    type cellZone;\n    cellLabels List<label> 268435456(0 1);\n}}\n)\n",
+                header("ascii", "regIOobject", "cellZones")
+            )
+            .into_bytes(),
+            "268435456 declared",
+        ),
+        ("faces-gz", "faces.gz", member.repeat(20), "memory budget"),
+    ];
+    files
+        .into_iter()
+        .map(|(case, file, bytes, needle)| {
+            let dir = root.join(case);
+            crate::openfoam::hex_box(4, 1).write(&dir, crate::openfoam::STYLES[0]);
+            let poly = dir.join("constant/polyMesh");
+            if file == "faces.gz" {
+                std::fs::remove_file(poly.join("faces")).unwrap();
+            }
+            std::fs::write(poly.join(file), bytes).unwrap();
+            (dir, poly.join(file), needle)
+        })
+        .collect()
+}
+
+/// Each bomb refused naming it; its mutants (the bomb file cut short or a
+/// byte changed) read through the CLI within the budget: `Ok` or an error,
+/// never a signal, a panic or more than 1 GiB of RSS.
+#[test]
+fn openfoam_declared_sizes_and_gzip_bombs_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rand = crate::common::xorshift(0x2545_f491_4f6c_dd1du64);
+    for (case, name, needle) in openfoam_bombs(dir.path()) {
+        refused(&case, Some("256M"), &[needle]);
+        let bytes = std::fs::read(&name).unwrap();
+        for k in 0..6 {
+            let mut b = bytes.clone();
+            if k % 3 == 0 {
+                b.truncate(rand() as usize % b.len());
+            } else {
+                let i = rand() as usize % b.len();
+                b[i] = rand() as u8;
+            }
+            std::fs::write(&name, &b).unwrap();
+            let args: [&OsStr; 4] = [
+                "quality".as_ref(),
+                case.as_os_str(),
+                "--max-memory".as_ref(),
+                "256M".as_ref(),
+            ];
+            let run = run_cli(&args, Duration::from_secs(60));
+            let what = format!("{} mutant {k}: {:?} {}", name.display(), run.code, run.stderr.trim());
+            assert_eq!(run.signal, None, "{what}");
+            assert!(
+                matches!(run.code, Some(0 | 1)) && !run.stderr.contains("panicked"),
+                "{what}"
+            );
+            assert!(run.max_rss_kib < 1 << 20 && run.secs < 5.0, "{what}");
+        }
+    }
+}

@@ -201,6 +201,11 @@ fn every_format_round_trips_every_mesh() {
             if matches!(f, Format::Medit | Format::Abaqus) && !is_grouped(&m) {
                 continue;
             }
+            // OpenFOAM rebuilds each cell from its faces, in an order of its
+            // own, and holds volume meshes only (its own tests in `openfoam`)
+            if f.is_openfoam() {
+                continue;
+            }
             let path = dir.path().join(format!("{name}-{f}.{}", ext(f)));
             io::write(&path, &m, f, &[]).unwrap_or_else(|e| panic!("{name} {f}: {e}"));
             let got = io::read(&path).unwrap_or_else(|e| panic!("{name} {f}: {e}"));

@@ -191,8 +191,8 @@ fn gmsh_views_survive_msh_and_vtu_round_trips() {
             let ext = match f {
                 Format::VtkAscii | Format::VtkBinary => "vtk",
                 Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
-                // neither holds arrays of values
-                Format::Medit | Format::Abaqus => continue,
+                // none holds arrays of values
+                Format::Medit | Format::Abaqus | Format::OpenFoam | Format::OpenFoamBinary => continue,
                 _ => "msh",
             };
             let out = dir.path().join(format!("views-{version}.{f}.{ext}"));

@@ -13,4 +13,5 @@ mod bombs;
 mod interop;
 mod io_roundtrip;
 mod lossless;
+mod openfoam;
 mod pvtu;
