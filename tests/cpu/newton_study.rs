@@ -224,7 +224,16 @@ fn quick_study_numbers_are_consistent() {
             c.best_objective <= c.initial_objective && c.best_objective >= 1.0,
             "{what}"
         );
-        for (m, run) in [("newton", &c.newton), ("bcd", &c.bcd)] {
+        // the paper's Newton and this library's reach the same optimum from the same start
+        if c.newton.stop.starts_with("converged") && c.newton_fast.stop.starts_with("converged") {
+            let (a, b) = (c.newton.objective, c.newton_fast.objective);
+            assert!(
+                (a - b).abs() <= 1e-6 * a,
+                "{what}: paper's Newton F {a}, fast Newton F {b}"
+            );
+        }
+        assert!(c.best_objective <= c.newton_fast.objective, "{what}");
+        for (m, run) in [("newton", &c.newton), ("bcd", &c.bcd), ("fast newton", &c.newton_fast)] {
             let t50 = run.t50.unwrap_or_else(|| panic!("{what} {m}: 50% not reached"));
             if let Some(t100) = run.t100 {
                 assert!(t50 <= t100, "{what} {m}: T50 {t50} > T100 {t100}");
@@ -306,6 +315,19 @@ fn quick_study_writes_every_table_and_figure() {
     ] {
         assert!(md.contains(t), "missing {t}");
     }
+    // every table's rows, separator included, have its header's columns
+    // (the paper's Newton and BCD, then the fast Newton beside them)
+    let mut columns = None;
+    for l in md.lines() {
+        if !l.starts_with('|') {
+            columns = None;
+            continue;
+        }
+        let n = l.matches('|').count();
+        let want = *columns.get_or_insert(n);
+        assert_eq!(n, want, "a row of another width than its header: {l}");
+    }
+    assert!(md.contains("fast Newton I | fast Newton T100"), "no fast Newton column");
     let row = |start: &str| md.lines().find(|l| l.starts_with(&format!("| {start} |")));
     // every row the paper has, with the paper's numbers quoted beside ours
     for (i, (name, v, _, _)) in paper::TABLE1.iter().enumerate() {
