@@ -139,6 +139,9 @@ pub struct Smoother {
     /// Newton: after a trial step that inverts an element, try this fraction
     /// of the distance to the first inversion (0: halve the step).
     pub inversion_fraction: f64,
+    /// Newton: at most this many coloured BCD sweeps first, while they gain
+    /// fast (0: Newton from the start, as the paper).
+    pub start_sweeps: usize,
     /// A reference mesh given in memory (instead of `reference`).
     #[serde(skip)]
     pub reference_mesh: Option<Mesh>,
@@ -178,6 +181,7 @@ impl Default for Smoother {
             // planar meshes on the CPU get Gauss-Seidel, the rest block Jacobi
             preconditioner: Preconditioner::Auto,
             inversion_fraction: newton.inversion_fraction,
+            start_sweeps: newton.start_sweeps,
             reference_mesh: None,
         }
     }
@@ -464,6 +468,7 @@ impl Smoother {
         p.newton.negative_curvature = self.negative_curvature;
         p.newton.preconditioner = self.preconditioner;
         p.newton.inversion_fraction = self.inversion_fraction;
+        p.newton.start_sweeps = self.start_sweeps;
         p.newton
             .check()
             .map_err(|e| bad("inversion_fraction", e.to_string().replace("invalid argument: ", "")))?;

@@ -253,6 +253,7 @@ fn smooth<'py>(
     d.set_item("colors", info.colors)?;
     d.set_item("cg_iterations", info.cg_iterations)?;
     d.set_item("negative_curvature_steps", info.negative_curvature_steps)?;
+    d.set_item("start_sweeps", info.start_sweeps)?;
     d.set_item("line_search_trials", info.line_search_trials)?;
     let rec = &info.history.records;
     let history = PyDict::new(py);

@@ -99,7 +99,11 @@ fn newton_counts(info: &Info) -> String {
         info.negative_curvature_steps,
     ) {
         (Some(cg), Some(ls), Some(nc)) => {
-            format!("; {cg} CG iterations, {ls} line-search trials, {nc} step(s) on negative curvature")
+            let sweeps = match info.start_sweeps {
+                Some(n) if n > 0 => format!("{n} coloured BCD sweep(s) first, then "),
+                _ => String::new(),
+            };
+            format!("; {sweeps}{cg} CG iterations, {ls} line-search trials, {nc} step(s) on negative curvature")
         }
         _ => String::new(),
     }

@@ -81,6 +81,7 @@ impl SolverArgs {
         s.negative_curvature = self.negative_curvature;
         s.preconditioner = self.preconditioner;
         s.inversion_fraction = self.inversion_fraction;
+        s.start_sweeps = self.start_sweeps;
         s.untangle = untangle;
         s.keep_partial = keep_partial;
         if let Some(path) = &self.config {

@@ -320,6 +320,12 @@ pub struct SolverArgs {
     /// the step instead, as the paper's Armijo search does.
     #[arg(long, value_name = "FRACTION", default_value_t = NewtonParams::default().inversion_fraction)]
     pub inversion_fraction: f64,
+    /// Newton: at most this many coloured BCD sweeps before the first Newton step, ending
+    /// once a sweep gains more than a quarter of the one before (far from the optimum a
+    /// sweep is cheaper than a Newton step on negative curvature and gains more: on badly
+    /// perturbed large meshes); 0 starts with Newton, as the paper does.
+    #[arg(long, value_name = "N", default_value_t = NewtonParams::default().start_sweeps)]
+    pub start_sweeps: usize,
     /// Settings from a file (.toml or .json; keys as the Python keywords: method, tol,
     /// time_limit, target, fix_groups, ...); options given on the command line override it.
     #[arg(long, value_name = "FILE")]

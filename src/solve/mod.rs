@@ -293,6 +293,9 @@ pub struct Info {
     /// Objective evaluations in Newton's line searches (Newton only): many
     /// per step when the direction is poor.
     pub line_search_trials: Option<usize>,
+    /// Of the `iterations`, the coloured BCD sweeps before the first Newton
+    /// step (Newton only; `NewtonParams::start_sweeps`).
+    pub start_sweeps: Option<usize>,
 }
 
 /// What every backend checks before its first step: usable settings and a
@@ -330,9 +333,30 @@ pub fn solve(p: &Problem, x: &mut [Vec3], opts: &Options, progress: &mut dyn FnM
 /// The method's state between iterations.
 enum Solver<'p> {
     Bcd(Box<bcd::Bcd<'p>>),
-    Newton(Box<Newton>),
+    /// Newton, after the coloured BCD sweeps of its start while they last.
+    Newton(Box<Newton>, Option<StartSweeps<'p>>),
     Laplace(laplace::Laplace),
     Nlcg(Box<Nlcg>),
+}
+
+/// Newton's start by coloured BCD sweeps (`NewtonParams::start_sweeps`).
+struct StartSweeps<'p> {
+    bcd: Box<bcd::Bcd<'p>>,
+    /// F before the last sweep and that sweep's decrease.
+    f: f64,
+    decrease: Option<f64>,
+    left: usize,
+}
+
+impl StartSweeps<'_> {
+    /// Whether to go on sweeping after a sweep that ended at `f`; updates the state.
+    fn go_on(&mut self, f: f64) -> bool {
+        let decrease = self.f - f;
+        let slowed = self.decrease.is_some_and(|d| decrease > newton::START_SLOWDOWN * d);
+        self.left -= 1;
+        (self.f, self.decrease) = (f, Some(decrease));
+        self.left > 0 && decrease > 0.0 && !slowed
+    }
 }
 
 /// `solve` on a backend already holding the problem and the start.
@@ -379,12 +403,25 @@ pub(crate) fn run_scaled<B: Backend + ?Sized>(
         Method::Bcd | Method::BcdColored => {
             Solver::Bcd(Box::new(bcd::Bcd::new(be, p, method == Method::Bcd, &params.bcd)?))
         }
-        Method::Newton => Solver::Newton(Box::new(Newton::new(be, params.newton)?)),
+        Method::Newton => {
+            let newton = Box::new(Newton::new(be, params.newton)?);
+            let start = if params.newton.start_sweeps > 0 && be.num_colors() > 0 {
+                Some(StartSweeps {
+                    bcd: Box::new(bcd::Bcd::new(be, p, false, &params.bcd)?),
+                    f: f64::NAN,
+                    decrease: None,
+                    left: params.newton.start_sweeps,
+                })
+            } else {
+                None
+            };
+            Solver::Newton(newton, start)
+        }
         Method::Laplace => Solver::Laplace(laplace::Laplace::new(be)?),
         Method::Nlcg => Solver::Nlcg(Box::new(Nlcg::new(be, params.nlcg, edge)?)),
     };
     let solver_setup = match &solver {
-        Solver::Newton(n) => n.setup_time,
+        Solver::Newton(n, _) => n.setup_time,
         _ => Duration::ZERO,
     };
     let start = Instant::now();
@@ -392,7 +429,12 @@ pub(crate) fn run_scaled<B: Backend + ?Sized>(
     let unit_free = |(f, g): (f64, f64)| (f, g * edge);
     let first = match &mut solver {
         Solver::Bcd(b) => b.start(be)?,
-        Solver::Newton(n) => n.start(be)?,
+        Solver::Newton(_, Some(w)) => {
+            let first = w.bcd.start(be)?;
+            w.f = first.map_or(f64::NAN, |(f, _)| f);
+            first
+        }
+        Solver::Newton(n, None) => n.start(be)?,
         Solver::Laplace(l) => l.start(be)?,
         Solver::Nlcg(n) => n.start(be)?,
     }
@@ -424,7 +466,23 @@ pub(crate) fn run_scaled<B: Backend + ?Sized>(
             let t = Instant::now();
             let mut sweep = match &mut solver {
                 Solver::Bcd(b) => b.step(be, deadline)?,
-                Solver::Newton(n) => n.step(be)?,
+                Solver::Newton(n, start) => match start {
+                    Some(w) => {
+                        let sweep = w.bcd.step(be, deadline)?;
+                        if !w.go_on(sweep.objective) {
+                            *start = None;
+                            // Newton takes over at the sweeps' end: its gradient and Hessian there
+                            if n.start(be)?.is_none() {
+                                return Err(accepted_step_inverted());
+                            }
+                        }
+                        Sweep {
+                            start_sweep: true,
+                            ..sweep
+                        }
+                    }
+                    None => n.step(be)?,
+                },
                 Solver::Laplace(l) => l.step(be, deadline)?,
                 Solver::Nlcg(n) => n.step(be)?,
             };
@@ -512,6 +570,8 @@ pub struct Sweep {
     pub negative_curvature: bool,
     /// Trial points the step's line search evaluated (Newton).
     pub line_search_trials: usize,
+    /// A coloured BCD sweep of Newton's start (`NewtonParams::start_sweeps`).
+    pub start_sweep: bool,
     /// Time of the optimisation proper within the step, where the method
     /// separates it (BCD: the sweep); otherwise the whole step counts.
     pub optimise_seconds: Option<f64>,
@@ -571,7 +631,7 @@ fn iterate(
     };
     let mut iterations = 0;
     let mut cg_iterations = 0;
-    let (mut negative_curvature_steps, mut line_search_trials) = (0, 0);
+    let (mut negative_curvature_steps, mut line_search_trials, mut start_sweeps) = (0, 0, 0);
     let mut optimise_seconds = 0.0;
     let (mut reorder_seconds, mut reorderings) = begin.first_reorder;
     while stop.is_none() {
@@ -596,6 +656,7 @@ fn iterate(
         cg_iterations += sweep.cg_iterations;
         negative_curvature_steps += sweep.negative_curvature as usize;
         line_search_trials += sweep.line_search_trials;
+        start_sweeps += sweep.start_sweep as usize;
         optimise_seconds += sweep.optimise_seconds.unwrap_or(0.0);
         reorder_seconds += sweep.reorder_seconds;
         reorderings += sweep.reorderings;
@@ -641,6 +702,7 @@ fn iterate(
         cg_iterations: (method == Method::Newton).then_some(cg_iterations),
         negative_curvature_steps: (method == Method::Newton).then_some(negative_curvature_steps),
         line_search_trials: (method == Method::Newton).then_some(line_search_trials),
+        start_sweeps: (method == Method::Newton).then_some(start_sweeps),
     })
 }
 

@@ -551,3 +551,60 @@ fn inversion_fraction_saves_trials_and_keeps_the_optimum() {
         trials(&blind)
     );
 }
+
+/// Newton after coloured BCD sweeps (`NewtonParams::start_sweeps`): the same
+/// optimum as Newton alone, fewer Newton steps on a badly perturbed box, the
+/// sweeps ended by the slowdown rule before their cap, and each history
+/// record's F falling.
+#[test]
+fn start_sweeps_reach_newtons_optimum_in_fewer_newton_steps() {
+    let mesh = perturbed_box(14, 0.3, 7);
+    let p = Problem::new(&mesh).unwrap();
+    let x0 = p.gather(&mesh.points);
+    let run = |sweeps: usize| {
+        let mut params = Params::default();
+        params.tol = 1e-9;
+        params.newton.start_sweeps = sweeps;
+        let mut x = x0.clone();
+        let info = common::solve_on(&p, &mut x, Method::Newton, &params, solve::Device::Cpu);
+        assert_eq!(info.stop, StopReason::Converged, "{sweeps} start sweeps");
+        (info, x)
+    };
+    let (plain, xp) = run(0);
+    let (swept, xs) = run(50);
+    assert_eq!(plain.start_sweeps, Some(0));
+    let sweeps = swept.start_sweeps.unwrap();
+    let newton_steps = swept.iterations - sweeps;
+    eprintln!(
+        "Newton alone: {} iterations ({} on negative curvature); {sweeps} sweeps, then {newton_steps} Newton ({})",
+        plain.iterations,
+        plain.negative_curvature_steps.unwrap(),
+        swept.negative_curvature_steps.unwrap()
+    );
+    // the slowdown rule, not the cap, ends the sweeps
+    assert!((2..50).contains(&sweeps), "{sweeps} sweeps");
+    assert!(
+        newton_steps >= 1 && newton_steps < plain.iterations,
+        "{newton_steps} vs {}",
+        plain.iterations
+    );
+    assert!((swept.objective - plain.objective).abs() <= 1e-8 * plain.objective);
+    let edge = p.mean_edge_length(&x0);
+    let far = xs
+        .iter()
+        .zip(&xp)
+        .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt())
+        .fold(0.0, f64::max);
+    assert!(far <= 1e-4 * edge, "minimisers {far:e} apart");
+    // the last sweep gained more than a quarter of the one before it, none before did
+    let f: Vec<f64> = swept.history.records.iter().map(|r| r.objective).collect();
+    let gain = |k: usize| f[k - 1] - f[k];
+    for k in 2..sweeps {
+        assert!(
+            gain(k) <= meshsmooth::solve::newton::START_SLOWDOWN * gain(k - 1),
+            "sweep {k}"
+        );
+    }
+    assert!(gain(sweeps) > meshsmooth::solve::newton::START_SLOWDOWN * gain(sweeps - 1));
+    assert!(f.windows(2).all(|w| w[1] <= w[0]));
+}

@@ -223,3 +223,27 @@ fn newton_timings() {
         );
     }
 }
+
+/// Newton after coloured BCD sweeps runs the same iterates on the device as
+/// on the CPU (f64): the sweeps, the switch to Newton and Newton's steps.
+#[test]
+fn start_sweeps_match_cpu_f64() {
+    let Some(ctx) = context(Precision::F64) else {
+        return;
+    };
+    let mesh = perturbed_box(8, 0.3, 2);
+    let p = Problem::new(&mesh).unwrap();
+    let x0 = p.gather(&mesh.points);
+    let mut params = Params::default();
+    params.newton.start_sweeps = 20;
+    let mut cx = x0.clone();
+    let cpu = solve_on(&p, &mut cx, Method::Newton, &params, Device::Cpu);
+    let mut gx = x0.clone();
+    let gpu = solve_on(&p, &mut gx, Method::Newton, &params, Device::Gpu(&ctx));
+    assert!(cpu.start_sweeps.unwrap() >= 2, "{:?}", cpu.start_sweeps);
+    assert_eq!(gpu.start_sweeps, cpu.start_sweeps);
+    assert_eq!(gpu.iterations, cpu.iterations);
+    assert_histories_agree(&cpu, &gpu, 1e-10, 1e-6);
+    let edge = p.mean_edge_length(&x0);
+    assert!(max_abs_diff(&cx, &gx) <= 1e-8 * edge);
+}
