@@ -102,7 +102,11 @@ pub(crate) fn vtk_shape(e: usize, t: i64) -> std::result::Result<Shape, String> 
 /// A POLYDATA file's cells, in VTK's order: vertices, lines, polygons.
 fn poly_cells(path: &Path, mut raw: RawMesh, sections: [Option<(Vec<usize>, Vec<u32>)>; 3]) -> Result<RawMesh> {
     if sections.iter().all(Option::is_none) {
-        return Err(Error::parse(path, None, "missing POLYGONS section: the POLYDATA has no cells"));
+        return Err(Error::parse(
+            path,
+            None,
+            "missing POLYGONS section: the POLYDATA has no cells",
+        ));
     }
     for (i, cells) in sections.into_iter().enumerate() {
         let Some((offsets, conn)) = cells else { continue };
@@ -248,11 +252,7 @@ impl Reader<'_> {
                         (self.npoints, "points")
                     } else {
                         attach = Attach::Cells;
-                        let cells = match &self.poly {
-                            Some(p) => Some(p.iter().flatten().map(|c| c.0.len() - 1).sum()),
-                            None => self.cells.as_ref().map(|c| c.0.len() - 1),
-                        };
-                        (cells, "cells")
+                        (self.ncells(), "cells")
                     };
                     if let Some(want) = want
                         && want != n
@@ -274,7 +274,10 @@ impl Reader<'_> {
         if self.npoints.is_none() {
             return Err(self.c.err(format!("{key} before POINTS")));
         }
-        let i = ["VERTICES", "LINES", "POLYGONS"].iter().position(|k| *k == key).unwrap_or(2);
+        let i = ["VERTICES", "LINES", "POLYGONS"]
+            .iter()
+            .position(|k| *k == key)
+            .unwrap_or(2);
         if self.poly.as_ref().is_some_and(|p| p[i].is_some()) {
             return Err(self.c.err(format!("a second {key} section")));
         }
@@ -556,10 +559,18 @@ impl Reader<'_> {
         Ok(())
     }
 
+    /// Cells read so far: CELLS, or a POLYDATA's sections together.
+    fn ncells(&self) -> Option<usize> {
+        match &self.poly {
+            Some(p) => Some(p.iter().flatten().map(|c| c.0.len() - 1).sum()),
+            None => self.cells.as_ref().map(|c| c.0.len() - 1),
+        }
+    }
+
     fn count_for(&self, attach: Attach, key: &str) -> Result<usize> {
         match attach {
             Attach::Points => Ok(self.npoints.unwrap_or(0)),
-            Attach::Cells => Ok(self.cells.as_ref().map_or(0, |c| c.0.len() - 1)),
+            Attach::Cells => Ok(self.ncells().unwrap_or(0)),
             Attach::None | Attach::Discard => Err(self.c.err(format!("{key} outside POINT_DATA or CELL_DATA"))),
         }
     }
@@ -629,7 +640,7 @@ impl Reader<'_> {
                     let aname = decode_name(t[0]);
                     if let Some(want) = match attach {
                         Attach::Points => self.npoints,
-                        Attach::Cells => self.cells.as_ref().map(|c| c.0.len() - 1),
+                        Attach::Cells => self.ncells(),
                         Attach::None | Attach::Discard => None,
                     } && tuples != want
                     {

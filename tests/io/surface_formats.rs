@@ -651,3 +651,101 @@ fn the_cli_reports_the_quality_of_an_stl_surface() {
     assert_eq!(a.status.success(), b.status.success(), "{}\n{}", text(&a), text(&b));
     assert_eq!(text(&a).replace(s(&stl), "F"), text(&b).replace(s(&vtk), "F"));
 }
+
+/// Legacy `DATASET POLYDATA`: polygons as elements, vertices and lines as
+/// lower cells, cell data over all of them in VTK's order.
+#[test]
+fn legacy_vtk_polydata_reads_polygons_lines_and_vertices() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("poly.vtk");
+    std::fs::write(
+        &p,
+        "# vtk DataFile Version 4.2\npolydata\nASCII\nDATASET POLYDATA\nPOINTS 5 float\n\
+         0 0 0 1 0 0 1 1 0 0 1 0 2 0 0\nVERTICES 1 2\n1 4\nLINES 1 3\n2 0 1\n\
+         POLYGONS 2 9\n3 1 4 2\n4 0 1 2 3\nPOINT_DATA 5\nSCALARS h double 1\nLOOKUP_TABLE default\n0 1 2 3 4\n\
+         CELL_DATA 4\nSCALARS id int 1\nLOOKUP_TABLE default\n10 11 12 13\n",
+    )
+    .unwrap();
+    let m = io::read(&p).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(m.kinds, vec![ElementKind::Triangle, ElementKind::Quadrilateral]);
+    assert_eq!(m.conn, vec![1, 4, 2, 0, 1, 2, 3]);
+    assert_eq!(m.lower.len(), 2);
+    let id = m.data.cell.iter().find(|a| a.name == "id").unwrap();
+    assert_eq!(id.values, Values::Int(vec![12, 13]));
+    assert_eq!(m.data.point.len(), 1);
+    // the 5.1 layout too
+    std::fs::write(
+        &p,
+        "# vtk DataFile Version 5.1\npolydata\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n\
+         0 0 0 1 0 0 1 1 0 0 1 0\nPOLYGONS 3 6\nOFFSETS vtktypeint64\n0 3 6\nCONNECTIVITY vtktypeint64\n0 1 2 0 2 3\n",
+    )
+    .unwrap();
+    assert_eq!(io::read(&p).unwrap().conn, vec![0, 1, 2, 0, 2, 3]);
+    let head = "# vtk DataFile Version 4.2\np\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\n";
+    expect_err(
+        &p,
+        format!("{head}TRIANGLE_STRIPS 1 5\n4 0 1 3 2\n").as_bytes(),
+        &["TRIANGLE_STRIPS", "line 7"],
+    );
+    expect_err(
+        &p,
+        format!("{head}POLYGONS 1 6\n5 0 1 2 3 0\n").as_bytes(),
+        &["POLYGONS cell 0 has 5 vertices"],
+    );
+    expect_err(
+        &p,
+        format!("{head}POLYGONS 1 4\n3 0 1 9\n").as_bytes(),
+        &["vertex 9", "line 8"],
+    );
+    expect_err(
+        &p,
+        format!("{head}POLYGONS 1 4\n3 0 1 2\nCELL_DATA 2\n").as_bytes(),
+        &["CELL_DATA 2", "1 cells"],
+    );
+}
+
+/// VTK's vtkPolyDataWriter (ASCII and binary) writes what we read as the
+/// same triangle surface.
+#[test]
+fn we_read_vtks_legacy_polydata() {
+    let Some(py) = python("vtk") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let m = sphere(3);
+    let src = dir.path().join("src.ply");
+    io::write(&src, &m, Format::PlyBinary, &[]).unwrap();
+    let write = r#"
+import sys, vtk
+r = vtk.vtkPLYReader()
+r.SetFileName(sys.argv[1])
+r.Update()
+o = r.GetOutput()
+h = vtk.vtkDoubleArray()
+h.SetName('h')
+for i in range(o.GetNumberOfPoints()):
+    h.InsertNextValue(o.GetPoint(i)[2])
+o.GetPointData().AddArray(h)
+for name, binary in [('a.vtk', False), ('b.vtk', True)]:
+    w = vtk.vtkPolyDataWriter()
+    w.SetInputData(o)
+    w.SetFileName(sys.argv[2] + '/' + name)
+    w.SetFileTypeToBinary() if binary else w.SetFileTypeToASCII()
+    w.Write()
+print('{}')
+"#;
+    run_py(&py, write, &[&src, dir.path()]);
+    for name in ["a.vtk", "b.vtk"] {
+        let got = io::read(dir.path().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(got.num_elements(), m.num_elements(), "{name}");
+        assert_eq!(got.conn, m.conn, "{name}");
+        // VTK writes 6 significant digits in ASCII, 32-bit floats in binary
+        let near = got
+            .points
+            .iter()
+            .zip(&m.points)
+            .all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-5));
+        assert!(near, "{name}: points differ");
+        assert!(got.data.point.iter().any(|a| a.name == "h"), "{name}");
+    }
+}
