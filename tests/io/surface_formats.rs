@@ -441,11 +441,15 @@ fn prefixes_and_mutants_of_surface_files_read_or_fail_cleanly() {
         lower: Vec::new(),
     });
     let mut rand = common::xorshift(0x9e37_79b9_7f4a_7c15);
-    for f in SURFACE {
+    let poly = b"# vtk DataFile Version 4.2\np\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\n\
+                 LINES 1 3\n2 0 1\nPOLYGONS 2 8\n3 0 1 2\n3 0 2 3\nCELL_DATA 3\nSCALARS c int 1\nLOOKUP_TABLE default\n1 2 3\n";
+    let files = SURFACE.map(|f| {
         let src = dir.path().join(format!("src.{}", ext(f)));
         io::write(&src, &m, f, &[]).unwrap();
-        let bytes = std::fs::read(&src).unwrap();
-        let p = dir.path().join(format!("fuzz.{}", ext(f)));
+        (f.name(), ext(f), std::fs::read(&src).unwrap())
+    });
+    for (f, ext, bytes) in files.into_iter().chain([("vtk polydata", "vtk", poly.to_vec())]) {
+        let p = dir.path().join(format!("fuzz.{ext}"));
         let check = |b: &[u8], what: &str| {
             std::fs::write(&p, b).unwrap();
             let r = std::panic::catch_unwind(|| io::read(&p));
