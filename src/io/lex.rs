@@ -46,7 +46,7 @@ impl<'a> Cursor<'a> {
     }
 
     /// Line of the last token returned (1-based).
-    pub fn line(&self) -> usize {
+    pub fn token_line(&self) -> usize {
         self.tok_line
     }
 

@@ -304,10 +304,8 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
                     if keep {
                         arrays[si].push(x);
                     }
-                    if is_vertex {
-                        if let Some(j) = xyz.iter().position(|&q| q == Some(si)) {
-                            p[j] = x;
-                        }
+                    if is_vertex && let Some(j) = xyz.iter().position(|&q| q == Some(si)) {
+                        p[j] = x;
                     }
                     si += 1;
                 }
@@ -326,7 +324,7 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
                 };
                 raw.push(Shape::Elem(kind), &corners);
                 faces_at.push(match enc {
-                    Enc::Ascii => Location::Line(body.c.line()),
+                    Enc::Ascii => Location::Line(body.c.token_line()),
                     _ => Location::Byte(start as u64),
                 });
             }

@@ -100,7 +100,7 @@ pub(crate) fn vtk_shape(e: usize, t: i64) -> std::result::Result<Shape, String> 
 }
 
 /// A POLYDATA file's cells, in VTK's order: vertices, lines, polygons.
-fn poly_cells(path: &Path, mut raw: RawMesh, sections: [Option<(Vec<usize>, Vec<u32>)>; 3]) -> Result<RawMesh> {
+fn poly_cells(path: &Path, mut raw: RawMesh, sections: PolySections) -> Result<RawMesh> {
     if sections.iter().all(Option::is_none) {
         return Err(Error::parse(
             path,
@@ -150,6 +150,9 @@ enum Attach {
     Cells,
 }
 
+/// A POLYDATA's VERTICES, LINES and POLYGONS: offsets and connectivity of each.
+type PolySections = [Option<(Vec<usize>, Vec<u32>)>; 3];
+
 struct Reader<'a> {
     c: Cursor<'a>,
     binary: bool,
@@ -162,7 +165,7 @@ struct Reader<'a> {
     cells_at: Option<(Cursor<'a>, usize, usize)>,
     /// `DATASET POLYDATA`: its VERTICES, LINES and POLYGONS (offsets and
     /// connectivity), in VTK's cell order, which its cell data follow.
-    poly: Option<[Option<(Vec<usize>, Vec<u32>)>; 3]>,
+    poly: Option<PolySections>,
 }
 
 pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> Result<RawMesh> {
@@ -284,7 +287,7 @@ impl Reader<'_> {
         let a = self.header_count(toks, 1)?;
         let b = self.header_count(toks, 2)?;
         let cells = self.cell_values(a, b, &|_| true)?;
-        let at = self.c.line();
+        let at = self.c.token_line();
         let (offsets, _) = &cells;
         // one cell a shape: poly-vertices, polylines and polygons past 4 sides have none here
         let fits = |n: usize| match i {
