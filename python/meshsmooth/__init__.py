@@ -556,7 +556,7 @@ def _blocks_of(kinds: np.ndarray, offsets: np.ndarray, conn: np.ndarray) -> Cell
 
 def read(path: Union[str, "os.PathLike[str]"]) -> MeshArrays:
     """Reads a mesh with the library's readers (.vtk, .vtu, .msh, .mesh, .inp,
-    or an OpenFOAM case folder):
+    .stl, .obj, .ply, or an OpenFOAM case folder):
     its points, cell blocks and fixed vertices (None when the file marks none).
     Point and cell data are not returned; use meshio and :func:`from_meshio` for them."""
     points, kinds, offsets, conn, fixed = _core.read(os.fspath(path))
@@ -573,7 +573,8 @@ def write(
     """Writes a mesh with the library's writers, with the per-cell
     ``inverse_mean_ratio``; refuses (writing nothing) a mesh with inverted
     cells. ``format`` (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2,
-    msh2-binary, msh4, msh4-binary, medit, abaqus, openfoam, openfoam-binary)
+    msh2-binary, msh4, msh4-binary, medit, abaqus, openfoam, openfoam-binary,
+    stl, stl-ascii, obj, ply, ply-ascii)
     defaults to the extension's; ``openfoam`` writes ``path`` as an OpenFOAM
     case folder (its faces built from the cells, one ``defaultFaces`` patch)."""
     p = _check_points(points)

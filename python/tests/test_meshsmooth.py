@@ -235,6 +235,25 @@ def test_read_write_round_trip(tmp_path, tet_box):
         ms.read(tmp_path / "missing.vtu")
 
 
+def test_surface_formats_round_trip(tmp_path):
+    # a flat triangulated square: STL, OBJ and PLY hold surfaces only
+    n = 4
+    xs = np.linspace(0.0, 1.0, n + 1)
+    points = np.array([[x, y, 0.0] for y in xs for x in xs])
+    tris = []
+    for j in range(n):
+        for i in range(n):
+            a, b, c, d = j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1, (j + 1) * (n + 1) + i
+            tris += [[a, b, c], [a, c, d]]
+    tris = np.array(tris)
+    for name, fmt in [("m.stl", None), ("a.stl", "stl-ascii"), ("m.obj", None), ("m.ply", None), ("a.ply", "ply-ascii")]:
+        ms.write(tmp_path / name, points, tris, format=fmt)
+        p, cells, _ = ms.read(tmp_path / name)
+        assert [t for t, _ in cells] == ["triangle"], name
+        # STL numbers the vertices as their corners come: compare the corners
+        np.testing.assert_allclose(p[cells[0][1]], points[tris], err_msg=name)
+
+
 def test_openfoam_case_round_trip(tmp_path, tet_box):
     points, tets, _ = tet_box
     case = tmp_path / "case"

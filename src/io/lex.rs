@@ -45,6 +45,11 @@ impl<'a> Cursor<'a> {
         self.pos
     }
 
+    /// Line of the last token returned (1-based).
+    pub fn token_line(&self) -> usize {
+        self.tok_line
+    }
+
     pub fn remaining(&self) -> usize {
         self.data.len() - self.pos
     }

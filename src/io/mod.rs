@@ -1,4 +1,4 @@
-//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus, OpenFOAM; atomic writes.
+//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus, OpenFOAM, STL, OBJ, PLY; atomic writes.
 //!
 //! Readers produce a `RawMesh` (every cell in file order, with its shape);
 //! `RawMesh::into_mesh` then splits top-dimensional elements from lower
@@ -35,7 +35,11 @@
 //! - an OpenFOAM case (a folder) keeps its faces, patches and zones in
 //!   `MeshData::polymesh`, which only the OpenFOAM writer puts back; its
 //!   patches are physical groups and its zones sets (see `openfoam`);
-//! - `cell_data` is written to VTK/VTU only (other formats check its length).
+//! - the surface formats STL, OBJ and PLY hold triangles (and, but for
+//!   STL, quadrilaterals) and no lower cells; STL's solids and OBJ's groups
+//!   read as element sets, which their writers put back; PLY's extra vertex
+//!   and face properties are point and cell arrays (see `stl`, `obj`, `ply`);
+//! - `cell_data` is written to VTK/VTU and PLY only (other formats check its length).
 
 mod abaqus;
 mod atomic;
@@ -46,9 +50,12 @@ mod input;
 mod lex;
 mod limits;
 mod medit;
+mod obj;
 mod openfoam;
+mod ply;
 mod pvtu;
 mod smoothed;
+mod stl;
 mod vtk;
 mod vtk_cells;
 mod vtu;
@@ -99,17 +106,27 @@ pub enum Format {
     OpenFoam,
     /// OpenFOAM polyMesh case, binary.
     OpenFoamBinary,
+    /// STL (`.stl`), binary: triangles only.
+    StlBinary,
+    /// STL, ASCII.
+    StlAscii,
+    /// Wavefront OBJ (`.obj`), ASCII.
+    Obj,
+    /// PLY (`.ply`), binary little-endian.
+    PlyBinary,
+    /// PLY, ASCII.
+    PlyAscii,
 }
 
 /// How much of a file [`Format::of_file`] reads: a VTU file's first array
 /// (and its compressor attribute) sits within the header.
 const HEAD_BYTES: u64 = 64 << 10;
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), an OpenFOAM case folder or its .foam file";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), .stl (STL), .obj (Wavefront OBJ), .ply (PLY), an OpenFOAM case folder or its .foam file";
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 13] = [
+    pub const ALL: [Format; 18] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
@@ -123,6 +140,11 @@ impl Format {
         Format::Abaqus,
         Format::OpenFoam,
         Format::OpenFoamBinary,
+        Format::StlBinary,
+        Format::StlAscii,
+        Format::Obj,
+        Format::PlyBinary,
+        Format::PlyAscii,
     ];
 
     /// Default format for a file name's extension (used for writing; reading
@@ -148,6 +170,9 @@ impl Format {
             Some("msh") => Ok(Format::Msh41Ascii),
             Some("mesh") => Ok(Format::Medit),
             Some("inp") => Ok(Format::Abaqus),
+            Some("stl") => Ok(Format::StlBinary),
+            Some("obj") => Ok(Format::Obj),
+            Some("ply") => Ok(Format::PlyBinary),
             _ => Err(Error::Unsupported(format!(
                 "{}: unknown mesh file extension; supported: {EXTENSIONS}",
                 path.display()
@@ -180,6 +205,9 @@ impl Format {
             Format::Msh41Ascii if matches!(from, Format::Msh22Ascii | Format::Msh22Binary) => from,
             Format::Msh41Ascii if binary => Format::Msh41Binary,
             Format::OpenFoam if binary => Format::OpenFoamBinary,
+            // the surface formats default to binary: an ASCII input stays ASCII
+            Format::StlBinary if from == Format::StlAscii => from,
+            Format::PlyBinary if from == Format::PlyAscii => from,
             other => other,
         })
     }
@@ -194,6 +222,8 @@ impl Format {
                 | Format::Msh22Binary
                 | Format::Msh41Binary
                 | Format::OpenFoamBinary
+                | Format::StlBinary
+                | Format::PlyBinary
         )
     }
 
@@ -225,7 +255,19 @@ impl Format {
             .ok()?;
         let text = String::from_utf8_lossy(&head);
         let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
-        match sniff(&head)? {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        let Some(family) = sniff(&head) else {
+            // binary STL and OBJ have no magic: their extension tells
+            return match ext.as_deref() {
+                Some("stl") => Some(Format::StlBinary),
+                Some("obj") => Some(Format::Obj),
+                _ => None,
+            };
+        };
+        match family {
             Family::Vtk => {
                 let kind = lines.nth(2)?;
                 Some(if kind.eq_ignore_ascii_case("binary") {
@@ -258,6 +300,23 @@ impl Format {
             }
             Family::Medit => Some(Format::Medit),
             Family::Abaqus => Some(Format::Abaqus),
+            Family::Stl => {
+                let len = std::fs::metadata(path).ok()?.len();
+                let n = head
+                    .get(80..84)
+                    .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64);
+                Some(if n.is_some_and(|n| 84 + 50 * n == len) {
+                    Format::StlBinary
+                } else {
+                    Format::StlAscii
+                })
+            }
+            Family::Obj => Some(Format::Obj),
+            Family::Ply => Some(if text.lines().nth(1)?.contains("ascii") {
+                Format::PlyAscii
+            } else {
+                Format::PlyBinary
+            }),
         }
     }
 
@@ -282,26 +341,45 @@ impl Format {
             Format::Abaqus => "abaqus",
             Format::OpenFoam => "openfoam",
             Format::OpenFoamBinary => "openfoam-binary",
+            Format::StlBinary => "stl",
+            Format::StlAscii => "stl-ascii",
+            Format::Obj => "obj",
+            Format::PlyBinary => "ply",
+            Format::PlyAscii => "ply-ascii",
         }
     }
 
     /// Whether the format stores lower-dimensional cells (boundary faces and
-    /// lines, points) and their cell arrays: every format does.
+    /// lines, points) and their cell arrays: every format but the surface
+    /// formats (STL, OBJ, PLY), which hold the elements only.
     pub fn keeps_lower_cells(self) -> bool {
         match self {
             Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => true,
             Format::Msh22Ascii | Format::Msh22Binary | Format::Msh41Ascii | Format::Msh41Binary => true,
             Format::Medit | Format::Abaqus => true,
             Format::OpenFoam | Format::OpenFoamBinary => true,
+            Format::StlBinary | Format::StlAscii | Format::Obj | Format::PlyBinary | Format::PlyAscii => false,
         }
     }
 
+    /// Whether the format holds surfaces only (triangles, and for OBJ and
+    /// PLY quadrilaterals): STL, OBJ, PLY.
+    pub fn is_surface_only(self) -> bool {
+        !self.keeps_lower_cells()
+    }
+
     /// Whether the format stores per-element data given to [`write`]
-    /// (VTK and VTU).
+    /// (VTK, VTU and PLY).
     pub fn keeps_cell_data(self) -> bool {
         matches!(
             self,
-            Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib
+            Format::VtkAscii
+                | Format::VtkBinary
+                | Format::VtuAscii
+                | Format::VtuBinary
+                | Format::VtuZlib
+                | Format::PlyBinary
+                | Format::PlyAscii
         )
     }
 }
@@ -328,6 +406,9 @@ enum Family {
     Gmsh,
     Medit,
     Abaqus,
+    Stl,
+    Ply,
+    Obj,
 }
 
 fn sniff(data: &[u8]) -> Option<Family> {
@@ -345,6 +426,11 @@ fn sniff(data: &[u8]) -> Option<Family> {
         Some(Family::Gmsh)
     } else if starts("MeshVersionFormatted") {
         Some(Family::Medit)
+    } else if starts("solid") {
+        // ASCII STL, or a binary one whose header starts so: `stl` tells them apart by size
+        Some(Family::Stl)
+    } else if starts("ply") && head.get(3).is_some_and(|b| b.is_ascii_whitespace()) {
+        Some(Family::Ply)
     } else if starts("*") {
         // a keyword or a `**` comment: no other format starts with one
         Some(Family::Abaqus)
@@ -415,6 +501,9 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => Family::Vtu,
             Format::Medit => Family::Medit,
             Format::Abaqus => Family::Abaqus,
+            Format::StlBinary | Format::StlAscii => Family::Stl,
+            Format::Obj => Family::Obj,
+            Format::PlyBinary | Format::PlyAscii => Family::Ply,
             _ => Family::Gmsh,
         },
     };
@@ -432,6 +521,9 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         Family::Gmsh => gmsh::read(path, &data, &budget)?,
         Family::Medit => medit::read(path, &data, &budget)?,
         Family::Abaqus => abaqus::read(path, &data, &budget)?,
+        Family::Stl => stl::read(path, &data, &budget)?,
+        Family::Obj => obj::read(path, &data, &budget)?,
+        Family::Ply => ply::read(path, &data, &budget)?,
     };
     drop(data);
     let mesh = raw.into_mesh(path)?;
@@ -567,6 +659,18 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[
         Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
         Format::Medit => medit::write(w, mesh, cell_data),
         Format::Abaqus => abaqus::write(w, mesh, cell_data),
+        Format::StlBinary | Format::StlAscii => {
+            check_cell_data(mesh, cell_data)?;
+            stl::write(w, mesh, format == Format::StlBinary)
+        }
+        Format::Obj => {
+            check_cell_data(mesh, cell_data)?;
+            obj::write(w, mesh)
+        }
+        Format::PlyBinary | Format::PlyAscii => {
+            check_cell_data(mesh, cell_data)?;
+            ply::write(w, mesh, cell_data, format == Format::PlyBinary)
+        }
         Format::OpenFoam | Format::OpenFoamBinary => Err(WriteError::Other(Error::InvalidArgument(
             "an OpenFOAM case is a folder: it is written by stage_write, not to a stream".into(),
         ))),
@@ -579,6 +683,28 @@ fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
         format,
         Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib
     ) || format.is_openfoam();
+    if format.is_surface_only() {
+        let bad = if matches!(format, Format::StlBinary | Format::StlAscii) {
+            stl::non_triangle(mesh)
+        } else {
+            mesh.kinds
+                .iter()
+                .position(|&k| k.dim() != 2)
+                .map(|e| (e, mesh.kinds[e]))
+        };
+        if let Some((e, k)) = bad {
+            let holds = if matches!(format, Format::StlBinary | Format::StlAscii) {
+                "triangles only (split quadrilaterals first, or write OBJ or PLY)"
+            } else {
+                "triangles and quadrilaterals only"
+            };
+            return Err(Error::InvalidArgument(format!(
+                "cannot write {}: element {e} is a {k}, and the {format} format holds {holds}",
+                path.display()
+            )));
+        }
+        return Ok(());
+    }
     match mesh.kinds.iter().position(|&k| k == ElementKind::Polyhedron) {
         Some(e) if !vtk => Err(Error::InvalidArgument(format!(
             "cannot write {}: element {e} is a polyhedron, which the {format} format cannot hold; \

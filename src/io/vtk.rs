@@ -99,6 +99,31 @@ pub(crate) fn vtk_shape(e: usize, t: i64) -> std::result::Result<Shape, String> 
     }
 }
 
+/// A POLYDATA file's cells, in VTK's order: vertices, lines, polygons.
+fn poly_cells(path: &Path, mut raw: RawMesh, sections: PolySections) -> Result<RawMesh> {
+    if sections.iter().all(Option::is_none) {
+        return Err(Error::parse(
+            path,
+            None,
+            "missing POLYGONS section: the POLYDATA has no cells",
+        ));
+    }
+    for (i, cells) in sections.into_iter().enumerate() {
+        let Some((offsets, conn)) = cells else { continue };
+        for w in offsets.windows(2) {
+            let vs = &conn[w[0]..w[1]];
+            let shape = match (i, vs.len()) {
+                (0, _) => Shape::Vertex,
+                (1, _) => Shape::Line,
+                (_, 3) => Shape::Elem(ElementKind::Triangle),
+                _ => Shape::Elem(ElementKind::Quadrilateral),
+            };
+            raw.push(shape, vs);
+        }
+    }
+    Ok(raw)
+}
+
 fn scalar_type(name: &str) -> Option<Scalar> {
     Some(match name.to_ascii_lowercase().as_str() {
         "char" | "signed_char" => Scalar::I8,
@@ -125,6 +150,9 @@ enum Attach {
     Cells,
 }
 
+/// A POLYDATA's VERTICES, LINES and POLYGONS: offsets and connectivity of each.
+type PolySections = [Option<(Vec<usize>, Vec<u32>)>; 3];
+
 struct Reader<'a> {
     c: Cursor<'a>,
     binary: bool,
@@ -135,6 +163,9 @@ struct Reader<'a> {
     has_types: bool,
     /// Where the CELLS values start, with the section's two counts.
     cells_at: Option<(Cursor<'a>, usize, usize)>,
+    /// `DATASET POLYDATA`: its VERTICES, LINES and POLYGONS (offsets and
+    /// connectivity), in VTK's cell order, which its cell data follow.
+    poly: Option<PolySections>,
 }
 
 pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> Result<RawMesh> {
@@ -164,11 +195,15 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &super::limits::Budget) -> 
         cells: None,
         has_types: false,
         cells_at: None,
+        poly: None,
     };
     r.sections()?;
     let path = r.c.path;
     if r.npoints.is_none() {
         return Err(Error::parse(path, None, "missing POINTS section"));
+    }
+    if let Some(sections) = r.poly.take() {
+        return poly_cells(path, r.raw, sections);
     }
     if r.cells.is_none() {
         return Err(Error::parse(path, None, "missing CELLS section"));
@@ -194,13 +229,21 @@ impl Reader<'_> {
             }
             match key.as_str() {
                 "DATASET" => {
-                    if !arg(1).eq_ignore_ascii_case("UNSTRUCTURED_GRID") {
+                    if arg(1).eq_ignore_ascii_case("POLYDATA") {
+                        self.poly = Some([None, None, None]);
+                    } else if !arg(1).eq_ignore_ascii_case("UNSTRUCTURED_GRID") {
                         return Err(self.c.err(format!(
-                            "DATASET {} is not supported; only UNSTRUCTURED_GRID is",
+                            "DATASET {} is not supported; only UNSTRUCTURED_GRID and POLYDATA are",
                             clip(arg(1))
                         )));
                     }
                     dataset = true;
+                }
+                "VERTICES" | "LINES" | "POLYGONS" if self.poly.is_some() => self.poly_section(&key, &toks)?,
+                "TRIANGLE_STRIPS" if self.poly.is_some() => {
+                    return Err(self.c.err(
+                        "TRIANGLE_STRIPS are not supported: write the strips as triangles (VTK's vtkTriangleFilter)",
+                    ));
                 }
                 "POINTS" => self.points(&toks)?,
                 "CELLS" => self.cell_conn(&toks)?,
@@ -212,7 +255,7 @@ impl Reader<'_> {
                         (self.npoints, "points")
                     } else {
                         attach = Attach::Cells;
-                        (self.cells.as_ref().map(|c| c.0.len() - 1), "cells")
+                        (self.ncells(), "cells")
                     };
                     if let Some(want) = want
                         && want != n
@@ -225,6 +268,46 @@ impl Reader<'_> {
                 "METADATA" => self.c.skip_to_blank_line(),
                 _ => self.attribute(&key, &toks, attach)?,
             }
+        }
+        Ok(())
+    }
+
+    /// A POLYDATA section of cells: its vertex ids checked as they are read.
+    fn poly_section(&mut self, key: &str, toks: &[&str]) -> Result<()> {
+        if self.npoints.is_none() {
+            return Err(self.c.err(format!("{key} before POINTS")));
+        }
+        let i = ["VERTICES", "LINES", "POLYGONS"]
+            .iter()
+            .position(|k| *k == key)
+            .unwrap_or(2);
+        if self.poly.as_ref().is_some_and(|p| p[i].is_some()) {
+            return Err(self.c.err(format!("a second {key} section")));
+        }
+        let a = self.header_count(toks, 1)?;
+        let b = self.header_count(toks, 2)?;
+        let cells = self.cell_values(a, b, &|_| true)?;
+        let at = self.c.token_line();
+        let (offsets, _) = &cells;
+        // one cell a shape: poly-vertices, polylines and polygons past 4 sides have none here
+        let fits = |n: usize| match i {
+            0 => n == 1,
+            1 => n == 2,
+            _ => n == 3 || n == 4,
+        };
+        if let Some(c) = (0..offsets.len() - 1).find(|&c| !fits(offsets[c + 1] - offsets[c])) {
+            let what = ["a vertex needs 1", "a line needs 2", "a polygon needs 3 or 4"][i];
+            return Err(Error::parse(
+                self.c.path,
+                Some(crate::error::Location::Line(at)),
+                format!(
+                    "{key} cell {c} has {} vertices: {what} (split poly-vertices, polylines and larger polygons first)",
+                    offsets[c + 1] - offsets[c]
+                ),
+            ));
+        }
+        if let Some(p) = self.poly.as_mut() {
+            p[i] = Some(cells);
         }
         Ok(())
     }
@@ -479,10 +562,18 @@ impl Reader<'_> {
         Ok(())
     }
 
+    /// Cells read so far: CELLS, or a POLYDATA's sections together.
+    fn ncells(&self) -> Option<usize> {
+        match &self.poly {
+            Some(p) => Some(p.iter().flatten().map(|c| c.0.len() - 1).sum()),
+            None => self.cells.as_ref().map(|c| c.0.len() - 1),
+        }
+    }
+
     fn count_for(&self, attach: Attach, key: &str) -> Result<usize> {
         match attach {
             Attach::Points => Ok(self.npoints.unwrap_or(0)),
-            Attach::Cells => Ok(self.cells.as_ref().map_or(0, |c| c.0.len() - 1)),
+            Attach::Cells => Ok(self.ncells().unwrap_or(0)),
             Attach::None | Attach::Discard => Err(self.c.err(format!("{key} outside POINT_DATA or CELL_DATA"))),
         }
     }
@@ -552,7 +643,7 @@ impl Reader<'_> {
                     let aname = decode_name(t[0]);
                     if let Some(want) = match attach {
                         Attach::Points => self.npoints,
-                        Attach::Cells => self.cells.as_ref().map(|c| c.0.len() - 1),
+                        Attach::Cells => self.ncells(),
                         Attach::None | Attach::Discard => None,
                     } && tuples != want
                     {

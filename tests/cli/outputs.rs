@@ -204,7 +204,8 @@ fn an_output_keeps_the_encoding_of_its_input() {
     let dir = tempfile::tempdir().unwrap();
     let mesh = io::read(input(dir.path())).unwrap();
     // every format is recognised in the file it was written as
-    for f in Format::ALL {
+    // the surface formats hold no volumes: `surface_formats` covers them
+    for f in Format::ALL.into_iter().filter(|f| !f.is_surface_only()) {
         let ext = match f {
             Format::VtkAscii | Format::VtkBinary => "vtk",
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",

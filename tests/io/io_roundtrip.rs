@@ -196,7 +196,8 @@ fn is_grouped(m: &Mesh) -> bool {
 fn every_format_round_trips_every_mesh() {
     let dir = tempfile::tempdir().unwrap();
     for (name, m) in test_meshes() {
-        for f in Format::ALL {
+        // the surface formats hold no volumes nor lower cells: `surface_formats` covers them
+        for f in Format::ALL.into_iter().filter(|f| !f.is_surface_only()) {
             // Medit and Abaqus write one block per kind: interleaved kinds come back grouped
             if matches!(f, Format::Medit | Format::Abaqus) && !is_grouped(&m) {
                 continue;
@@ -406,13 +407,13 @@ fn format_names_and_extensions() {
     for f in Format::ALL {
         assert_eq!(Format::from_name(f.name()), Some(f));
     }
-    assert_eq!(Format::from_name("stl"), None);
+    assert_eq!(Format::from_name("stl-binary"), None);
     assert_eq!(Format::from_path(Path::new("a/b.VTK")).unwrap(), Format::VtkAscii);
     assert_eq!(Format::from_path(Path::new("b.vtu")).unwrap(), Format::VtuAscii);
     assert_eq!(Format::from_path(Path::new("b.msh")).unwrap(), Format::Msh41Ascii);
     assert_eq!(Format::from_path(Path::new("b.mesh")).unwrap(), Format::Medit);
-    let e = Format::from_path(Path::new("b.stl")).unwrap_err().to_string();
-    assert!(e.contains("b.stl") && e.contains(".vtk") && e.contains(".mesh"), "{e}");
+    let e = Format::from_path(Path::new("b.xyz")).unwrap_err().to_string();
+    assert!(e.contains("b.xyz") && e.contains(".vtk") && e.contains(".mesh"), "{e}");
 }
 
 #[test]

@@ -187,7 +187,7 @@ fn gmsh_views_survive_msh_and_vtu_round_trips() {
         let m = io::read(&src).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!((m.num_elements(), m.lower.len()), (1, 1));
         check_views(&format!("{version} as read"), &m);
-        for f in Format::ALL {
+        for f in Format::ALL.into_iter().filter(|f| !f.is_surface_only()) {
             let ext = match f {
                 Format::VtkAscii | Format::VtkBinary => "vtk",
                 Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",

@@ -15,3 +15,4 @@ mod io_roundtrip;
 mod lossless;
 mod openfoam;
 mod pvtu;
+mod surface_formats;
