@@ -252,6 +252,11 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
                 "element face has no vertex_indices (or vertex_index) list",
             ));
         }
+        if e.props.is_empty() {
+            // entries without properties take no bytes: counting through a
+            // hostile 10^19 of them would never end
+            continue;
+        }
         let each = 8 * e.props.len() as u64 + if is_vertex { 24 } else { 16 };
         if keep {
             budget.charge(

@@ -91,10 +91,22 @@ fn read_binary(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
 
 fn read_ascii(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
     let text = std::str::from_utf8(data).map_err(|e| {
+        // a file that is neither says why it is not binary either, since a
+        // truncated or padded binary STL is the usual cause
+        let binary = if data.len() < 84 {
+            format!("only {} bytes, shorter than a binary STL's 84-byte header", data.len())
+        } else {
+            let n = u32::from_le_bytes([data[80], data[81], data[82], data[83]]) as u64;
+            format!(
+                "its binary facet count {n} needs {} bytes but the file has {}",
+                84 + 50 * n,
+                data.len()
+            )
+        };
         Error::parse(
             path,
-            None,
-            format!("not an ASCII STL: byte {} is not text", e.valid_up_to()),
+            Some(Location::Byte(e.valid_up_to() as u64)),
+            format!("neither an ASCII STL (this byte is not text) nor a binary STL ({binary})"),
         )
     })?;
     // points, connectivity and merge table: at most one corner per 12 bytes of text

@@ -410,7 +410,33 @@ fn bad_surface_files_are_refused_naming_the_file_and_where() {
         b"ply\nformat binary_big_endian 1.0\nelement vertex 4000000000000\nproperty double x\nproperty double y\nend_header\n\0\0",
         &["element vertex declares 4000000000000", "line 3"],
     );
+    // an element without properties takes no bytes: a huge count of them
+    // must be passed over at once, not counted through
+    let started = std::time::Instant::now();
+    std::fs::write(
+        &ply,
+        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+          element junk 18000000000000000000\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+          0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    )
+    .unwrap();
+    let m = io::read(&ply).unwrap();
+    assert_eq!((m.points.len(), m.num_elements()), (3, 1));
+    assert!(started.elapsed().as_secs() < 5, "took {:?}", started.elapsed());
     let stl = dir.path().join("bad.stl");
+    // neither text nor a binary of the right size: both reasons are given
+    let mut b = vec![b'x'; 84];
+    b[80..84].copy_from_slice(&2u32.to_le_bytes());
+    b.extend_from_slice(&[0xff; 60]);
+    expect_err(
+        &stl,
+        &b,
+        &[
+            "neither an ASCII STL",
+            "binary facet count 2 needs 184 bytes but the file has 144",
+            "byte 84",
+        ],
+    );
     expect_err(
         &stl,
         b"solid a\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n  endloop\n",
