@@ -29,7 +29,7 @@ use crate::mesh::fixing::{FixRules, RuleCount};
 use crate::metric::corner_model::Template;
 use crate::metric::smetric::MetricKind;
 use crate::metric_report::{self, MetricSummary, SpacingDisplacement};
-use crate::problem::boundary::{VertexClass, classify};
+use crate::problem::boundary::VertexClass;
 use crate::problem::targets::{LayerChange, first_layer_change_on_skin};
 use crate::problem::{Boundary, BoundaryMode, Ordering, ProblemOptions, Target};
 use crate::report::{QualityReport, quality_report_on_skin};
@@ -145,6 +145,13 @@ pub struct Smoother {
     /// A reference mesh given in memory (instead of `reference`).
     #[serde(skip)]
     pub reference_mesh: Option<Mesh>,
+    /// A geometry file (a triangulated surface such as STL, OBJ, PLY, or a
+    /// volume mesh whose skin is used) the skin slides on instead of its own
+    /// skin; giving one makes the boundary slide.
+    pub surface: Option<PathBuf>,
+    /// The geometry given in memory (instead of `surface`).
+    #[serde(skip)]
+    pub surface_mesh: Option<Mesh>,
 }
 
 impl Default for Smoother {
@@ -183,6 +190,8 @@ impl Default for Smoother {
             inversion_fraction: newton.inversion_fraction,
             start_sweeps: newton.start_sweeps,
             reference_mesh: None,
+            surface: None,
+            surface_mesh: None,
         }
     }
 }
@@ -277,6 +286,8 @@ pub struct Sliding {
     pub edge: usize,
     /// Corners (fixed).
     pub corners: usize,
+    /// Whether the skin slides on a given geometry rather than on itself.
+    pub geometry: bool,
 }
 
 /// What a smoothing run did.
@@ -497,8 +508,30 @@ impl Smoother {
         path.map(io::read).transpose()
     }
 
-    /// What is optimised, with `reference` as the reference mesh.
-    pub fn problem_options<'a>(&'a self, reference: Option<&'a Mesh>) -> Result<ProblemOptions<'a>> {
+    /// The surface geometry: given in memory, or read from its file.
+    pub fn surface_geometry(&self) -> Result<Option<Mesh>> {
+        if let Some(m) = &self.surface_mesh {
+            return Ok(Some(m.clone()));
+        }
+        self.surface.as_deref().map(io::read).transpose()
+    }
+
+    /// What the skin does: a surface geometry makes it slide.
+    pub fn boundary_mode(&self) -> BoundaryMode {
+        if self.surface.is_some() || self.surface_mesh.is_some() {
+            BoundaryMode::Slide
+        } else {
+            self.boundary
+        }
+    }
+
+    /// What is optimised, with `reference` as the reference mesh and
+    /// `surface` as the geometry the skin slides on.
+    pub fn problem_options<'a>(
+        &'a self,
+        reference: Option<&'a Mesh>,
+        surface: Option<&'a Mesh>,
+    ) -> Result<ProblemOptions<'a>> {
         let target = self.target_spec()?;
         Ok(ProblemOptions {
             metric: self.metric.unwrap_or(target.default_metric()),
@@ -508,9 +541,10 @@ impl Smoother {
             ordering: self.order,
             order_seed: self.order_seed,
             boundary: Boundary {
-                mode: self.boundary,
+                mode: self.boundary_mode(),
                 feature_angle: self.feature_angle,
             },
+            surface,
             ..Default::default()
         })
     }
@@ -527,7 +561,7 @@ impl Smoother {
             free_groups: self.free_groups.clone(),
             fixed_arrays: self.fixed_arrays.clone(),
             fixed_ids,
-            release_facets: self.boundary == BoundaryMode::Slide,
+            release_facets: self.boundary_mode() == BoundaryMode::Slide,
         })
     }
 
@@ -675,7 +709,8 @@ impl Smoother {
         let input_points = mesh.num_points();
         let result = self.with_rules(mesh, |s, mesh, ruled| {
             let reference = s.reference_for(ruled.used.as_deref(), input_points)?;
-            let options = s.problem_options(reference.as_ref())?;
+            let surface = s.surface_geometry()?;
+            let options = s.problem_options(reference.as_ref(), surface.as_ref())?;
             crate::problem::check(mesh, &mesh.points, &options)?;
             let (backend, note) = s.backend(&[untangle_method(s.method)])?;
             let unused = ruled.unused;
@@ -767,8 +802,11 @@ impl Smoother {
         targets: Option<String>,
         note: Option<String>,
     ) -> Start {
-        let class = (options.boundary.mode == BoundaryMode::Slide)
-            .then(|| classify(mesh, &mesh.points, options.boundary.feature_angle).class);
+        // an error here comes back from the problem's build, which stops the run
+        let class = crate::problem::boundary::skin_classes(mesh, &mesh.points, options)
+            .ok()
+            .flatten()
+            .map(|c| c.class);
         let sliding = class.as_ref().map(|class| {
             let count = |k: VertexClass| {
                 (0..mesh.num_points())
@@ -780,6 +818,7 @@ impl Smoother {
                 surface: count(VertexClass::Surface),
                 edge: count(VertexClass::Edge),
                 corners: count(VertexClass::Corner),
+                geometry: options.surface.is_some(),
             }
         });
         let held = |v: usize| {
@@ -846,7 +885,8 @@ impl Smoother {
     ) -> Result<Report> {
         let params = self.params()?;
         let reference = self.reference_for(ruled.used.as_deref(), input_points)?;
-        let options = self.problem_options(reference.as_ref())?;
+        let surface = self.surface_geometry()?;
+        let options = self.problem_options(reference.as_ref(), surface.as_ref())?;
         // refuse what cannot be smoothed before anything moves or is
         // reported (a planar mesh that is not flat included: its "inverted"
         // elements would be those of a projection)

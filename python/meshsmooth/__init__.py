@@ -304,6 +304,7 @@ def smooth(
     fixed: Optional[npt.ArrayLike] = None,
     boundary: str = "fixed",
     feature_angle: float = 30.0,
+    surface: Optional[Union[str, os.PathLike]] = None,
     device: str = "auto",
     precision: str = "auto",
     adapter: Optional[str] = None,
@@ -361,6 +362,11 @@ def smooth(
         feature_angle: with ``boundary="slide"``, faces meeting at more than
             this many degrees form a feature edge, and an edge turning by more
             than it makes a corner.
+        surface: a triangulated geometry file (STL, OBJ, PLY, VTK, Gmsh; typically
+            a finer export of the CAD surface) for a volume mesh's boundary to
+            slide on instead of its own skin: every boundary vertex is projected
+            onto it, on its patches, along its feature curves, and its corners
+            stay. Implies ``boundary="slide"``.
         device: "auto" (a hardware GPU when there is one, else the CPU;
             ``Result.info["notes"]`` says why the CPU was chosen), "cpu" (f64
             on all cores) or "gpu" (wgpu; bcd runs colour by colour).
@@ -425,6 +431,7 @@ def smooth(
     settings = _settings(
         method=method, metric=metric, target=target, template=template, boundary=boundary,
         feature_angle=float(feature_angle), device=device, precision=precision, adapter=adapter,
+        surface=None if surface is None else os.fspath(surface),
         tol=float(tol), max_iter=int(max_iter),
         time_limit=None if time_limit is None else float(time_limit),
         untangle=bool(untangle), order=str(order), order_seed=int(order_seed),

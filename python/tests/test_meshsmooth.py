@@ -254,6 +254,36 @@ def test_surface_formats_round_trip(tmp_path):
         np.testing.assert_allclose(p[cells[0][1]], points[tris], err_msg=name)
 
 
+def test_boundary_slides_on_a_surface_geometry(tmp_path):
+    # the unit cube's 12 triangles as the geometry; the hexahedral box with
+    # its boundary vertices moved within their faces and along their edges
+    cube = np.array([[x, y, z] for z in (0.0, 1.0) for y in (0.0, 1.0) for x in (0.0, 1.0)])
+    quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    tris = np.array([t for a, b, c, d in quads for t in ([a, b, c], [a, c, d])])
+    # written by hand: the package writes surfaces only in a plane for now
+    facets = "".join(
+        "facet normal 0 0 0\nouter loop\n" + "".join(f"vertex {x} {y} {z}\n" for x, y, z in cube[t]) + "endloop\nendfacet\n"
+        for t in tris
+    )
+    (tmp_path / "cube.stl").write_text(f"solid cube\n{facets}endsolid cube\n")
+    points, hexes, _ = box(5, alpha=0.0)
+    rng = np.random.default_rng(4)
+    start = points.copy()
+    for v, p in enumerate(points):
+        free = (p > 1e-12) & (p < 1 - 1e-12)
+        start[v, free] += rng.uniform(-0.06, 0.06, free.sum())
+    fixed = ms.smooth(start, hexes)
+    slid = ms.smooth(start, hexes, surface=tmp_path / "cube.stl")
+    assert slid.objective < fixed.objective - 1e-3
+    bound = (start < 1e-12) | (start > 1 - 1e-12)
+    # bound coordinates kept: faces stay on their faces, edges on their edges, corners in place
+    np.testing.assert_allclose(slid.points[bound], start[bound], atol=1e-9)
+    moved = np.abs(slid.points - start).max(axis=1) > 1e-6
+    assert (moved & bound.any(axis=1)).sum() > 10
+    with pytest.raises(Exception, match="nope.stl"):
+        ms.smooth(start, hexes, surface=tmp_path / "nope.stl")
+
+
 def test_openfoam_case_round_trip(tmp_path, tet_box):
     points, tets, _ = tet_box
     case = tmp_path / "case"

@@ -14,6 +14,14 @@ pub struct BoundaryArgs {
     /// feature edge, and an edge turning by more than it makes a corner.
     #[arg(long, value_name = "DEGREES", default_value_t = Boundary::default().feature_angle)]
     pub feature_angle: f64,
+    /// Slide the boundary on this triangulated geometry (STL, OBJ, PLY, VTK or any mesh
+    /// file holding a surface; typically a finer export of the CAD surface) instead of
+    /// the mesh's own skin: every boundary vertex is projected onto it, smooth parts
+    /// slide on its patches, vertices on its feature curves along them, and vertices
+    /// at its corners stay. Implies --boundary slide; the feature angle is applied to
+    /// the geometry's own facets.
+    #[arg(long, value_name = "GEOMETRY")]
+    pub surface: Option<PathBuf>,
     /// Fix the vertices of a group: a Gmsh physical group (name or number), an
     /// element set or a node set (Abaqus *ELSET, *NSET); repeatable.
     #[arg(long, value_name = "GROUP")]

@@ -74,8 +74,16 @@ pub fn start(start: &Start) -> String {
     out.extend(start.rules.iter().map(rule));
     if let Some(s) = &start.sliding {
         out.push(format!(
-            "{} vertices slide on boundary faces, {} along feature edges; {} corners fixed (feature angle {}°)",
-            s.surface, s.edge, s.corners, s.feature_angle
+            "{} vertices slide on {}, {} along feature edges; {} corners fixed (feature angle {}°)",
+            s.surface,
+            if s.geometry {
+                "the --surface geometry"
+            } else {
+                "boundary faces"
+            },
+            s.edge,
+            s.corners,
+            s.feature_angle
         ));
     }
     if let Some(note) = &start.targets {

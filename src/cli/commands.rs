@@ -167,8 +167,12 @@ impl Printer {
                         }
                         if let Some(s) = &start.sliding {
                             println!(
-                                "--boundary slide (feature angle {}°): {} vertices slide on boundary faces, {} along feature edges; {} corners fixed\n",
-                                s.feature_angle, s.surface, s.edge, s.corners
+                                "--boundary slide{} (feature angle {}°): {} vertices slide on boundary faces, {} along feature edges; {} corners fixed\n",
+                                if s.geometry { " on the --surface geometry" } else { "" },
+                                s.feature_angle,
+                                s.surface,
+                                s.edge,
+                                s.corners
                             );
                         }
                     }
@@ -556,7 +560,7 @@ fn smooth_pieces(a: &SmoothArgs, settings: &Smoother, pieces: Option<Option<usiz
         ));
     }
     let rules = settings.rules()?;
-    if settings.boundary != meshsmooth::problem::BoundaryMode::Fixed
+    if settings.boundary_mode() != meshsmooth::problem::BoundaryMode::Fixed
         || settings.reference.is_some()
         || settings.target.starts_with("reference:")
         || !(rules.fix_groups.is_empty() && rules.fixed_arrays.is_empty() && rules.fixed_ids.is_empty())
@@ -564,10 +568,10 @@ fn smooth_pieces(a: &SmoothArgs, settings: &Smoother, pieces: Option<Option<usiz
         || a.save_partial
     {
         return refuse(
-            "only the fixed boundary, the ideal targets and the file's own fixed flags (no --boundary slide, --reference, --fix-*, --drop-data or --save-partial)",
+            "only the fixed boundary, the ideal targets and the file's own fixed flags (no --boundary slide, --surface, --reference, --fix-*, --drop-data or --save-partial)",
         );
     }
-    let objective = settings.problem_options(None)?;
+    let objective = settings.problem_options(None, None)?;
     let params = settings.params()?;
     let (backend, note) = settings.backend(&[settings.method])?;
     if let Some(note) = note {

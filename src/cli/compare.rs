@@ -30,7 +30,8 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let params = settings.params()?;
     let mesh = io::read(&a.input)?;
     let reference = settings.reference_mesh()?;
-    let options = settings.problem_options(reference.as_ref())?;
+    let surface = settings.surface_geometry()?;
+    let options = settings.problem_options(reference.as_ref(), surface.as_ref())?;
     // every method needs a version on the device: checked before running any
     let (backend, note) = settings.backend(methods)?;
     if let Some(note) = note {

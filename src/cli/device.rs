@@ -42,6 +42,7 @@ impl BoundaryArgs {
     fn fill(&self, s: &mut Smoother) {
         s.boundary = self.boundary;
         s.feature_angle = self.feature_angle;
+        s.surface = self.surface.clone();
         s.fix_groups = self.fix_group.clone();
         s.free_groups = self.free_group.clone();
         s.fixed_arrays = self.fixed_array.clone();

@@ -161,10 +161,10 @@ fn unit(a: Vec3) -> Vec3 {
     if n > 0.0 { a.map(|c| c / n) } else { a }
 }
 
-const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+pub(crate) const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// I - n n^T
-fn plane_projector(n: &Vec3) -> Mat3 {
+pub(crate) fn plane_projector(n: &Vec3) -> Mat3 {
     let mut p = IDENTITY;
     for i in 0..3 {
         for j in 0..3 {
@@ -175,7 +175,7 @@ fn plane_projector(n: &Vec3) -> Mat3 {
 }
 
 /// t t^T
-fn line_projector(t: &Vec3) -> Mat3 {
+pub(crate) fn line_projector(t: &Vec3) -> Mat3 {
     let mut p = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
@@ -246,6 +246,11 @@ fn skin_facets(mesh: &Mesh, points: &[Vec3]) -> Vec<Facet> {
         .collect()
 }
 
+/// The vertices of each skin facet of `mesh` (faces in 3D, edges in 2D).
+pub(crate) fn skin_faces(mesh: &Mesh, points: &[Vec3]) -> Vec<Vec<u32>> {
+    skin_facets(mesh, points).into_iter().map(|f| f.vertices).collect()
+}
+
 fn centroid(points: &[Vec3], vs: &[u32]) -> Vec3 {
     let mut c = [0.0; 3];
     for &v in vs {
@@ -258,6 +263,31 @@ fn centroid(points: &[Vec3], vs: &[u32]) -> Vec3 {
 
 fn edge_key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
+}
+
+/// The skin's classes where the boundary slides (`None` where it is fixed):
+/// on the geometry `opts.surface` when one is given (which makes it slide),
+/// else on the mesh's own skin.
+pub fn skin_classes(
+    mesh: &Mesh,
+    points: &[Vec3],
+    opts: &super::ProblemOptions,
+) -> crate::error::Result<Option<SkinClasses>> {
+    match opts.surface {
+        Some(g) => {
+            if mesh.dim() != 3 {
+                return Err(crate::error::Error::Unsupported(
+                    "a surface geometry needs a volume mesh: a planar mesh's boundary slides along its own sides"
+                        .into(),
+                ));
+            }
+            let geometry = super::geometry::Geometry::new(g, &g.points, opts.boundary.feature_angle)?;
+            geometry.classify(mesh, points).map(Some)
+        }
+        None => Ok(
+            (opts.boundary.mode == BoundaryMode::Slide).then(|| classify(mesh, points, opts.boundary.feature_angle))
+        ),
+    }
 }
 
 /// Classifies the skin of `mesh` at `points` (the coordinates the problem is

@@ -23,6 +23,7 @@ mod adjacency;
 pub mod boundary;
 mod check;
 mod corners;
+pub mod geometry;
 mod numbering;
 pub mod targets;
 
@@ -71,6 +72,10 @@ pub struct ProblemOptions<'a> {
     /// solve's frame: `Frame::scale`); size and metric fields are divided by
     /// it. 0 means 1.
     pub length_unit: f64,
+    /// A geometry the sliding skin vertices stay on instead of the mesh's
+    /// own skin (a surface, or a volume mesh whose skin is used), in the
+    /// mesh's coordinates; it makes the boundary slide (`geometry`).
+    pub surface: Option<&'a Mesh>,
 }
 
 impl<'a> ProblemOptions<'a> {
@@ -204,8 +209,7 @@ impl Problem {
         let plane = check(mesh, &mesh.points, opts)?;
         let points = in_plane(plane.as_ref(), &mesh.points);
         let mut graph = MeshGraph::of(mesh);
-        let skin = (opts.boundary.mode == BoundaryMode::Slide)
-            .then(|| boundary::classify(mesh, &points, opts.boundary.feature_angle));
+        let skin = boundary::skin_classes(mesh, &points, opts)?;
         // a sliding vertex is free unless the user fixed it
         let slides = |v: usize| {
             skin.as_ref()

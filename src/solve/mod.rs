@@ -741,8 +741,13 @@ pub(crate) fn in_mesh_frame<T>(
         points: local(r),
         ..r.clone()
     });
+    let surface = problem.surface.map(|g| Mesh {
+        points: local(g),
+        ..g.clone()
+    });
     let problem = ProblemOptions {
         reference: reference.as_ref(),
+        surface: surface.as_ref(),
         length_unit: frame.scale
             * if problem.length_unit > 0.0 {
                 problem.length_unit
@@ -758,6 +763,12 @@ pub(crate) fn in_mesh_frame<T>(
     let p = built?;
     let mut x = p.gather(&local_points);
     let x0 = x.clone();
+    if let (Some(s), Some(_)) = (&p.sliding, problem.surface) {
+        // a given geometry is where the skin lies: every sliding vertex starts on it
+        for (v, xv) in x.iter_mut().enumerate() {
+            *xv = crate::backend::cpu::project_boundary::project_vertex(s, v, xv);
+        }
+    }
     let result = run(&p, &mut x);
     if result.is_ok() || keep_failed {
         // back from the plane (a planar mesh outside z = constant moves in all

@@ -12,6 +12,7 @@ mod coloring;
 mod convergence;
 mod generate;
 mod generate_papers;
+mod geometry;
 mod metric_elements;
 mod metric_fd;
 mod newton;
