@@ -1,4 +1,4 @@
-//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus, OpenFOAM, STL, OBJ, PLY; atomic writes.
+//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus, Exodus II, OpenFOAM, STL, OBJ, PLY; atomic writes.
 //!
 //! Readers produce a `RawMesh` (every cell in file order, with its shape);
 //! `RawMesh::into_mesh` then splits top-dimensional elements from lower
@@ -32,6 +32,9 @@
 //! - Abaqus keeps its node and element numbers and element types as the
 //!   arrays `abaqus:node_id`, `abaqus:element_id`, `abaqus:type` and
 //!   `abaqus:types`, which the `.inp` writer puts back;
+//! - Exodus II (cargo feature `exodus`) keeps its blocks (element sets and
+//!   the cell array `exodus:block_id`), node sets, side sets (boundary cells
+//!   in element sets), number maps and last time step's variables (see `exodus`);
 //! - an OpenFOAM case (a folder) keeps its faces, patches and zones in
 //!   `MeshData::polymesh`, which only the OpenFOAM writer puts back; its
 //!   patches are physical groups and its zones sets (see `openfoam`);
@@ -45,11 +48,15 @@ mod abaqus;
 mod atomic;
 mod batch;
 mod codec;
+#[cfg(feature = "exodus")]
+mod exodus;
 mod gmsh;
 mod input;
 mod lex;
 mod limits;
 mod medit;
+#[cfg(feature = "exodus")]
+mod netcdf_classic;
 mod obj;
 mod openfoam;
 mod ply;
@@ -102,6 +109,8 @@ pub enum Format {
     Medit,
     /// Abaqus input (`.inp`), ASCII.
     Abaqus,
+    /// Exodus II (`.exo`, `.e`): netCDF-4 (cargo feature `exodus`).
+    Exodus,
     /// OpenFOAM polyMesh case (a folder), ASCII.
     OpenFoam,
     /// OpenFOAM polyMesh case, binary.
@@ -118,15 +127,20 @@ pub enum Format {
     PlyAscii,
 }
 
+/// What a build without the `exodus` feature says of an Exodus II (netCDF) file.
+#[cfg(not(feature = "exodus"))]
+const NO_EXODUS: &str = "an Exodus II (netCDF) file, which this build of meshsmooth cannot read or write: \
+     build it with `--features exodus` (needs libnetCDF, Debian's libnetcdf-dev)";
+
 /// How much of a file [`Format::of_file`] reads: a VTU file's first array
 /// (and its compressor attribute) sits within the header.
 const HEAD_BYTES: u64 = 64 << 10;
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), .stl (STL), .obj (Wavefront OBJ), .ply (PLY), an OpenFOAM case folder or its .foam file";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), .exo/.e (Exodus II), .stl (STL), .obj (Wavefront OBJ), .ply (PLY), an OpenFOAM case folder or its .foam file";
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 18] = [
+    pub const ALL: [Format; 19] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
@@ -138,6 +152,7 @@ impl Format {
         Format::Msh41Binary,
         Format::Medit,
         Format::Abaqus,
+        Format::Exodus,
         Format::OpenFoam,
         Format::OpenFoamBinary,
         Format::StlBinary,
@@ -170,6 +185,7 @@ impl Format {
             Some("msh") => Ok(Format::Msh41Ascii),
             Some("mesh") => Ok(Format::Medit),
             Some("inp") => Ok(Format::Abaqus),
+            Some("exo" | "e" | "ex2" | "exii" | "gen" | "g") => Ok(Format::Exodus),
             Some("stl") => Ok(Format::StlBinary),
             Some("obj") => Ok(Format::Obj),
             Some("ply") => Ok(Format::PlyBinary),
@@ -224,6 +240,7 @@ impl Format {
                 | Format::OpenFoamBinary
                 | Format::StlBinary
                 | Format::PlyBinary
+                | Format::Exodus
         )
     }
 
@@ -300,6 +317,7 @@ impl Format {
             }
             Family::Medit => Some(Format::Medit),
             Family::Abaqus => Some(Format::Abaqus),
+            Family::Exodus => Some(Format::Exodus),
             Family::Stl => {
                 let len = std::fs::metadata(path).ok()?.len();
                 let n = head
@@ -339,6 +357,7 @@ impl Format {
             Format::Msh41Binary => "msh4-binary",
             Format::Medit => "medit",
             Format::Abaqus => "abaqus",
+            Format::Exodus => "exodus",
             Format::OpenFoam => "openfoam",
             Format::OpenFoamBinary => "openfoam-binary",
             Format::StlBinary => "stl",
@@ -356,7 +375,7 @@ impl Format {
         match self {
             Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => true,
             Format::Msh22Ascii | Format::Msh22Binary | Format::Msh41Ascii | Format::Msh41Binary => true,
-            Format::Medit | Format::Abaqus => true,
+            Format::Medit | Format::Abaqus | Format::Exodus => true,
             Format::OpenFoam | Format::OpenFoamBinary => true,
             Format::StlBinary | Format::StlAscii | Format::Obj | Format::PlyBinary | Format::PlyAscii => false,
         }
@@ -380,6 +399,7 @@ impl Format {
                 | Format::VtuZlib
                 | Format::PlyBinary
                 | Format::PlyAscii
+                | Format::Exodus
         )
     }
 }
@@ -406,6 +426,7 @@ enum Family {
     Gmsh,
     Medit,
     Abaqus,
+    Exodus,
     Stl,
     Ply,
     Obj,
@@ -431,6 +452,13 @@ fn sniff(data: &[u8]) -> Option<Family> {
         Some(Family::Stl)
     } else if starts("ply") && head.get(3).is_some_and(|b| b.is_ascii_whitespace()) {
         Some(Family::Ply)
+    } else if head.starts_with(b"CDF\x01")
+        || head.starts_with(b"CDF\x02")
+        || head.starts_with(b"CDF\x05")
+        || head.starts_with(b"\x89HDF\r\n\x1a\n")
+    {
+        // netCDF classic, 64-bit offset, 64-bit data, or netCDF-4 (HDF5)
+        Some(Family::Exodus)
     } else if starts("*") {
         // a keyword or a `**` comment: no other format starts with one
         Some(Family::Abaqus)
@@ -501,6 +529,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => Family::Vtu,
             Format::Medit => Family::Medit,
             Format::Abaqus => Family::Abaqus,
+            Format::Exodus => Family::Exodus,
             Format::StlBinary | Format::StlAscii => Family::Stl,
             Format::Obj => Family::Obj,
             Format::PlyBinary | Format::PlyAscii => Family::Ply,
@@ -521,6 +550,10 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         Family::Gmsh => gmsh::read(path, &data, &budget)?,
         Family::Medit => medit::read(path, &data, &budget)?,
         Family::Abaqus => abaqus::read(path, &data, &budget)?,
+        #[cfg(feature = "exodus")]
+        Family::Exodus => exodus::read(path, &data, &budget)?,
+        #[cfg(not(feature = "exodus"))]
+        Family::Exodus => return Err(Error::parse(path, None, NO_EXODUS)),
         Family::Stl => stl::read(path, &data, &budget)?,
         Family::Obj => obj::read(path, &data, &budget)?,
         Family::Ply => ply::read(path, &data, &budget)?,
@@ -659,6 +692,10 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[
         Format::Msh41Binary => gmsh::write41(w, mesh, cell_data, true),
         Format::Medit => medit::write(w, mesh, cell_data),
         Format::Abaqus => abaqus::write(w, mesh, cell_data),
+        #[cfg(feature = "exodus")]
+        Format::Exodus => exodus::write(w, mesh, cell_data),
+        #[cfg(not(feature = "exodus"))]
+        Format::Exodus => Err(WriteError::Other(Error::Unsupported(NO_EXODUS.into()))),
         Format::StlBinary | Format::StlAscii => {
             check_cell_data(mesh, cell_data)?;
             stl::write(w, mesh, format == Format::StlBinary)

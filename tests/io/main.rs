@@ -10,6 +10,8 @@ mod common;
 mod abaqus;
 mod bad_input_io;
 mod bombs;
+#[cfg(feature = "exodus")]
+mod exodus;
 mod interop;
 mod io_roundtrip;
 mod lossless;
