@@ -16,13 +16,17 @@
 //!   that step's time as the field array [`TIME`];
 //! - the node and element number maps as [`NODE_ID`] and [`ELEMENT_ID`].
 //!
-//! The writer puts all of it back: elements grouped by [`BLOCK_ID`] (by kind
-//! where the mesh has none), block names from the cell set holding exactly a
-//! block's elements, cell sets of boundary cells as side sets (each face
-//! found as the side of its element), every numeric point and cell array
-//! (and the quality arrays) as nodal and element variables of one time step,
-//! one component per variable (`NAME_0`, `NAME_1`, ... for several). Lower
-//! cells in no set (Gmsh lines and points) are not kept. netCDF writes to a
+//! The writer puts all of it back: elements grouped by [`BLOCK_ID`] (by Gmsh
+//! physical group, else by kind, where the mesh has none), block names from
+//! the cell set holding exactly a block's elements (else the physical
+//! group's name); boundary cells (Gmsh's faces, lines and points) in blocks
+//! of their own grouped the same way, except faces that only a side set
+//! holds; other cell sets of boundary cells as side sets (each face found as
+//! the side of its element); fixed vertices as the node set
+//! `MESHSMOOTH_FIXED`, which reads back as fixed; every numeric point and
+//! cell array (and the quality arrays) as nodal and element variables of one
+//! time step, one component per variable (`NAMEX`, `NAMEY`, `NAMEZ` for
+//! vectors, which read back joined, `NAME_0`, `NAME_1`, ... for more; element variables are not kept on boundary cells). netCDF writes to a
 //! file, so the output is built in a private temporary file and copied to
 //! the staged output (atomic, or streamed). Files are written as classic
 //! 64-bit-offset netCDF, which every Exodus reader takes.
@@ -39,7 +43,8 @@ use netcdf::types::{NcTypeDescriptor, NcVariableType};
 use super::limits::Budget;
 use super::{CellData, RawMesh, Shape, WriteError, WriteResult};
 use crate::error::{Error, Result};
-use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, NodeSet, ValueType, Values};
+use crate::mesh::data::GMSH_PHYSICAL;
+use crate::mesh::{DataArray, ElementKind, ElementSet, LowerKind, Mesh, NodeSet, ValueType, Values};
 
 /// The cell array of each element's block id (0 for boundary cells).
 pub const BLOCK_ID: &str = "exodus:block_id";
@@ -375,7 +380,19 @@ fn read_file(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
     let nss = r.dim("num_side_sets");
     let ss_ids = r.ids("ss_prop1", nss)?;
     let ss_names = r.names("ss_names", nss)?;
+    // a side that a block of faces holds already is that face, not a new one
     let mut face_of: HashMap<Vec<u32>, u32> = HashMap::new();
+    for (c, &(shape, at)) in elems.iter().enumerate() {
+        let nodes = match shape {
+            Shape::Line => 2,
+            Shape::Elem(ElementKind::Triangle) => 3,
+            Shape::Elem(ElementKind::Quadrilateral) => 4,
+            _ => continue,
+        };
+        let mut key = raw.conn[at..at + nodes].to_vec();
+        key.sort_unstable();
+        face_of.entry(key).or_insert(c as u32);
+    }
     for s in 0..nss {
         let name = if ss_names[s].is_empty() {
             format!("sideset_{}", ss_ids[s])
@@ -433,6 +450,7 @@ fn read_file(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
     let nns = r.dim("num_node_sets");
     let ns_ids = r.ids("ns_prop1", nns)?;
     let ns_names = r.names("ns_names", nns)?;
+    let mut set_ids = Vec::with_capacity(nns);
     for s in 0..nns {
         let name = if ns_names[s].is_empty() {
             format!("nodeset_{}", ns_ids[s])
@@ -452,11 +470,16 @@ fn read_file(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
         }
         vertices.sort_unstable();
         vertices.dedup();
-        raw.node_sets.push(NodeSet { name, vertices });
+        if name.eq_ignore_ascii_case(super::abaqus::FIXED_SET) {
+            vertices.iter().for_each(|&v| raw.fix(v as usize));
+        } else {
+            raw.node_sets.push(NodeSet { name, vertices });
+            set_ids.push(ns_ids[s]);
+        }
     }
-    if nns > 0 {
+    if !set_ids.is_empty() {
         raw.field_data
-            .push(DataArray::new(NODE_SET_IDS, ValueType::I64, 1, Values::Int(ns_ids)));
+            .push(DataArray::new(NODE_SET_IDS, ValueType::I64, 1, Values::Int(set_ids)));
     }
     if nss > 0 {
         raw.field_data
@@ -537,67 +560,200 @@ fn read_file(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
             }
         }
     }
+    raw.point_data = join_components(std::mem::take(&mut raw.point_data));
+    raw.cell_data = join_components(std::mem::take(&mut raw.cell_data));
     Ok(raw)
 }
+
+/// The names of component `c` of `k` as variables: `X`, `Y`, `Z` for
+/// vectors (`velocityX`, which VTK and meshio read as one vector
+/// `velocity`), else `_0`, `_1`, ...
+fn component_suffix(c: usize, k: usize) -> String {
+    if k <= 3 {
+        ["X", "Y", "Z"][c].to_string()
+    } else {
+        format!("_{c}")
+    }
+}
+
+/// Consecutive one-component variables `NAMEX`, `NAMEY`(, `NAMEZ`) (also
+/// lower case, also `NAME_X`) or `NAME_0`, `NAME_1`, ... joined into one
+/// array of several components.
+fn join_components(arrays: Vec<DataArray>) -> Vec<DataArray> {
+    let floats = |a: &DataArray| match &a.values {
+        Values::Float(v) if a.components == 1 => Some(v.len()),
+        _ => None,
+    };
+    // the length of the run of components starting at `i`, and its base name
+    let run = |i: usize| -> Option<(usize, String)> {
+        let a = &arrays[i];
+        let len = floats(a)?;
+        let (base, style) = [("X", 0), ("x", 1), ("_0", 2)]
+            .iter()
+            .find_map(|&(s, style)| a.name.strip_suffix(s).map(|b| (b, style)))
+            .filter(|(b, _)| !b.is_empty())?;
+        let name = |c: usize| match style {
+            0 => format!("{base}{}", ["X", "Y", "Z"][c]),
+            1 => format!("{base}{}", ["x", "y", "z"][c]),
+            _ => format!("{base}_{c}"),
+        };
+        let k = (0..arrays.len() - i)
+            .take_while(|&c| {
+                (style == 2 || c < 3) && arrays[i + c].name == name(c) && floats(&arrays[i + c]) == Some(len)
+            })
+            .count();
+        let base = base.strip_suffix('_').filter(|b| !b.is_empty()).unwrap_or(base);
+        (k >= 2).then(|| (k, base.to_string()))
+    };
+    let runs: Vec<Option<(usize, String)>> = (0..arrays.len()).map(run).collect();
+    let mut out = Vec::with_capacity(arrays.len());
+    let mut arrays = arrays.into_iter().enumerate();
+    while let Some((i, a)) = arrays.next() {
+        let Some((k, base)) = runs[i].clone() else {
+            out.push(a);
+            continue;
+        };
+        let parts: Vec<DataArray> = std::iter::once(a)
+            .chain(arrays.by_ref().take(k - 1).map(|p| p.1))
+            .collect();
+        let len = parts[0].values.len();
+        let mut joined = vec![0.0; len * k];
+        for (c, p) in parts.iter().enumerate() {
+            for j in 0..len {
+                joined[j * k + c] = p.get_f64(j);
+            }
+        }
+        out.push(DataArray::new(base, ValueType::F64, k, Values::Float(joined)));
+    }
+    out
+}
+
+/// An element variable: its name and values on the elements and on the
+/// boundary cells, where the mesh has them.
+type Var = (String, Option<Vec<f64>>, Option<Vec<f64>>);
 
 /// Internal arrays of this and other formats: not written as variables.
 fn internal(name: &str) -> bool {
     name.contains(':') || name == "fixed"
 }
 
-/// One block of the output: its id, name and elements (mesh order).
+/// One block of the output: its id, name, Exodus type and cells (mesh
+/// order): elements, or lower cells in a block of their own (`lower`).
 struct Block {
     id: i64,
     name: String,
-    kind: ElementKind,
-    elements: Vec<usize>,
+    elem_type: &'static str,
+    nodes: usize,
+    lower: bool,
+    cells: Vec<usize>,
 }
 
-fn blocks(mesh: &Mesh) -> Vec<Block> {
-    let ids: Option<Vec<i64>> = mesh
-        .data
-        .cell
+/// The integer array called `name` with one value per cell, if any.
+fn int_values(arrays: &[DataArray], name: &str, len: usize) -> Option<Vec<i64>> {
+    arrays
         .iter()
-        .find(|a| a.name == BLOCK_ID && a.components == 1)
+        .find(|a| a.name == name && a.components == 1)
         .and_then(|a| match &a.values {
-            Values::Int(v) if v.len() == mesh.num_elements() => Some(v.clone()),
+            Values::Int(v) if v.len() == len => Some(v.clone()),
             _ => None,
-        });
+        })
+}
+
+fn lower_type(kind: LowerKind) -> (&'static str, usize) {
+    match kind {
+        LowerKind::Vertex => ("SPHERE", 1),
+        LowerKind::Line => ("BAR2", 2),
+        LowerKind::Triangle => ("TRI3", 3),
+        LowerKind::Quadrilateral => ("QUAD4", 4),
+    }
+}
+
+/// The blocks of the output: elements by [`BLOCK_ID`] (by Gmsh physical
+/// group, else by kind, where the mesh has none), then the lower cells the
+/// same way, except the faces that are only the sides of a side set (a
+/// block id of 0), which the side sets hold.
+fn blocks(mesh: &Mesh) -> Vec<Block> {
+    let ne = mesh.num_elements();
+    let nl = mesh.lower.len();
+    let keys = |arrays: &[DataArray], len: usize| {
+        let ids = int_values(arrays, BLOCK_ID, len);
+        let by_id = ids.is_some();
+        (ids.or_else(|| int_values(arrays, GMSH_PHYSICAL, len)), by_id)
+    };
+    let (elem_keys, elem_by_id) = keys(&mesh.data.cell, ne);
+    let (lower_keys, lower_by_id) = keys(&mesh.data.lower, nl);
+    let in_side_set: Vec<bool> = {
+        let mut v = vec![false; nl];
+        for s in mesh.data.element_sets.iter().filter(|s| s.elements.is_empty()) {
+            s.lower.iter().for_each(|&c| v[c as usize] = true);
+        }
+        v
+    };
     let mut out: Vec<Block> = Vec::new();
-    let mut at: HashMap<(i64, ElementKind), usize> = HashMap::new();
-    for e in 0..mesh.num_elements() {
-        let kind = mesh.kinds[e];
-        // a block holds one kind: kinds beyond the first get blocks of their own
-        let key = (ids.as_ref().map_or(0, |v| v[e]), kind);
-        let i = *at.entry(key).or_insert_with(|| {
+    // (lower, key, type) -> block; a block holds one type
+    let mut at: HashMap<(bool, i64, &'static str), usize> = HashMap::new();
+    let mut add = |lower: bool, key: i64, (elem_type, nodes): (&'static str, usize), c: usize| {
+        let i = *at.entry((lower, key, elem_type)).or_insert_with(|| {
             out.push(Block {
-                id: 0,
+                id: key,
                 name: String::new(),
-                kind,
-                elements: Vec::new(),
+                elem_type,
+                nodes,
+                lower,
+                cells: Vec::new(),
             });
             out.len() - 1
         });
-        out[i].elements.push(e);
+        out[i].cells.push(c);
+    };
+    for e in 0..ne {
+        let kind = mesh.kinds[e];
+        let t = (type_name(kind), kind.num_vertices().unwrap_or(0));
+        add(false, elem_keys.as_ref().map_or(0, |v| v[e]), t, e);
+    }
+    for (c, (kind, _)) in mesh.lower.iter().enumerate() {
+        let key = lower_keys.as_ref().map_or(0, |v| v[c]);
+        if lower_by_id && key == 0 && in_side_set[c] && *kind != LowerKind::Vertex {
+            continue;
+        }
+        add(true, key, lower_type(*kind), c);
     }
     let mut used = std::collections::HashSet::new();
     for (i, b) in out.iter_mut().enumerate() {
-        let wanted = ids.as_ref().map_or(i as i64 + 1, |v| v[b.elements[0]]);
+        let by_id = if b.lower { lower_by_id } else { elem_by_id };
+        let wanted = if by_id { b.id } else { i as i64 + 1 };
+        let physical = (!by_id).then_some(b.id).filter(|&t| t > 0);
         b.id = if wanted > 0 && used.insert(wanted) {
             wanted
         } else {
             (1..).find(|&k| used.insert(k)).expect("a free id")
         };
-        b.name = mesh
-            .data
-            .element_sets
-            .iter()
-            .find(|s| {
-                s.lower.is_empty()
-                    && s.elements.len() == b.elements.len()
-                    && s.elements.iter().zip(&b.elements).all(|(&a, &c)| a as usize == c)
-            })
-            .map_or_else(|| format!("block_{}", b.id), |s| s.name.clone());
+        let same = |members: &[u32]| {
+            members.len() == b.cells.len() && members.iter().zip(&b.cells).all(|(&a, &c)| a as usize == c)
+        };
+        let set = mesh.data.element_sets.iter().find(|s| {
+            if b.lower {
+                s.elements.is_empty() && same(&s.lower)
+            } else {
+                s.lower.is_empty() && same(&s.elements)
+            }
+        });
+        let dim = if b.lower {
+            [0, 0, 1, 2, 2][b.nodes]
+        } else {
+            mesh.dim() as i32
+        };
+        let group = physical.and_then(|t| {
+            mesh.data
+                .physical_names
+                .iter()
+                .find(|p| i64::from(p.tag) == t && p.dim == dim)
+        });
+        b.name = match (set, group) {
+            (Some(s), _) => s.name.clone(),
+            (None, Some(p)) => p.name.clone(),
+            (None, None) => format!("block_{}", b.id),
+        };
     }
     out
 }
@@ -665,12 +821,21 @@ type SideSet = (i64, String, Vec<(i32, i32)>);
 
 /// Cell sets of boundary cells as side sets: each face is the side of an
 /// element with the same vertices.
-fn side_sets(mesh: &Mesh, file_pos: &[usize]) -> std::result::Result<Vec<SideSet>, WriteError> {
+fn side_sets(mesh: &Mesh, file_pos: &[usize], blocks: &[Block]) -> std::result::Result<Vec<SideSet>, WriteError> {
+    // a set that is exactly a block of boundary cells is that block already
+    let is_block = |s: &ElementSet| {
+        blocks.iter().any(|b| {
+            b.lower
+                && b.name == s.name
+                && b.cells.len() == s.lower.len()
+                && b.cells.iter().zip(&s.lower).all(|(&c, &l)| c == l as usize)
+        })
+    };
     let sets: Vec<_> = mesh
         .data
         .element_sets
         .iter()
-        .filter(|s| s.elements.is_empty() && !s.lower.is_empty())
+        .filter(|s| s.elements.is_empty() && !s.lower.is_empty() && !is_block(s))
         .collect();
     if sets.is_empty() {
         return Ok(Vec::new());
@@ -741,13 +906,18 @@ fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {
         2
     };
     let blocks = blocks(mesh);
-    // file order: block by block
-    let order: Vec<usize> = blocks.iter().flat_map(|b| b.elements.iter().copied()).collect();
+    let num_elem: usize = blocks.iter().map(|b| b.cells.len()).sum();
+    // file order: element blocks come first, block by block
+    let order: Vec<usize> = blocks
+        .iter()
+        .filter(|b| !b.lower)
+        .flat_map(|b| b.cells.iter().copied())
+        .collect();
     let mut file_pos = vec![0; mesh.num_elements()];
     for (i, &e) in order.iter().enumerate() {
         file_pos[e] = i;
     }
-    let sides = side_sets(mesh, &file_pos)?;
+    let sides = side_sets(mesh, &file_pos, &blocks)?;
     let node_sets = &mesh.data.node_sets;
 
     // classic 64-bit-offset netCDF, not netCDF-4: every Exodus reader takes it,
@@ -769,7 +939,7 @@ fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {
         ("len_name", LEN_NAME),
         ("num_dim", num_dim),
         ("num_nodes", n),
-        ("num_elem", mesh.num_elements()),
+        ("num_elem", num_elem),
         ("num_el_blk", blocks.len()),
     ] {
         f.add_dimension(name, len).map_err(nc)?;
@@ -832,55 +1002,72 @@ fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {
         &blocks.iter().map(|b| b.name.clone()).collect::<Vec<_>>(),
     )?;
     for (i, b) in blocks.iter().enumerate() {
-        let nv = b.kind.num_vertices().unwrap_or(0);
         let (de, dn) = (format!("num_el_in_blk{}", i + 1), format!("num_nod_per_el{}", i + 1));
-        f.add_dimension(&de, b.elements.len()).map_err(nc)?;
-        f.add_dimension(&dn, nv).map_err(nc)?;
+        f.add_dimension(&de, b.cells.len()).map_err(nc)?;
+        f.add_dimension(&dn, b.nodes).map_err(nc)?;
+        let vertices = |c: usize| -> &[u32] { if b.lower { &mesh.lower[c].1 } else { mesh.element(c) } };
         let conn: Vec<i32> = b
-            .elements
+            .cells
             .iter()
-            .flat_map(|&e| mesh.element(e).iter().map(|&v| v as i32 + 1))
+            .flat_map(|&c| vertices(c).iter().map(|&v| v as i32 + 1))
             .collect();
         let name = format!("connect{}", i + 1);
         put_ints(&mut f, &mut pending, &name, &[&de, &dn], &conn)?;
         f.variable_mut(&name)
             .expect("just added")
-            .put_attribute("elem_type", type_name(b.kind))
+            .put_attribute("elem_type", b.elem_type)
             .map_err(nc)?;
     }
 
-    let int_array = |arrays: &[DataArray], name: &str, len: usize| -> Option<Vec<i64>> {
-        arrays
-            .iter()
-            .find(|a| a.name == name && a.components == 1)
-            .and_then(|a| match &a.values {
-                Values::Int(v) if v.len() == len => Some(v.clone()),
-                _ => None,
-            })
-    };
-    if let Some(map) = int_array(&mesh.data.point, NODE_ID, n) {
+    if let Some(map) = int_values(&mesh.data.point, NODE_ID, n) {
         let map: Vec<i32> = map
             .iter()
             .map(|&v| to_i32(v, "node number"))
             .collect::<std::result::Result<_, _>>()?;
         put_ints(&mut f, &mut pending, "node_num_map", &["num_nodes"], &map)?;
     }
-    if let Some(map) = int_array(&mesh.data.cell, ELEMENT_ID, mesh.num_elements()) {
-        let map: Vec<i32> = order
+    if let Some(map) = int_values(&mesh.data.cell, ELEMENT_ID, mesh.num_elements()) {
+        // boundary cells keep their numbers where they have them, else follow
+        let lower = int_values(&mesh.data.lower, ELEMENT_ID, mesh.lower.len());
+        let mut next = map.iter().copied().max().unwrap_or(0);
+        let mut numbers = order.iter().map(|&e| map[e]).collect::<Vec<_>>();
+        for b in blocks.iter().filter(|b| b.lower) {
+            for &c in &b.cells {
+                numbers.push(match lower.as_ref().map(|l| l[c]) {
+                    Some(k) if k > 0 => k,
+                    _ => {
+                        next += 1;
+                        next
+                    }
+                });
+            }
+        }
+        let numbers: Vec<i32> = numbers
             .iter()
-            .map(|&e| to_i32(map[e], "element number"))
+            .map(|&v| to_i32(v, "element number"))
             .collect::<std::result::Result<_, _>>()?;
-        put_ints(&mut f, &mut pending, "elem_num_map", &["num_elem"], &map)?;
+        put_ints(&mut f, &mut pending, "elem_num_map", &["num_elem"], &numbers)?;
     }
 
     // a netCDF dimension of length 0 is unlimited: empty sets are not written
-    let ns_ids = int_array(&mesh.data.field, NODE_SET_IDS, node_sets.len())
+    let ns_ids = int_values(&mesh.data.field, NODE_SET_IDS, node_sets.len())
         .unwrap_or_else(|| (1..=node_sets.len() as i64).collect());
-    let node_sets: Vec<(i64, &NodeSet)> = ns_ids
+    let mut node_sets: Vec<(i64, &NodeSet)> = ns_ids
         .into_iter()
         .zip(node_sets)
         .filter(|(_, s)| !s.vertices.is_empty())
         .collect();
+    // fixed vertices as a node set of their own, which reads back as fixed
+    let fixed = NodeSet {
+        name: super::abaqus::FIXED_SET.to_string(),
+        vertices: (0..n as u32)
+            .filter(|&v| mesh.fixed.get(v as usize) == Some(&true))
+            .collect(),
+    };
+    if !fixed.vertices.is_empty() {
+        let id = node_sets.iter().map(|s| s.0).max().unwrap_or(0) + 1;
+        node_sets.push((id, &fixed));
+    }
     if !node_sets.is_empty() {
         f.add_dimension("num_node_sets", node_sets.len()).map_err(nc)?;
         let ids: Vec<i32> = node_sets
@@ -973,7 +1160,7 @@ fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {
         (0..k)
             .map(|c| {
                 (
-                    format!("{}_{c}", a.name),
+                    format!("{}{}", a.name, component_suffix(c, k)),
                     values.iter().skip(c).step_by(k).copied().collect(),
                 )
             })
@@ -1006,16 +1193,29 @@ fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {
             )?;
         }
     }
-    let mut element: Vec<(String, Vec<f64>)> = cell_data
+    // element variables: values on the elements and on the boundary cells,
+    // each where the mesh has them (the truth table says which blocks)
+    let mut element: Vec<Var> = cell_data
         .iter()
-        .map(|c| (c.name.to_string(), c.values.to_vec()))
+        .map(|c| (c.name.to_string(), Some(c.values.to_vec()), None))
         .collect();
-    for a in mesh.data.cell.iter().filter(|a| !internal(&a.name)) {
-        for v in split(a) {
-            if !element.iter().any(|e| e.0 == v.0) {
-                element.push(v);
+    for (lower, arrays) in [(false, &mesh.data.cell), (true, &mesh.data.lower)] {
+        for a in arrays.iter().filter(|a| !internal(&a.name)) {
+            for (name, values) in split(a) {
+                let at = match element.iter().position(|e| e.0 == name) {
+                    Some(at) => at,
+                    None => {
+                        element.push((name, None, None));
+                        element.len() - 1
+                    }
+                };
+                let slot = if lower { &mut element[at].2 } else { &mut element[at].1 };
+                slot.get_or_insert(values);
             }
         }
+    }
+    fn values_of<'a>(v: &'a Var, b: &Block) -> Option<&'a Vec<f64>> {
+        if b.lower { v.2.as_ref() } else { v.1.as_ref() }
     }
     if !element.is_empty() {
         f.add_dimension("num_elem_var", element.len()).map_err(nc)?;
@@ -1031,16 +1231,19 @@ fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {
             &mut pending,
             "elem_var_tab",
             &["num_el_blk", "num_elem_var"],
-            &vec![1; blocks.len() * element.len()],
+            &blocks
+                .iter()
+                .flat_map(|b| element.iter().map(|v| i32::from(values_of(v, b).is_some())))
+                .collect::<Vec<_>>(),
         )?;
-        for (j, (_, values)) in element.iter().enumerate() {
+        for (j, var) in element.iter().enumerate() {
             for (i, b) in blocks.iter().enumerate() {
-                let v: Vec<f64> = b.elements.iter().map(|&e| values[e]).collect();
-                let var = format!("vals_elem_var{}eb{}", j + 1, i + 1);
+                let Some(values) = values_of(var, b) else { continue };
+                let v: Vec<f64> = b.cells.iter().map(|&c| values[c]).collect();
                 put(
                     &mut f,
                     &mut pending,
-                    &var,
+                    &format!("vals_elem_var{}eb{}", j + 1, i + 1),
                     &["time_step", &format!("num_el_in_blk{}", i + 1)],
                     v,
                     true,
@@ -1053,4 +1256,43 @@ fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {
         write(&mut f)?;
     }
     f.close().map_err(nc)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one(name: &str, v: &[f64]) -> DataArray {
+        DataArray::new(name, ValueType::F64, 1, Values::Float(v.to_vec()))
+    }
+
+    #[test]
+    fn components_join_by_their_suffixes_and_nothing_else() {
+        let arrays = vec![
+            one("dX", &[1.0, 2.0]),
+            one("dY", &[3.0, 4.0]),
+            one("dZ", &[5.0, 6.0]),
+            one("AX", &[0.0, 0.0]),
+            one("t_0", &[1.0, 1.0]),
+            one("t_1", &[2.0, 2.0]),
+            one("t_2", &[3.0, 3.0]),
+            one("t_3", &[4.0, 4.0]),
+            one("q_x", &[7.0, 8.0]),
+            one("q_y", &[9.0, 10.0]),
+            one("rX", &[1.0]),
+            one("rY", &[1.0, 2.0]),
+        ];
+        let got = join_components(arrays);
+        let names: Vec<(&str, usize)> = got.iter().map(|a| (a.name.as_str(), a.components)).collect();
+        assert_eq!(names, [("d", 3), ("AX", 1), ("t", 4), ("q", 2), ("rX", 1), ("rY", 1)]);
+        assert_eq!(got[0].values, Values::Float(vec![1.0, 3.0, 5.0, 2.0, 4.0, 6.0]));
+        assert_eq!(
+            got[2].values,
+            Values::Float(vec![1.0, 2.0, 3.0, 4.0, 1.0, 2.0, 3.0, 4.0])
+        );
+        // and what the writer names is what the reader joins
+        let names: Vec<String> = (0..3).map(|c| format!("v{}", component_suffix(c, 3))).collect();
+        let got = join_components(names.iter().map(|n| one(n, &[1.0])).collect());
+        assert_eq!((got[0].name.as_str(), got[0].components), ("v", 3));
+    }
 }

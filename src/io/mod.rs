@@ -109,7 +109,7 @@ pub enum Format {
     Medit,
     /// Abaqus input (`.inp`), ASCII.
     Abaqus,
-    /// Exodus II (`.exo`, `.e`): netCDF-4 (cargo feature `exodus`).
+    /// Exodus II (`.exo`, `.e`): netCDF, classic or netCDF-4 (cargo feature `exodus`).
     Exodus,
     /// OpenFOAM polyMesh case (a folder), ASCII.
     OpenFoam,

@@ -138,13 +138,16 @@ fn exodus_round_trip_keeps_blocks_sets_and_variables() {
         let old = (0..m.num_elements()).find(|&o| elements_of(&m, o) == key).unwrap();
         assert_eq!(p[e], old_p[old], "element {e}");
     }
-    // the nodal vector comes back as one variable per component
-    let v = floats(array(&m.data.point, "velocity"));
-    for c in 0..3 {
-        let got = floats(array(&back.data.point, &format!("velocity_{c}")));
-        let want: Vec<f64> = v.iter().skip(c).step_by(3).copied().collect();
-        assert_eq!(got, want);
-    }
+    // the nodal vector is written as velocityX, Y, Z and read back as one array
+    let v = array(&back.data.point, "velocity");
+    assert_eq!(v.components, 3);
+    assert_eq!(floats(v), floats(array(&m.data.point, "velocity")));
+    assert!(
+        back.data
+            .point
+            .iter()
+            .all(|a| !a.name.starts_with("velocity") || a.name == "velocity")
+    );
     let inlet = back
         .data
         .node_sets
@@ -343,4 +346,77 @@ fn broken_exodus_files_fail_cleanly() {
     let o = meshsmooth(&["smooth", s(&bad), "-o", s(&dir.path().join("out.vtu"))]);
     assert!(!o.status.success());
     assert!(!dir.path().join("out.vtu").exists());
+}
+
+/// A Gmsh mesh with physical groups (a volume and its skin) smoothed to
+/// Exodus: each group is a block of its name, the skin a block of
+/// triangles, read so by meshsmooth, by vtkExodusIIReader and by meshio;
+/// fixed vertices come back fixed, and a nodal vector is one 3-component
+/// array for VTK as for us.
+#[test]
+fn gmsh_groups_become_named_blocks_that_vtk_and_meshio_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop/gmsh_box_phys_msh41a.msh");
+    let input = io::read(&src).unwrap();
+    let (ne, nl) = (input.num_elements(), input.lower.len());
+    assert!(nl > 0 && input.lower.iter().all(|(k, _)| *k == LowerKind::Triangle));
+    let output = dir.path().join("box.exo");
+    let o = meshsmooth(&["smooth", s(&src), "-o", s(&output), "--max-iter", "5", "-q"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = io::read(&output).unwrap();
+    assert_ne!(out.points, input.points, "smoothed");
+    let set = |m: &Mesh, name: &str| -> (usize, usize) {
+        let s = m.data.element_sets.iter().find(|s| s.name == name);
+        let s = s.unwrap_or_else(|| panic!("no set {name}"));
+        (s.elements.len(), s.lower.len())
+    };
+    assert_eq!(set(&out, "solid"), (ne, 0));
+    assert_eq!(set(&out, "skin"), (0, nl));
+    assert!(out.data.element_sets.iter().all(|s| !s.name.starts_with("sideset")));
+    // the skin's vertices were fixed (they are a boundary): they stay so
+    let skin: std::collections::BTreeSet<u32> = input.lower.iter().flat_map(|c| c.1.clone()).collect();
+    assert!(skin.iter().all(|&v| out.is_fixed(v as usize)));
+
+    let mut m = out.clone();
+    m.data.point.push(DataArray::new(
+        "velocity",
+        ValueType::F64,
+        3,
+        Values::Float((0..3 * m.num_points()).map(|i| i as f64 * 0.25).collect()),
+    ));
+    let again = dir.path().join("again.exo");
+    io::write(&again, &m, Format::Exodus, &[]).unwrap();
+    let back = io::read(&again).unwrap();
+    assert_eq!(back.lower.len(), nl);
+    assert_eq!(
+        floats(array(&back.data.point, "velocity")),
+        floats(array(&m.data.point, "velocity"))
+    );
+
+    let Some(python) = python() else {
+        return;
+    };
+    let read = r#"
+import sys, json, meshio, vtk
+r = vtk.vtkExodusIIReader()
+r.SetFileName(sys.argv[1])
+r.UpdateInformation()
+r.SetAllArrayStatus(vtk.vtkExodusIIReader.NODAL, 1)
+r.Update()
+blocks = {}
+out = r.GetOutput().GetBlock(0)
+for i in range(out.GetNumberOfBlocks()):
+    name = out.GetMetaData(i).Get(vtk.vtkCompositeDataSet.NAME())
+    blocks[name] = out.GetBlock(i).GetNumberOfCells()
+vel = out.GetBlock(0).GetPointData().GetArray("velocity")
+m = meshio.read(sys.argv[1])
+print(json.dumps({"vtk_blocks": blocks, "vtk_velocity": vel.GetNumberOfComponents() if vel else 0,
+  "meshio": {c.type: len(c.data) for c in m.cells}}))
+"#;
+    let got = py(&python, read, &[&again]);
+    assert_eq!(got["vtk_blocks"]["solid"], ne, "{got}");
+    assert_eq!(got["vtk_blocks"]["skin"], nl, "{got}");
+    assert_eq!(got["vtk_velocity"], 3, "{got}");
+    assert_eq!(got["meshio"]["tetra"], ne, "{got}");
+    assert_eq!(got["meshio"]["triangle"], nl, "{got}");
 }

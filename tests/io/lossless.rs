@@ -191,6 +191,7 @@ fn gmsh_views_survive_msh_and_vtu_round_trips() {
             let ext = match f {
                 Format::VtkAscii | Format::VtkBinary => "vtk",
                 Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
+                Format::Exodus => "exo",
                 // none holds arrays of values
                 Format::Medit | Format::Abaqus | Format::OpenFoam | Format::OpenFoamBinary => continue,
                 _ => "msh",
