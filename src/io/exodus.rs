@@ -240,16 +240,8 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
 }
 
 fn read_file(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh> {
-    // netCDF reads files by name: a stream's bytes go to a private copy first
-    let regular = std::fs::metadata(path).is_ok_and(|m| m.is_file());
-    let copy;
-    let open_path = if regular {
-        path
-    } else {
-        copy = tempfile::NamedTempFile::new().map_err(|e| Error::io(path, e))?;
-        std::fs::write(copy.path(), data).map_err(|e| Error::io(path, e))?;
-        copy.path()
-    };
+    let (_copy, open_path) = super::on_disk(path, data)?;
+    let open_path = open_path.as_path();
     if let Some(end) = super::netcdf_classic::data_end(data) {
         let (end, what) =
             end.map_err(|why| Error::parse(path, None, format!("Exodus II: a damaged netCDF header: {why}")))?;
@@ -890,12 +882,7 @@ pub(crate) fn write(w: &mut dyn std::io::Write, mesh: &Mesh, cell_data: &[CellDa
             "Exodus II: element {e} is a polyhedron, which this writer does not write (write VTK or OpenFOAM)"
         ))));
     }
-    let dir = tempfile::tempdir().map_err(WriteError::Io)?;
-    let tmp = dir.path().join("out.exo");
-    build(&tmp, mesh, cell_data)?;
-    let mut f = std::fs::File::open(&tmp).map_err(WriteError::Io)?;
-    std::io::copy(&mut f, w).map_err(WriteError::Io)?;
-    Ok(())
+    super::through_file(w, |path| build(path, mesh, cell_data))
 }
 
 fn build(path: &Path, mesh: &Mesh, cell_data: &[CellData]) -> WriteResult {

@@ -1,4 +1,4 @@
-//! Mesh files: VTK legacy and XML, Gmsh, Medit, Abaqus, Exodus II, OpenFOAM, STL, OBJ, PLY; atomic writes.
+//! Mesh files: VTK legacy, XML and HDF, Gmsh, Medit, Abaqus, Exodus II, OpenFOAM, STL, OBJ, PLY; atomic writes.
 //!
 //! Readers produce a `RawMesh` (every cell in file order, with its shape);
 //! `RawMesh::into_mesh` then splits top-dimensional elements from lower
@@ -35,6 +35,8 @@
 //! - Exodus II (cargo feature `exodus`) keeps its blocks (element sets and
 //!   the cell array `exodus:block_id`), node sets, side sets (boundary cells
 //!   in element sets), number maps and last time step's variables (see `exodus`);
+//! - VTKHDF (cargo feature `vtkhdf`) keeps what a `.vtu` keeps, its pieces
+//!   merged on reading (see `vtkhdf`);
 //! - an OpenFOAM case (a folder) keeps its faces, patches and zones in
 //!   `MeshData::polymesh`, which only the OpenFOAM writer puts back; its
 //!   patches are physical groups and its zones sets (see `openfoam`);
@@ -65,6 +67,8 @@ mod smoothed;
 mod stl;
 mod vtk;
 mod vtk_cells;
+#[cfg(feature = "vtkhdf")]
+mod vtkhdf;
 mod vtu;
 
 pub use atomic::{Staged, is_stream, same_file, same_target, stage, write_atomic};
@@ -111,6 +115,8 @@ pub enum Format {
     Abaqus,
     /// Exodus II (`.exo`, `.e`): netCDF, classic or netCDF-4 (cargo feature `exodus`).
     Exodus,
+    /// VTKHDF (`.vtkhdf`, `.hdf`): VTK's HDF5 format, an UnstructuredGrid (cargo feature `vtkhdf`).
+    VtkHdf,
     /// OpenFOAM polyMesh case (a folder), ASCII.
     OpenFoam,
     /// OpenFOAM polyMesh case, binary.
@@ -132,15 +138,20 @@ pub enum Format {
 const NO_EXODUS: &str = "an Exodus II (netCDF) file, which this build of meshsmooth cannot read or write: \
      build it with `--features exodus` (needs libnetCDF, Debian's libnetcdf-dev)";
 
+/// What a build without the `vtkhdf` feature says of a VTKHDF file.
+#[cfg(not(feature = "vtkhdf"))]
+const NO_VTKHDF: &str = "a VTKHDF (HDF5) file, which this build of meshsmooth cannot read or write: \
+     build it with `--features vtkhdf` (needs libHDF5, Debian's libhdf5-dev)";
+
 /// How much of a file [`Format::of_file`] reads: a VTU file's first array
 /// (and its compressor attribute) sits within the header.
 const HEAD_BYTES: u64 = 64 << 10;
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), .exo/.e (Exodus II), .stl (STL), .obj (Wavefront OBJ), .ply (PLY), an OpenFOAM case folder or its .foam file";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), .exo/.e (Exodus II), .vtkhdf/.hdf (VTKHDF), .stl (STL), .obj (Wavefront OBJ), .ply (PLY), an OpenFOAM case folder or its .foam file";
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 19] = [
+    pub const ALL: [Format; 20] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
@@ -153,6 +164,7 @@ impl Format {
         Format::Medit,
         Format::Abaqus,
         Format::Exodus,
+        Format::VtkHdf,
         Format::OpenFoam,
         Format::OpenFoamBinary,
         Format::StlBinary,
@@ -186,6 +198,7 @@ impl Format {
             Some("mesh") => Ok(Format::Medit),
             Some("inp") => Ok(Format::Abaqus),
             Some("exo" | "e" | "ex2" | "exii" | "gen" | "g") => Ok(Format::Exodus),
+            Some("vtkhdf" | "hdf" | "hdf5" | "h5") => Ok(Format::VtkHdf),
             Some("stl") => Ok(Format::StlBinary),
             Some("obj") => Ok(Format::Obj),
             Some("ply") => Ok(Format::PlyBinary),
@@ -241,6 +254,7 @@ impl Format {
                 | Format::StlBinary
                 | Format::PlyBinary
                 | Format::Exodus
+                | Format::VtkHdf
         )
     }
 
@@ -318,6 +332,7 @@ impl Format {
             Family::Medit => Some(Format::Medit),
             Family::Abaqus => Some(Format::Abaqus),
             Family::Exodus => Some(Format::Exodus),
+            Family::Hdf5 => Some(hdf5_format(path, &head)),
             Family::Stl => {
                 let len = std::fs::metadata(path).ok()?.len();
                 let n = head
@@ -358,6 +373,7 @@ impl Format {
             Format::Medit => "medit",
             Format::Abaqus => "abaqus",
             Format::Exodus => "exodus",
+            Format::VtkHdf => "vtkhdf",
             Format::OpenFoam => "openfoam",
             Format::OpenFoamBinary => "openfoam-binary",
             Format::StlBinary => "stl",
@@ -375,7 +391,7 @@ impl Format {
         match self {
             Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => true,
             Format::Msh22Ascii | Format::Msh22Binary | Format::Msh41Ascii | Format::Msh41Binary => true,
-            Format::Medit | Format::Abaqus | Format::Exodus => true,
+            Format::Medit | Format::Abaqus | Format::Exodus | Format::VtkHdf => true,
             Format::OpenFoam | Format::OpenFoamBinary => true,
             Format::StlBinary | Format::StlAscii | Format::Obj | Format::PlyBinary | Format::PlyAscii => false,
         }
@@ -400,6 +416,7 @@ impl Format {
                 | Format::PlyBinary
                 | Format::PlyAscii
                 | Format::Exodus
+                | Format::VtkHdf
         )
     }
 }
@@ -427,6 +444,8 @@ enum Family {
     Medit,
     Abaqus,
     Exodus,
+    /// HDF5: a netCDF-4 (Exodus) or VTKHDF file, told apart by [`hdf5_format`].
+    Hdf5,
     Stl,
     Ply,
     Obj,
@@ -452,13 +471,11 @@ fn sniff(data: &[u8]) -> Option<Family> {
         Some(Family::Stl)
     } else if starts("ply") && head.get(3).is_some_and(|b| b.is_ascii_whitespace()) {
         Some(Family::Ply)
-    } else if head.starts_with(b"CDF\x01")
-        || head.starts_with(b"CDF\x02")
-        || head.starts_with(b"CDF\x05")
-        || head.starts_with(b"\x89HDF\r\n\x1a\n")
-    {
-        // netCDF classic, 64-bit offset, 64-bit data, or netCDF-4 (HDF5)
+    } else if head.starts_with(b"CDF\x01") || head.starts_with(b"CDF\x02") || head.starts_with(b"CDF\x05") {
+        // netCDF classic, 64-bit offset, 64-bit data
         Some(Family::Exodus)
+    } else if head.starts_with(b"\x89HDF\r\n\x1a\n") {
+        Some(Family::Hdf5)
     } else if starts("*") {
         // a keyword or a `**` comment: no other format starts with one
         Some(Family::Abaqus)
@@ -530,6 +547,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
             Format::Medit => Family::Medit,
             Format::Abaqus => Family::Abaqus,
             Format::Exodus => Family::Exodus,
+            Format::VtkHdf => Family::Hdf5,
             Format::StlBinary | Format::StlAscii => Family::Stl,
             Format::Obj => Family::Obj,
             Format::PlyBinary | Format::PlyAscii => Family::Ply,
@@ -544,6 +562,34 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         mesh.validate().map_err(|e| in_file(path, e))?;
         return Ok(mesh);
     }
+    let family = match family {
+        Family::Hdf5 if hdf5_format(path, &data) == Format::Exodus => Family::Exodus,
+        f => f,
+    };
+    if family == Family::Hdf5 {
+        #[cfg(feature = "vtkhdf")]
+        {
+            let (raws, names) = vtkhdf::read(path, &data, &budget)?;
+            drop(data);
+            let pieces = raws
+                .into_iter()
+                .map(|raw| {
+                    let piece = raw.into_mesh(path)?;
+                    piece.validate_structure().map_err(|e| in_file(path, e))?;
+                    Ok(piece)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let mesh = match <[Mesh; 1]>::try_from(pieces) {
+                Ok([one]) => one,
+                Err(pieces) => pvtu::merge_pieces(path, &pieces, &names)?,
+            };
+            mesh.validate().map_err(|e| in_file(path, e))?;
+            check_wedge_convention(path, &mesh)?;
+            return Ok(mesh);
+        }
+        #[cfg(not(feature = "vtkhdf"))]
+        return Err(Error::parse(path, None, NO_VTKHDF));
+    }
     let raw = match family {
         Family::Vtk => vtk::read(path, &data, &budget)?,
         Family::Vtu => vtu::read(path, &data, &budget)?,
@@ -554,6 +600,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         Family::Exodus => exodus::read(path, &data, &budget)?,
         #[cfg(not(feature = "exodus"))]
         Family::Exodus => return Err(Error::parse(path, None, NO_EXODUS)),
+        Family::Hdf5 => unreachable!("read above"),
         Family::Stl => stl::read(path, &data, &budget)?,
         Family::Obj => obj::read(path, &data, &budget)?,
         Family::Ply => ply::read(path, &data, &budget)?,
@@ -570,6 +617,42 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         check_wedge_convention(path, &mesh)?;
     }
     Ok(mesh)
+}
+
+/// Which HDF5 file `path` is: VTKHDF by its extension or, failing that, by
+/// the name of its `VTKHDF` group among `data`'s bytes; else netCDF-4 (Exodus).
+fn hdf5_format(path: &Path, data: &[u8]) -> Format {
+    match Format::from_path(path) {
+        Ok(f @ (Format::VtkHdf | Format::Exodus)) => f,
+        _ if data.windows(6).any(|w| w == b"VTKHDF") => Format::VtkHdf,
+        _ => Format::Exodus,
+    }
+}
+
+/// A path libraries that open files by name (libnetCDF, libHDF5) can open
+/// for `path`, whose bytes are `data`: `path` itself when it is a regular
+/// file, else a private copy of `data` (kept while the guard lives).
+#[cfg(any(feature = "exodus", feature = "vtkhdf"))]
+fn on_disk(path: &Path, data: &[u8]) -> Result<(Option<tempfile::NamedTempFile>, std::path::PathBuf)> {
+    if std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return Ok((None, path.to_path_buf()));
+    }
+    let copy = tempfile::NamedTempFile::new().map_err(|e| Error::io(path, e))?;
+    std::fs::write(copy.path(), data).map_err(|e| Error::io(path, e))?;
+    let p = copy.path().to_path_buf();
+    Ok((Some(copy), p))
+}
+
+/// Output through a library that writes files by name: `build` writes a
+/// private temporary file, which is then copied to `w` (the staged output).
+#[cfg(any(feature = "exodus", feature = "vtkhdf"))]
+fn through_file(w: &mut dyn std::io::Write, build: impl FnOnce(&Path) -> WriteResult) -> WriteResult {
+    let dir = tempfile::tempdir().map_err(WriteError::Io)?;
+    let tmp = dir.path().join("out");
+    build(&tmp)?;
+    let mut f = std::fs::File::open(&tmp).map_err(WriteError::Io)?;
+    std::io::copy(&mut f, w).map_err(WriteError::Io)?;
+    Ok(())
 }
 
 /// Errors about a mesh read from `path` (invalid, inverted, unsupported)
@@ -696,6 +779,10 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[
         Format::Exodus => exodus::write(w, mesh, cell_data),
         #[cfg(not(feature = "exodus"))]
         Format::Exodus => Err(WriteError::Other(Error::Unsupported(NO_EXODUS.into()))),
+        #[cfg(feature = "vtkhdf")]
+        Format::VtkHdf => vtkhdf::write(w, mesh, cell_data),
+        #[cfg(not(feature = "vtkhdf"))]
+        Format::VtkHdf => Err(WriteError::Other(Error::Unsupported(NO_VTKHDF.into()))),
         Format::StlBinary | Format::StlAscii => {
             check_cell_data(mesh, cell_data)?;
             stl::write(w, mesh, format == Format::StlBinary)

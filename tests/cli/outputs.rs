@@ -211,6 +211,8 @@ fn an_output_keeps_the_encoding_of_its_input() {
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
             Format::Medit => "mesh",
             Format::Abaqus => "inp",
+            Format::Exodus => "exo",
+            Format::VtkHdf => "vtkhdf",
             // a case folder
             Format::OpenFoam | Format::OpenFoamBinary => "",
             _ => "msh",

@@ -382,6 +382,8 @@ fn no_panics_on_truncated_or_corrupted_files() {
             Format::VtuAscii | Format::VtuBinary => "vtu",
             Format::Medit => "mesh",
             Format::Abaqus => "inp",
+            Format::Exodus => "exo",
+            Format::VtkHdf => "vtkhdf",
             _ => "msh",
         };
         let src = dir.path().join(format!("src.{ext}"));

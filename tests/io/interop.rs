@@ -92,6 +92,8 @@ fn ext(f: Format) -> &'static str {
         Format::VtkAscii | Format::VtkBinary => "vtk",
         Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
         Format::Medit => "mesh",
+        Format::Exodus => "exo",
+        Format::VtkHdf => "vtkhdf",
         _ => "msh",
     }
 }
@@ -219,7 +221,7 @@ fn check_folder(dir: &Path) -> usize {
             assert_eq!(got.kinds, m.kinds, "{ctx}: kinds");
             assert_eq!(got.conn, m.conn, "{ctx}: connectivity");
             check_lower_cells(&ctx, f, &got, &m);
-            if is_vtk(f) {
+            if is_vtk(f) || f == Format::VtkHdf {
                 // every array, exactly: names, types, components, values
                 assert_arrays_eq(&format!("{ctx}: point data"), &got.data.point, &m.data.point);
                 assert_arrays_eq(&format!("{ctx}: cell data"), &got.data.cell, &m.data.cell);
@@ -227,7 +229,9 @@ fn check_folder(dir: &Path) -> usize {
                 if !m.data.lower.is_empty() {
                     assert_arrays_eq(&format!("{ctx}: lower-cell data"), &got.data.lower, &m.data.lower);
                 }
-                check_by_meshio.push((p, got));
+                if f != Format::VtkHdf {
+                    check_by_meshio.push((p, got));
+                }
             } else if matches!(f, Format::Abaqus | Format::Exodus) {
                 // Gmsh's physical groups come back as element sets (Abaqus) or
                 // blocks (Exodus) of the same name and members

@@ -166,6 +166,8 @@ fn ext(f: Format) -> &'static str {
         Format::VtkAscii | Format::VtkBinary => "vtk",
         Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
         Format::Medit => "mesh",
+        Format::Exodus => "exo",
+        Format::VtkHdf => "vtkhdf",
         _ => "msh",
     }
 }
@@ -225,6 +227,7 @@ fn every_format_round_trips_every_mesh() {
                 | Format::VtuAscii
                 | Format::VtuBinary
                 | Format::VtuZlib
+                | Format::VtkHdf
                 | Format::Medit
                 | Format::Exodus => assert_eq!(got.lower, m.lower, "{ctx}: lower"),
                 // Abaqus has no point element: the fixed flags of points travel as a node set

@@ -192,6 +192,7 @@ fn gmsh_views_survive_msh_and_vtu_round_trips() {
                 Format::VtkAscii | Format::VtkBinary => "vtk",
                 Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => "vtu",
                 Format::Exodus => "exo",
+                Format::VtkHdf => "vtkhdf",
                 // none holds arrays of values
                 Format::Medit | Format::Abaqus | Format::OpenFoam | Format::OpenFoamBinary => continue,
                 _ => "msh",

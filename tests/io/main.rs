@@ -18,3 +18,5 @@ mod lossless;
 mod openfoam;
 mod pvtu;
 mod surface_formats;
+#[cfg(feature = "vtkhdf")]
+mod vtkhdf;
