@@ -405,3 +405,55 @@ fn bad_vtkhdf_files_are_refused_naming_the_file_and_the_problem() {
     assert!(!o.status.success() && text(&o).contains("cut.vtkhdf"), "{}", text(&o));
     assert!(!out.exists());
 }
+
+fn vtk_file(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/interop/vtkhdf")
+        .join(name)
+}
+
+/// The files VTK 9.7.2's vtkHDFWriter wrote of `whole.vtu` (see
+/// `make_vtkhdf.py`): one piece with its arrays, and two gzip-compressed
+/// pieces that share points, read as the whole mesh; the one piece smoothed
+/// keeps its arrays.
+#[test]
+fn vtk_written_files_read_as_the_mesh_they_hold() {
+    let whole = io::read(&vtk_file("whole.vtu")).unwrap();
+    let one = io::read(&vtk_file("one_piece.vtkhdf")).unwrap();
+    assert_eq!(one.points, whole.points);
+    assert_eq!((&one.kinds, &one.conn), (&whole.kinds, &whole.conn));
+    let flow = array(&one.data.point, "flow");
+    assert_eq!((flow.ty, flow.components), (ValueType::F64, 3));
+    for i in 0..one.num_points() {
+        let want = [i as f64, -(i as f64), 0.5 * i as f64];
+        assert_eq!((0..3).map(|c| flow.get_f64(3 * i + c)).collect::<Vec<_>>(), want);
+    }
+    let zone = array(&one.data.cell, "zone");
+    assert_eq!(zone.ty, ValueType::I32);
+    assert!((0..one.num_elements()).all(|e| zone.get_f64(e) == (e % 3) as f64));
+    assert_eq!(
+        array(&one.data.field, "origin").values,
+        Values::Str(vec!["VTK 9.7.2 vtkHDFWriter".into()])
+    );
+
+    let two = io::read(&vtk_file("two_pieces.vtkhdf")).unwrap();
+    assert_eq!(two.num_points(), whole.num_points());
+    assert_eq!(sorted_elements(&two), sorted_elements(&whole));
+    let flow = array(&two.data.point, "flow");
+    for v in 0..two.num_points() {
+        let i = whole.points.iter().position(|p| *p == two.points[v]).unwrap();
+        assert_eq!(flow.get_f64(3 * v + 1), -(i as f64), "point {v}");
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("smoothed.vtkhdf");
+    let o = meshsmooth(&["smooth", s(&vtk_file("one_piece.vtkhdf")), "-o", s(&out)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let got = io::read(&out).unwrap();
+    let q = |m: &Mesh| meshsmooth::report::quality_report(m, &m.points).objective.unwrap();
+    assert!(q(&got) < q(&one) - 1e-3, "{} vs {}", q(&got), q(&one));
+    assert_eq!(array(&got.data.point, "flow"), array(&one.data.point, "flow"));
+    assert_eq!(array(&got.data.cell, "zone"), array(&one.data.cell, "zone"));
+    assert_eq!(array(&got.data.field, "origin"), array(&one.data.field, "origin"));
+    assert!(got.data.cell.iter().any(|a| a.name == "inverse_mean_ratio"));
+}
