@@ -235,6 +235,26 @@ def test_read_write_round_trip(tmp_path, tet_box):
         ms.read(tmp_path / "missing.vtu")
 
 
+def test_formats_of_simulation_codes(tmp_path, tet_box):
+    points, tets, _ = tet_box
+    ms.write(tmp_path / "m.inp", points, tets)
+    p, cells, _ = ms.read(tmp_path / "m.inp")
+    np.testing.assert_array_equal(p, points)
+    np.testing.assert_array_equal(cells[0][1], tets)
+    # Exodus II and VTKHDF link C libraries: a wheel built without them says
+    # which feature to build with, and writes nothing
+    for name, feature in [("m.exo", "exodus"), ("m.vtkhdf", "vtkhdf")]:
+        try:
+            ms.write(tmp_path / name, points, tets)
+        except ValueError as e:
+            assert f"--features {feature}" in str(e), e
+            assert not (tmp_path / name).exists()
+            continue
+        p, cells, _ = ms.read(tmp_path / name)
+        np.testing.assert_array_equal(p, points)
+        np.testing.assert_array_equal(cells[0][1], tets)
+
+
 def test_surface_formats_round_trip(tmp_path):
     # a flat triangulated square: STL, OBJ and PLY hold surfaces only
     n = 4
