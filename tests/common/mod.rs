@@ -55,6 +55,40 @@ pub fn skipped(reason: &str) {
     let _ = std::io::stderr().write_all(format!("{test}: skipped: {reason}\n").as_bytes());
 }
 
+/// A Python that imports `modules` (`"meshio, vtk"`): `MESHSMOOTH_PYTHON`,
+/// else the checkout's `.venv`; `None` (said, see [`skipped`]) where there is
+/// none, except under `CI`, which must have it for the tests of `what` (see
+/// `.ci/install-test-deps`).
+pub fn python_with(modules: &str, what: &str) -> Option<std::path::PathBuf> {
+    let p = std::env::var_os("MESHSMOOTH_PYTHON")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
+    let ok = std::process::Command::new(&p)
+        .args(["-c", &format!("import {modules}")])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "no Python with {modules} at {}, and CI must run {what} (see .ci/install-test-deps)",
+            p.display()
+        );
+        skipped(&format!("no Python with {modules} (set MESHSMOOTH_PYTHON)"));
+    }
+    ok.then_some(p)
+}
+
+/// What a Python `script` run on `args` prints, as JSON; it must succeed.
+pub fn py_json(python: &std::path::Path, script: &str, args: &[&std::path::Path]) -> serde_json::Value {
+    let o = std::process::Command::new(python)
+        .args(["-c", script])
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
 /// An n x n x n Kuhn box of side n (unit cells), every interior vertex
 /// moved randomly by up to `alpha` of the edge length (never inverting).
 pub fn perturbed_box(n: usize, alpha: f64, seed: u64) -> Mesh {

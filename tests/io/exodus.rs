@@ -10,7 +10,6 @@ use meshsmooth::generate;
 use meshsmooth::io::{self, Format};
 use meshsmooth::mesh::{DataArray, ElementSet, LowerKind, Mesh, NodeSet, ValueType, Values};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// A 3^3 tet box with a node set, two blocks (by x), a side set of its
 /// z = 0 faces, a nodal vector and an element scalar.
@@ -195,31 +194,12 @@ fn elements_of(m: &Mesh, e: usize) -> Vec<u32> {
     v
 }
 
-/// The .venv's Python with meshio, netCDF4 and vtk; `None` (said) outside CI.
+/// A Python with meshio, netCDF4 and vtk (see [`common::python_with`]).
 fn python() -> Option<PathBuf> {
-    let p = std::env::var_os("MESHSMOOTH_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
-    let ok = Command::new(&p)
-        .args(["-c", "import meshio, netCDF4, vtk"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "no Python with meshio, netCDF4 and vtk at {}, and CI must run the Exodus interop tests",
-            p.display()
-        );
-        common::skipped("no Python with meshio, netCDF4 and vtk (set MESHSMOOTH_PYTHON)");
-    }
-    ok.then_some(p)
+    common::python_with("meshio, netCDF4, vtk", "the Exodus interop tests")
 }
 
-fn py(python: &Path, script: &str, args: &[&Path]) -> serde_json::Value {
-    let o = Command::new(python).args(["-c", script]).args(args).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout).unwrap()
-}
+use common::py_json as py;
 
 /// meshio writes a perturbed tet box with a node set; meshsmooth smooths it
 /// to Exodus; VTK's vtkExodusIIReader and meshio read the output with the

@@ -729,26 +729,9 @@ fn data_arrays_follow_a_reordering() {
     }
 }
 
-/// A Python with meshio: `MESHSMOOTH_PYTHON`, else the checkout's `.venv`;
-/// `None` (said) where there is none, except under CI, which must have it
-/// (see .ci/install-test-deps).
+/// A Python with meshio (see [`crate::common::python_with`]).
 pub(crate) fn meshio_python() -> Option<PathBuf> {
-    let p = std::env::var_os("MESHSMOOTH_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
-    let ok = Command::new(&p)
-        .args(["-c", "import meshio"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "no Python with meshio at {}, and CI must run the meshio read-back tests (see .ci/install-test-deps)",
-            p.display()
-        );
-        eprintln!("skipping the meshio read-back: no Python with meshio (set MESHSMOOTH_PYTHON)");
-    }
-    ok.then_some(p)
+    crate::common::python_with("meshio", "the meshio read-back tests")
 }
 
 /// meshio 5.3 reads the legacy VTK files meshsmooth writes, ASCII and
@@ -811,7 +794,7 @@ fn meshio_reads_our_legacy_vtk_arrays() {
 fn meshio_s_exodus_and_abaqus_files_are_smoothed_keeping_their_set() {
     use crate::common::cli::{meshsmooth as cli, s, text};
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/interop/meshio");
-    let whole = io::read(&dir.join("box.vtu")).unwrap();
+    let whole = io::read(dir.join("box.vtu")).unwrap();
     let x0 = whole.points.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
     let wall: Vec<u32> = (0..whole.num_points() as u32)
         .filter(|&v| whole.points[v as usize][0] == x0)

@@ -872,25 +872,9 @@ fn prefixes_and_mutants_read_or_fail_cleanly() {
     }
 }
 
-/// A Python with VTK: `MESHSMOOTH_PYTHON`, else the checkout's `.venv`;
-/// `None` (said) where there is none, except under CI, which must have it.
+/// A Python with VTK (see [`common::python_with`]).
 fn vtk_python() -> Option<PathBuf> {
-    let p = std::env::var_os("MESHSMOOTH_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
-    let ok = Command::new(&p)
-        .args(["-c", "import vtk"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "no Python with vtk at {}, and CI must run the vtkOpenFOAMReader tests (see .ci/install-test-deps)",
-            p.display()
-        );
-        common::skipped("no Python with vtk (set MESHSMOOTH_PYTHON)");
-    }
-    ok.then_some(p)
+    common::python_with("vtk", "the vtkOpenFOAMReader tests")
 }
 
 /// What vtkOpenFOAMReader reads of a case: the internal mesh's points and

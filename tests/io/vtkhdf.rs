@@ -11,7 +11,6 @@ use meshsmooth::generate;
 use meshsmooth::io::{self, Format};
 use meshsmooth::mesh::{DataArray, ElementSet, LowerKind, Mesh, NodeSet, ValueType, Values};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// A 3^3 tet box with its z = 0 faces as boundary triangles, a node set, an
 /// element set, a fixed vertex, point, cell (and boundary-cell) and field
@@ -239,31 +238,12 @@ fn a_file_of_two_pieces_reads_as_the_whole_mesh() {
     assert!(got[1].as_u64().unwrap() > m.num_points() as u64, "{got}");
 }
 
-/// The .venv's Python with vtk; `None` (said) outside CI.
+/// A Python with vtk (see [`common::python_with`]).
 fn python() -> Option<PathBuf> {
-    let p = std::env::var_os("MESHSMOOTH_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
-    let ok = Command::new(&p)
-        .args(["-c", "import vtk"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "no Python with vtk at {}, and CI must run the VTKHDF interop tests",
-            p.display()
-        );
-        common::skipped("no Python with vtk (set MESHSMOOTH_PYTHON)");
-    }
-    ok.then_some(p)
+    common::python_with("vtk", "the VTKHDF interop tests")
 }
 
-fn py(python: &Path, script: &str, args: &[&Path]) -> serde_json::Value {
-    let o = Command::new(python).args(["-c", script]).args(args).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout).unwrap()
-}
+use common::py_json as py;
 
 /// VTK's vtkHDFWriter writes a perturbed tet box (float32 points, a point
 /// vector); meshsmooth smooths it to VTKHDF; vtkHDFReader reads the output
@@ -418,8 +398,8 @@ fn vtk_file(name: &str) -> PathBuf {
 /// keeps its arrays.
 #[test]
 fn vtk_written_files_read_as_the_mesh_they_hold() {
-    let whole = io::read(&vtk_file("whole.vtu")).unwrap();
-    let one = io::read(&vtk_file("one_piece.vtkhdf")).unwrap();
+    let whole = io::read(vtk_file("whole.vtu")).unwrap();
+    let one = io::read(vtk_file("one_piece.vtkhdf")).unwrap();
     assert_eq!(one.points, whole.points);
     assert_eq!((&one.kinds, &one.conn), (&whole.kinds, &whole.conn));
     let flow = array(&one.data.point, "flow");
@@ -436,7 +416,7 @@ fn vtk_written_files_read_as_the_mesh_they_hold() {
         Values::Str(vec!["VTK 9.7.2 vtkHDFWriter".into()])
     );
 
-    let two = io::read(&vtk_file("two_pieces.vtkhdf")).unwrap();
+    let two = io::read(vtk_file("two_pieces.vtkhdf")).unwrap();
     assert_eq!(two.num_points(), whole.num_points());
     assert_eq!(sorted_elements(&two), sorted_elements(&whole));
     let flow = array(&two.data.point, "flow");
