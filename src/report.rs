@@ -8,7 +8,6 @@ use rayon::prelude::*;
 
 use crate::mesh::topology::{skin_vertices, with_user_fixed};
 use crate::mesh::{ElementKind, Mesh};
-use crate::metric::{element_eta, element_min_det};
 
 /// Summary of a set of values. `sigma_n` is the population standard deviation
 /// divided by the mean, as in the papers' tables. Empty sets give NaN (null in JSON).
@@ -132,6 +131,9 @@ pub struct QualityReport {
     pub kinds: Vec<(String, usize)>,
     /// Dimension of the mesh: 2 or 3.
     pub dim: usize,
+    /// A surface mesh: 2D elements in 3D, each measured in its own plane.
+    #[serde(default)]
+    pub surface: bool,
     /// Inverse mean ratio over the non-inverted elements.
     pub eta: Stats,
     /// Element volume (area in 2D) over all elements; see [`element_volume`].
@@ -166,13 +168,13 @@ pub fn quality_report_on_skin(mesh: &Mesh, points: &[[f64; 3]], skin: &[bool]) -
     // clockwise planar meshes are measured mirrored (centroids below use the real points)
     let measured = crate::metric::oriented(mesh, points);
     // shapes at a size whose determinants neither underflow nor overflow
-    let shaped = crate::metric::near_unit(&measured);
+    let shaped = crate::metric::Measured::new(mesh, points);
     // (eta, volume); eta None when any corner determinant is not positive
     let per_element: Vec<(Option<f64>, f64)> = (0..ne)
         .into_par_iter()
         .map(|e| {
-            let min_det = element_min_det(mesh, &shaped, e);
-            let eta = element_eta(mesh, &shaped, e).filter(|_| min_det > 0.0);
+            let min_det = shaped.min_det(mesh, e);
+            let eta = shaped.eta(mesh, e).filter(|_| min_det > 0.0);
             (eta, mesh_element_volume(mesh, &measured, e))
         })
         .collect();
@@ -223,6 +225,7 @@ pub fn quality_report_on_skin(mesh: &Mesh, points: &[[f64; 3]], skin: &[bool]) -
             .filter(|(_, c)| *c > 0)
             .collect(),
         dim: mesh.dim(),
+        surface: shaped.is_surface(),
         eta: Stats::of(&etas),
         volume: Stats::of(&volumes),
         inverted: inverted_all.len(),
@@ -417,13 +420,24 @@ pub fn num(x: f64) -> String {
     }
 }
 
+impl QualityReport {
+    /// "2D", "3D" or "surface": what kind of mesh was measured.
+    pub fn kind_name(&self) -> String {
+        if self.surface {
+            "surface".into()
+        } else {
+            format!("{}D", self.dim)
+        }
+    }
+}
+
 impl fmt::Display for QualityReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let kinds: Vec<String> = self.kinds.iter().map(|(k, c)| format!("{c} {k}")).collect();
         writeln!(
             f,
-            "{}D mesh: {} vertices ({} free, {} fixed), {} elements ({})",
-            self.dim,
+            "{} mesh: {} vertices ({} free, {} fixed), {} elements ({})",
+            self.kind_name(),
             self.vertices,
             self.free_vertices,
             self.fixed_vertices,

@@ -707,18 +707,63 @@ def smooth_meshio(mesh: Any, **kwargs: Any) -> Any:
 _VTK_TO_MESHIO = {1: "vertex", 3: "line", 5: "triangle", 9: "quad", 10: "tetra", 12: "hexahedron", 13: "wedge"}
 
 
+def _polydata_parts(mesh: Any) -> List[Tuple[str, Any]]:
+    """A PolyData's polygons as meshio-named blocks: triangles and
+    quadrilaterals (a surface), lines as lower-dimensional cells; strips and
+    polygons of other sizes refused naming the cell."""
+    parts: List[Tuple[str, Any]] = []
+    if getattr(mesh, "n_strips", 0):
+        raise ValueError("polydata: triangle strips are not supported (triangulate() the mesh first)")
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    by_size: Dict[int, List[Any]] = {3: [], 4: []}
+    i, cell = 0, 0
+    while i < len(faces):
+        k = int(faces[i])
+        if k not in by_size:
+            raise ValueError(
+                f"polydata: polygon {cell} has {k} vertices; only triangles and quadrilaterals are smoothed "
+                "(triangulate() the mesh first)"
+            )
+        by_size[k].append(faces[i + 1 : i + 1 + k])
+        i += k + 1
+        cell += 1
+    for k, name in ((3, "triangle"), (4, "quad")):
+        if by_size[k]:
+            parts.append((name, np.array(by_size[k], dtype=np.int64)))
+    lines = np.asarray(getattr(mesh, "lines", []), dtype=np.int64)
+    i, segments = 0, []
+    while i < len(lines):
+        k = int(lines[i])
+        ids = lines[i + 1 : i + 1 + k]
+        segments.extend([ids[j], ids[j + 1]] for j in range(k - 1))
+        i += k + 1
+    if segments:
+        parts.append(("line", np.array(segments, dtype=np.int64)))
+    if not parts:
+        raise ValueError("polydata: no triangles or quadrilaterals to smooth")
+    return parts
+
+
 def smooth_pyvista(grid: Any, **kwargs: Any) -> Any:
-    """Smooths a PyVista ``UnstructuredGrid`` (needs pyvista) and returns a
-    copy with the new points and all its arrays; keyword arguments as for
-    :func:`smooth`, lower-dimensional cells handled as in :func:`smooth_meshio`.
-    The result of the solve is on ``.meshsmooth_result`` of the returned grid."""
+    """Smooths a PyVista ``UnstructuredGrid`` or ``PolyData`` surface (needs
+    pyvista) and returns a copy with the new points and all its arrays;
+    keyword arguments as for :func:`smooth`, lower-dimensional cells (a
+    PolyData's lines among them) handled as in :func:`smooth_meshio`. A
+    PolyData's triangles and quadrilaterals are a surface: every vertex slides
+    on it, features and corners kept. The result of the solve is on
+    ``.meshsmooth_result`` of the returned mesh."""
     _optional("pyvista", "smooth_pyvista")
-    parts = []
-    for vtk_type, data in grid.cells_dict.items():
-        name = _VTK_TO_MESHIO.get(int(vtk_type))
-        if name is None:
-            raise ValueError(f"grid: unsupported VTK cell type {int(vtk_type)}")
-        parts.append((name, np.asarray(data)))
+    if hasattr(grid, "cells_dict"):
+        parts = []
+        for vtk_type, data in grid.cells_dict.items():
+            name = _VTK_TO_MESHIO.get(int(vtk_type))
+            if name is None:
+                raise ValueError(f"grid: unsupported VTK cell type {int(vtk_type)}")
+            parts.append((name, np.asarray(data)))
+    elif hasattr(grid, "faces"):
+        parts = _polydata_parts(grid)
+    else:
+        raise TypeError(f"smooth_pyvista takes a pyvista UnstructuredGrid or PolyData, not {type(grid).__name__}")
     points, result = _smooth_parts(np.asarray(grid.points), parts, kwargs, dict(grid.point_data))
     out = grid.copy()
     out.points = points

@@ -15,8 +15,8 @@ const QUALITY_HEAD: &str = "quality: inverse mean ratio of each element, 1 for t
 pub fn mesh_line(q: &QualityReport) -> String {
     let kinds: Vec<String> = q.kinds.iter().map(|(k, c)| format!("{c} {k}")).collect();
     format!(
-        "{}D mesh: {} vertices, {} elements ({})",
-        q.dim,
+        "{} mesh: {} vertices, {} elements ({})",
+        q.kind_name(),
         q.vertices,
         q.elements,
         kinds.join(", ")

@@ -658,11 +658,14 @@ pub fn quality(a: &QualityArgs) -> Result<()> {
         1 => eprintln!("note: 1 point is used by no element: it takes no part in the measures"),
         n => eprintln!("note: {n} points are used by no element: they take no part in the measures"),
     }
-    // what smooth refuses is not measured either: a planar mesh that is not
-    // flat has no orientation to tell inverted elements by
+    // what smooth refuses is not measured either: a planar mesh without area
+    // has no orientation to tell inverted elements by (one that is not flat
+    // is a surface, each element measured in its own plane)
     let in_use = mesh.without_unused();
     let measured = in_use.as_ref().map_or(&mesh, |(_, m)| m);
-    meshsmooth::mesh::plane::Plane::fit(measured, &measured.points).map_err(|e| io::in_file(&a.input, e))?;
+    if !meshsmooth::mesh::plane::is_surface(measured, &measured.points) {
+        meshsmooth::mesh::plane::Plane::fit(measured, &measured.points).map_err(|e| io::in_file(&a.input, e))?;
+    }
     let report = quality_report(&mesh, &mesh.points);
     let target = meshsmooth::problem::Target::parse(&a.target)?;
     let before = match &a.before {

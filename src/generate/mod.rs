@@ -12,6 +12,7 @@ pub mod layer;
 pub mod mixed;
 pub mod perturb;
 pub mod prism;
+pub mod surface;
 pub mod unstructured_duct;
 pub mod voronoi;
 
@@ -24,5 +25,6 @@ pub use layer::{LayerKind, boundary_layer, boundary_layer_2d, graded_hex_box};
 pub use mixed::mixed_block;
 pub use perturb::{PerturbOptions, PerturbStats, Perturbation, perturb, perturb_unguarded};
 pub use prism::{Distortion, distorted_hex_box, distorted_prism_mesh, prism_mesh};
+pub use surface::{cube_surface, sphere};
 pub use unstructured_duct::{duct_size_for, unstructured_duct};
 pub use voronoi::{VoronoiOptions, voronoi_mesh};

@@ -9,9 +9,9 @@ use std::path::Path;
 
 /// Per-element inverse mean ratio (infinite where inverted).
 pub fn eta_field(mesh: &Mesh) -> Vec<f64> {
-    let points = metric::oriented(mesh, &mesh.points);
+    let measured = metric::Measured::new(mesh, &mesh.points);
     (0..mesh.num_elements())
-        .map(|e| metric::element_eta(mesh, &points, e).unwrap_or(f64::INFINITY))
+        .map(|e| measured.eta(mesh, e).unwrap_or(f64::INFINITY))
         .collect()
 }
 

@@ -37,6 +37,23 @@ impl Plane {
     /// for one in a plane z = constant (used as it is); an error naming the
     /// farthest vertex for a planar mesh that is not flat.
     pub fn fit(mesh: &Mesh, points: &[Vec3]) -> Result<Option<Plane>> {
+        let Some(fit) = Self::best(mesh, points)? else {
+            return Ok(None);
+        };
+        let (plane, far, dist, extent) = (fit.plane, fit.farthest, fit.distance, fit.extent);
+        if dist > PLANARITY_TOLERANCE * extent {
+            return Err(Error::Unsupported(format!(
+                "planar mesh is not flat: vertex {far} lies {dist:e} off the best-fitting plane \
+                 (normal ({:.6}, {:.6}, {:.6})), more than {PLANARITY_TOLERANCE:e} of the mesh's extent {extent:e}",
+                plane.axes[2][0], plane.axes[2][1], plane.axes[2][2]
+            )));
+        }
+        Ok(Some(plane))
+    }
+
+    /// The best-fitting plane of a mesh of 2D elements and its farthest
+    /// vertex; `None` for a volume mesh and one in a plane z = constant.
+    fn best(mesh: &Mesh, points: &[Vec3]) -> Result<Option<Fit>> {
         if mesh.dim() != 2 || points.is_empty() {
             return Ok(None);
         }
@@ -89,14 +106,12 @@ impl Plane {
             .map(|p| dot(&sub(p, &origin), &plane.axes[2]).abs())
             .enumerate()
             .fold((0, 0.0f64), |m, (v, d)| if d > m.1 { (v, d) } else { m });
-        if dist > PLANARITY_TOLERANCE * extent {
-            return Err(Error::Unsupported(format!(
-                "planar mesh is not flat: vertex {far} lies {dist:e} off the best-fitting plane \
-                 (normal ({:.6}, {:.6}, {:.6})), more than {PLANARITY_TOLERANCE:e} of the mesh's extent {extent:e}",
-                plane.axes[2][0], plane.axes[2][1], plane.axes[2][2]
-            )));
-        }
-        Ok(Some(plane))
+        Ok(Some(Fit {
+            plane,
+            farthest: far,
+            distance: dist,
+            extent,
+        }))
     }
 
     /// In-plane coordinates (u, v, 0).
@@ -110,6 +125,30 @@ impl Plane {
         let [e1, e2, _] = &self.axes;
         std::array::from_fn(|k| self.origin[k] + q[0] * e1[k] + q[1] * e2[k])
     }
+}
+
+/// A fitted plane and how far the mesh is from it.
+struct Fit {
+    plane: Plane,
+    farthest: usize,
+    distance: f64,
+    extent: f64,
+}
+
+/// Whether `mesh` is a surface mesh at `points`: its elements are triangles
+/// and quadrilaterals that do not lie in one plane (beyond
+/// [`PLANARITY_TOLERANCE`]). Such a mesh is optimised in 3D, each element in
+/// its own tangent plane, every vertex sliding on the surface.
+pub fn is_surface(mesh: &Mesh, points: &[Vec3]) -> bool {
+    matches!(Plane::best(mesh, points), Ok(Some(f)) if f.distance > PLANARITY_TOLERANCE * f.extent)
+        || (mesh.dim() == 2 && matches!(Plane::best(mesh, points), Err(_)) && spans_space(points))
+}
+
+/// Points that do not all lie on one plane through the first three (a
+/// closed surface has a Newell normal of zero, so it fits no plane at all).
+fn spans_space(points: &[Vec3]) -> bool {
+    let (lo, hi) = bounding_box(points);
+    (0..3).filter(|&k| hi[k] > lo[k]).count() == 3
 }
 
 /// `points` in the plane's coordinates when a plane was fitted, else as they are.

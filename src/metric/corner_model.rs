@@ -13,6 +13,7 @@ use super::planar;
 use super::reference_jacobian;
 use super::shess::{SHess, TEMPLATE_SLOT};
 use super::smetric::{self, MetricKind};
+use super::surface;
 
 /// How corner values are combined into the objective.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -37,6 +38,10 @@ pub struct CornerShape {
     pub tet: TetShape,
     /// The corner's dimension: 2 (planar) or 3.
     pub n: usize,
+    /// A surface mesh's corner (in 3D): its element's unit reference normal,
+    /// which it must keep facing (`surface.rs`); zero for every other corner.
+    #[serde(default)]
+    pub normal: Vec3,
 }
 
 impl CornerShape {
@@ -61,7 +66,21 @@ impl CornerShape {
         Some(CornerShape {
             tet: TetShape::from_winv(&winv),
             n,
+            normal: [0.0; 3],
         })
+    }
+
+    /// This planar shape as the corner of a surface element with unit
+    /// reference normal `normal`.
+    pub fn on_surface(mut self, normal: Vec3) -> CornerShape {
+        self.normal = normal;
+        self
+    }
+
+    /// A surface mesh's corner, measured in its own tangent plane.
+    #[inline]
+    pub fn is_surface(&self) -> bool {
+        self.normal != [0.0; 3]
     }
 
     /// W^-1 (rows b_1..b_n).
@@ -135,6 +154,9 @@ impl Model {
     /// Objective term of a corner of `shape` from its S.
     #[inline]
     pub fn value_of_s(&self, shape: &CornerShape, s: &Mat3) -> Option<f64> {
+        if shape.is_surface() {
+            return surface::value(self.template, s, &shape.normal);
+        }
         if self.fast(shape.n) {
             return TetShape::value_of_s(s);
         }
@@ -147,7 +169,7 @@ impl Model {
     /// The corner's objective term at positions `x` (corner first); `None` when the corner is infeasible.
     #[inline]
     pub fn value(&self, shape: &CornerShape, x: &[Vec3; 4]) -> Option<f64> {
-        if self.planar(shape.n) {
+        if self.planar(shape.n) && !shape.is_surface() {
             // the line searches' hot path: three points, the leading 2x2 block
             return planar::value_of_s(&planar::s_of(&shape.tet, x));
         }
@@ -160,6 +182,10 @@ impl Model {
     #[inline]
     pub fn vertex_gradient_hessian_of_s(&self, shape: &CornerShape, s: Mat3, b: &Vec3) -> Option<(f64, Vec3, Mat3)> {
         let n = shape.n;
+        if shape.is_surface() {
+            let p = surface::parts(self.template, &s, &shape.normal)?;
+            return Some((p.value, p.gradient(b), p.block(b, b)));
+        }
         if self.fast(n) {
             return TetShape::vertex_gradient_hessian_at(s, b);
         }
@@ -185,6 +211,14 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
+        if shape.is_surface() {
+            let p = surface::parts(self.template, &s, &shape.normal)?;
+            let mut out = [[0.0; 3]; 4];
+            for (k, o) in out.iter_mut().enumerate().take(3) {
+                *o = p.gradient(shape.tet.b(k));
+            }
+            return Some((p.value, out));
+        }
         if self.planar(n) {
             let p = planar::parts(&s)?;
             let mut out = [[0.0; 3]; 4];
@@ -227,6 +261,9 @@ impl Model {
         }
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
+        if shape.is_surface() {
+            return surface_blocks(self.template, shape, &s, out);
+        }
         if self.planar(n) {
             return planar_blocks(shape, &s, out);
         }
@@ -253,6 +290,30 @@ impl Model {
         }
         Some((v, grad))
     }
+}
+
+/// `Model::upper_blocks` for a surface corner (3 vertices) through `surface.rs`.
+fn surface_blocks(
+    template: Template,
+    shape: &CornerShape,
+    s: &Mat3,
+    out: &mut [[Mat3; 4]; 4],
+) -> Option<(f64, [Vec3; 4])> {
+    let p = surface::parts(template, s, &shape.normal)?;
+    let mut grad = [[0.0; 3]; 4];
+    for k in 0..4 {
+        for l in k..4 {
+            out[k][l] = if l < 3 {
+                p.block(shape.tet.b(k), shape.tet.b(l))
+            } else {
+                [[0.0; 3]; 3]
+            };
+        }
+        if k < 3 {
+            grad[k] = p.gradient(shape.tet.b(k));
+        }
+    }
+    Some((p.value, grad))
 }
 
 /// `Model::upper_blocks` for a planar corner (3 vertices) through `planar.rs`.

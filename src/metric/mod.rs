@@ -13,6 +13,7 @@ pub mod reference_jacobian;
 #[doc(hidden)]
 pub mod shess;
 pub mod smetric;
+pub mod surface;
 
 pub use mean_ratio::{TetShape, tet_det};
 
@@ -133,13 +134,87 @@ pub fn refuse_inverted(mesh: &Mesh) -> crate::error::Result<()> {
 }
 
 /// Ids of elements with a non-positive corner determinant (against the
-/// mesh's own orientation for planar meshes).
+/// mesh's own orientation for planar meshes, against each element's own
+/// normal on a surface mesh).
 pub fn inverted_elements(mesh: &Mesh, points: &[Vec3]) -> Vec<usize> {
-    let points = oriented(mesh, points);
-    let points = near_unit(&points);
+    let measured = Measured::new(mesh, points);
     (0..mesh.num_elements())
-        .filter(|&e| !(element_min_det(mesh, &points, e) > 0.0))
+        .filter(|&e| !(measured.min_det(mesh, e) > 0.0))
         .collect()
+}
+
+/// Elements as the checks and reports measure them: a planar mesh
+/// [`oriented`], a surface mesh's element each in its own tangent plane
+/// (axes from its Newell normal), all at a size whose determinants neither
+/// underflow nor overflow ([`near_unit`]).
+pub struct Measured<'a> {
+    points: std::borrow::Cow<'a, [Vec3]>,
+    surface: bool,
+}
+
+impl<'a> Measured<'a> {
+    /// `mesh` at `points`, read for measuring.
+    pub fn new(mesh: &Mesh, points: &'a [Vec3]) -> Measured<'a> {
+        let surface = crate::mesh::plane::is_surface(mesh, points);
+        let read = if surface {
+            std::borrow::Cow::Borrowed(points)
+        } else {
+            oriented(mesh, points)
+        };
+        let scaled = match near_unit(&read) {
+            std::borrow::Cow::Owned(v) => Some(v),
+            std::borrow::Cow::Borrowed(_) => None,
+        };
+        Measured {
+            points: scaled.map_or(read, std::borrow::Cow::Owned),
+            surface,
+        }
+    }
+
+    /// Whether the mesh is measured as a surface.
+    pub fn is_surface(&self) -> bool {
+        self.surface
+    }
+
+    /// The points measured (oriented and scaled).
+    pub fn points(&self) -> &[Vec3] {
+        &self.points
+    }
+
+    /// A surface element's vertices in its own tangent frame; `None` for a
+    /// degenerate one.
+    fn in_frame(&self, mesh: &Mesh, e: usize) -> Option<([Vec3; 8], usize)> {
+        let vs = mesh.element(e);
+        let normal = surface::element_normal(&self.points, vs)?;
+        let axes = surface::frame_of(&normal);
+        let o = self.points[vs[0] as usize];
+        let mut x = [[0.0; 3]; 8];
+        for (slot, &v) in x.iter_mut().zip(vs) {
+            let d = sub(&self.points[v as usize], &o);
+            *slot = std::array::from_fn(|i| mat3::dot(&axes[i], &d));
+        }
+        Some((x, vs.len()))
+    }
+
+    /// Smallest corner determinant of element `e` (positive when feasible).
+    pub fn min_det(&self, mesh: &Mesh, e: usize) -> f64 {
+        if !self.surface {
+            return element_min_det(mesh, &self.points, e);
+        }
+        match self.in_frame(mesh, e) {
+            Some((x, n)) => min_corner_det(mesh.kinds[e], &x[..n]),
+            None => f64::NEG_INFINITY,
+        }
+    }
+
+    /// Inverse mean ratio of element `e`; `None` if it is inverted.
+    pub fn eta(&self, mesh: &Mesh, e: usize) -> Option<f64> {
+        if !self.surface {
+            return element_eta(mesh, &self.points, e);
+        }
+        let (x, n) = self.in_frame(mesh, e)?;
+        corner::element_eta(mesh.kinds[e], &x[..n])
+    }
 }
 
 /// Inverse mean ratio of element `e` at `points`, `None` if it is inverted.

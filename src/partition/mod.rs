@@ -364,6 +364,7 @@ fn restrict(
     }
     Problem {
         dim: p.dim,
+        surface_mesh: p.surface_mesh,
         order: global.to_vec(),
         elem_order: elems.to_vec(),
         elements,

@@ -273,20 +273,57 @@ pub fn skin_classes(
     points: &[Vec3],
     opts: &super::ProblemOptions,
 ) -> crate::error::Result<Option<SkinClasses>> {
-    match opts.surface {
+    let surface_mesh = crate::mesh::plane::is_surface(mesh, points);
+    let angle = opts.boundary.feature_angle;
+    let classes = match opts.surface {
         Some(g) => {
-            if mesh.dim() != 3 {
+            if mesh.dim() != 3 && !surface_mesh {
                 return Err(crate::error::Error::Unsupported(
-                    "a surface geometry needs a volume mesh: a planar mesh's boundary slides along its own sides"
+                    "a surface geometry needs a volume or surface mesh: a planar mesh's boundary slides along its own sides"
                         .into(),
                 ));
             }
-            let geometry = super::geometry::Geometry::new(g, &g.points, opts.boundary.feature_angle)?;
-            geometry.classify(mesh, points).map(Some)
+            super::geometry::Geometry::new(g, &g.points, angle)?.classify(mesh, points)?
         }
-        None => Ok(
-            (opts.boundary.mode == BoundaryMode::Slide).then(|| classify(mesh, points, opts.boundary.feature_angle))
-        ),
+        // a surface mesh slides on itself: its faces are the geometry
+        None if surface_mesh => super::geometry::Geometry::new(mesh, points, angle)?.classify(mesh, points)?,
+        None if opts.boundary.mode == BoundaryMode::Slide => classify(mesh, points, angle),
+        None => return Ok(None),
+    };
+    Ok(Some(if surface_mesh && opts.boundary.mode == BoundaryMode::Fixed {
+        classes.keeping(&open_boundary(mesh))
+    } else {
+        classes
+    }))
+}
+
+/// Per vertex of a surface mesh: on an edge of one element only (its open
+/// boundary curves).
+fn open_boundary(mesh: &Mesh) -> Vec<bool> {
+    let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+    for e in 0..mesh.num_elements() {
+        let vs = mesh.element(e);
+        for i in 0..vs.len() {
+            *count.entry(edge_key(vs[i], vs[(i + 1) % vs.len()])).or_default() += 1;
+        }
+    }
+    let mut out = vec![false; mesh.num_points()];
+    for ((a, b), c) in count {
+        if c == 1 {
+            out[a as usize] = true;
+            out[b as usize] = true;
+        }
+    }
+    out
+}
+
+/// The faces the sliding vertices of `mesh` lie on: a surface mesh's own
+/// elements, a volume or planar mesh's skin facets.
+pub(crate) fn sliding_faces(mesh: &Mesh, points: &[Vec3]) -> Vec<Vec<u32>> {
+    if crate::mesh::plane::is_surface(mesh, points) {
+        (0..mesh.num_elements()).map(|e| mesh.element(e).to_vec()).collect()
+    } else {
+        skin_faces(mesh, points)
     }
 }
 
@@ -472,6 +509,23 @@ pub fn classify(mesh: &Mesh, points: &[Vec3], feature_angle: f64) -> SkinClasses
 }
 
 impl SkinClasses {
+    /// These classes with the vertices `kept` made corners: they stay.
+    fn keeping(mut self, kept: &[bool]) -> SkinClasses {
+        let mut pairs = Vec::new();
+        for (v, &k) in kept.iter().enumerate() {
+            if k {
+                if self.class[v] != VertexClass::Interior {
+                    self.class[v] = VertexClass::Corner;
+                }
+                self.projector[v] = IDENTITY;
+            } else {
+                pairs.extend(self.candidates.of(v).iter().map(|&c| (v as u32, c)));
+            }
+        }
+        self.candidates = Csr::from_pairs(kept.len(), pairs.into_iter());
+        self
+    }
+
     /// The constraints of the vertices that slide (`moves[v]`: not fixed by
     /// the user), in the problem's numbering.
     pub fn renumber(&self, numbering: &Numbering, moves: impl Fn(usize) -> bool) -> Sliding {

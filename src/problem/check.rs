@@ -17,13 +17,37 @@ pub fn check(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions) -> Result<Opti
     if mesh.num_elements() == 0 {
         return Err(Error::InvalidMesh("mesh has no elements".into()));
     }
-    // a planar mesh must be flat (in any plane)
+    // a planar mesh must be flat (in any plane); one that is not is a surface
+    if crate::mesh::plane::is_surface(mesh, points) {
+        opts.check(mesh)?;
+        opts.check_surface()?;
+        return Ok(None);
+    }
     let plane = Plane::fit(mesh, points)?;
     opts.check(mesh)?;
     Ok(plane)
 }
 
 impl ProblemOptions<'_> {
+    /// What a surface mesh can be smoothed with: each element is measured in
+    /// its own tangent plane against the ideal element of its kind, by a
+    /// metric of its size-free shape.
+    pub fn check_surface(&self) -> Result<()> {
+        if !crate::metric::surface::supports(self.metric) {
+            return Err(Error::Unsupported(format!(
+                "a surface mesh is measured with the inverse mean ratio (imr) or the condition number (cn), not {}",
+                self.metric
+            )));
+        }
+        if self.reference.is_some() || self.target.is_constructed() {
+            return Err(Error::Unsupported(
+                "a surface mesh is smoothed toward ideal elements: reference meshes and constructed targets are for planar and volume meshes"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
     /// The options' own consistency and the reference's fit to `mesh`, without
     /// building anything: callers can refuse bad input before any work.
     pub fn check(&self, mesh: &Mesh) -> Result<()> {
@@ -108,17 +132,21 @@ mod tests {
     use crate::generate;
 
     #[test]
-    fn check_refuses_a_bent_planar_mesh_and_a_mismatched_reference() {
+    fn check_takes_a_bent_planar_mesh_as_a_surface_and_refuses_a_mismatched_reference() {
         let mut m = generate::quad_grid(2, 2, [1.0, 1.0]);
         let opts = ProblemOptions::default();
         assert!(check(&m, &m.points, &opts).is_ok());
         let mut tilted = m.points.clone();
         tilted[4][2] = 0.5;
-        let err = check(&m, &tilted, &opts).unwrap_err().to_string();
-        assert!(
-            err.contains("not flat") && err.contains("off the best-fitting plane"),
-            "{err}"
-        );
+        // a bent one is a surface: no plane, and only what a surface takes
+        assert_eq!(check(&m, &tilted, &opts).unwrap(), None);
+        let tmp = ProblemOptions {
+            metric: MetricKind::ShapeSize,
+            target: crate::problem::Target::Input(Default::default()),
+            ..Default::default()
+        };
+        let err = check(&m, &tilted, &tmp).unwrap_err().to_string();
+        assert!(err.contains("surface mesh"), "{err}");
         let other = generate::quad_grid(3, 2, [1.0, 1.0]);
         let with_ref = ProblemOptions {
             reference: Some(&other),

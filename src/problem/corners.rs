@@ -20,6 +20,9 @@ pub struct Corners {
     pub dim: usize,
     /// Planar mesh wound clockwise: elements are read in mirrored order.
     pub flip: bool,
+    /// A surface mesh (`mesh::plane::is_surface`): every corner measured in
+    /// its own tangent plane, facing its element's normal at `points`.
+    pub surface: bool,
     /// The corner vertex, then its `dim` neighbours (a 2D corner repeats its
     /// vertex in the unused fourth slot, whose B row is zero).
     pub corners: Vec<[u32; 4]>,
@@ -82,8 +85,14 @@ fn corner_matrix(pts: &[Vec3], vs: &[u32], c: &[usize; 4], n: usize) -> Mat3 {
 const CHUNK: usize = 1 << 12;
 
 /// A shape's bits, the key under which equal shapes share one id.
-fn shape_key(shape: &CornerShape) -> [u64; 12] {
-    std::array::from_fn(|i| shape.tet.b(i / 3)[i % 3].to_bits())
+fn shape_key(shape: &CornerShape) -> [u64; 15] {
+    std::array::from_fn(|i| {
+        if i < 12 {
+            shape.tet.b(i / 3)[i % 3].to_bits()
+        } else {
+            shape.normal[i - 12].to_bits()
+        }
+    })
 }
 
 /// `s` cut into consecutive pieces of the given lengths.
@@ -107,8 +116,9 @@ fn split_by<'a, T>(mut s: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]> {
 /// result does not depend on the thread count.
 pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &Numbering) -> Result<Corners> {
     let dim = mesh.dim();
+    let surface = crate::mesh::plane::is_surface(mesh, points);
     // planar meshes wound clockwise are optimised in mirrored order
-    let flip = crate::metric::is_clockwise(mesh, points);
+    let flip = !surface && crate::metric::is_clockwise(mesh, points);
     let elem_order = &numbering.elem_order;
     let ne = elem_order.len();
     let inv = &numbering.inv;
@@ -122,7 +132,7 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
     let every = opts.metric.every_corner();
     // constructed targets (input, size or metric field), per used corner
     let targets = super::targets::build(mesh, points, flip, opts.target, opts.length_unit)?;
-    let own = reference.is_some() || targets.is_some();
+    let own = reference.is_some() || targets.is_some() || surface;
     let used_by = |e: usize| {
         if every {
             mesh.element_corners(e)
@@ -192,6 +202,7 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
     let mut out = Corners {
         dim,
         flip,
+        surface,
         corners: vec![[0; 4]; total],
         corner_element: vec![0; total],
         corner_shape: vec![0; total],
@@ -243,6 +254,14 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
                             ))
                         })?;
                     }
+                } else if surface {
+                    // the kind's ideal corner, facing the element's own normal
+                    let normal = crate::metric::surface::element_normal(points, &vs)
+                        .ok_or_else(|| Error::InvalidMesh(format!("surface element {old_e} ({kind}) has no area")))?;
+                    let ideal = CornerShape::from_w(&ideal_corner(kind), dim).ok_or_else(|| refused(&used[0]))?;
+                    for j in 0..used.len() {
+                        own_out[at + j] = ideal.on_surface(normal);
+                    }
                 } else if let (None, Some(c)) = (kind_shape[kind_index(kind)], used.first()) {
                     return Err(refused(c));
                 }
@@ -281,7 +300,7 @@ pub fn corners(mesh: &Mesh, points: &[Vec3], opts: &ProblemOptions, numbering: &
 /// `ids[c]` becomes corner `c`'s shape id and `shapes` the distinct shapes.
 /// A parallel sort of the corners by key, not a hash map.
 fn number_shapes(own: &[CornerShape], ids: &mut [u32], shapes: &mut Vec<CornerShape>) {
-    let keys: Vec<[u64; 12]> = own.par_iter().map(shape_key).collect();
+    let keys: Vec<[u64; 15]> = own.par_iter().map(shape_key).collect();
     let mut by_key: Vec<u32> = (0..own.len() as u32).collect();
     by_key.par_sort_unstable_by(|&a, &b| keys[a as usize].cmp(&keys[b as usize]).then(a.cmp(&b)));
     // each corner's first equal corner, then those first corners numbered in order
@@ -394,6 +413,7 @@ mod tests {
         let mut out = Corners {
             dim,
             flip: false,
+            surface: false,
             corners: vec![],
             corner_element: vec![],
             corner_shape: vec![],

@@ -241,7 +241,7 @@ impl Geometry {
         let n = mesh.num_points();
         // each skin vertex's longest skin edge: the length its tolerances scale with
         let mut h = vec![0.0f64; n];
-        for f in boundary::skin_faces(mesh, points) {
+        for f in boundary::sliding_faces(mesh, points) {
             for i in 0..f.len() {
                 let (a, b) = (f[i] as usize, f[(i + 1) % f.len()] as usize);
                 let d = sub(&points[a], &points[b]);
@@ -291,11 +291,39 @@ impl Geometry {
             } else {
                 VertexClass::Surface
             };
-            projector[v] = if is_edge {
+            // the mean direction of every primitive of the patch or curve the
+            // vertex touches (a vertex of the geometry touches several), so
+            // that the tangent space does not depend on which one a tree
+            // query meets first
+            let touch = (1e-9 * h[v]).powi(2).max(f64::MIN_POSITIVE);
+            let mut dir = [0.0; 3];
+            let first = if is_edge {
                 let [a, b, _] = &nearest.shape;
-                boundary::line_projector(&unit(sub(b, a)))
+                unit(sub(b, a))
             } else {
-                boundary::plane_projector(&self.normal[nearest.index as usize])
+                self.normal[nearest.index as usize]
+            };
+            for c in tree.locate_within_distance(*p, touch) {
+                if self.group[c.index as usize] != g {
+                    continue;
+                }
+                let d = if is_edge {
+                    let [a, b, _] = &c.shape;
+                    unit(sub(b, a))
+                } else {
+                    self.normal[c.index as usize]
+                };
+                // segments point either way along their curve
+                let s = if is_edge && dot(&d, &first) < 0.0 { -1.0 } else { 1.0 };
+                for k in 0..3 {
+                    dir[k] += s * d[k];
+                }
+            }
+            let dir = if dot(&dir, &dir) > 0.0 { unit(dir) } else { first };
+            projector[v] = if is_edge {
+                boundary::line_projector(&dir)
+            } else {
+                boundary::plane_projector(&dir)
             };
             let reach = (REACH * h[v]).powi(2);
             let mut cs: Vec<u32> = tree

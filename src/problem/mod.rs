@@ -112,6 +112,7 @@ impl<'a> ProblemOptions<'a> {
         }
         if self.metric != MetricKind::InverseMeanRatio
             || self.reference.is_some()
+            || crate::mesh::plane::is_surface(mesh, &mesh.points)
             || mesh.kinds.contains(&crate::mesh::ElementKind::Polyhedron)
             || tangled()
         {
@@ -182,6 +183,10 @@ pub struct Problem {
     /// Colour classes of the free vertices: no two vertices of a class share an
     /// element. Each class is in sweep order.
     pub colors: Csr,
+    /// A surface mesh: its elements are measured in their own tangent planes
+    /// (`metric::surface`) and its vertices slide on the surface.
+    #[serde(default)]
+    pub surface_mesh: bool,
     /// The plane of a planar mesh outside the planes z = constant: positions
     /// are in its coordinates (`gather` maps into them, `scatter` back).
     pub plane: Option<Plane>,
@@ -215,8 +220,11 @@ impl Problem {
             skin.as_ref()
                 .is_some_and(|s| !s.candidates.of(v).is_empty() && !mesh.is_fixed(v))
         };
+        // a surface mesh's vertices move only on the surface: one that does
+        // not slide (a corner, a kept boundary curve) stays
+        let surface_mesh = plane.is_none() && crate::mesh::plane::is_surface(mesh, &points);
         for (v, f) in graph.fixed.iter_mut().enumerate() {
-            *f &= !slides(v);
+            *f = if surface_mesh { !slides(v) } else { *f && !slides(v) };
         }
         let numbering = order(mesh, &graph, opts.ordering);
         let corners = corners(mesh, &points, opts, &numbering)?;
@@ -225,6 +233,7 @@ impl Problem {
         let sliding = skin.as_ref().map(|s| s.renumber(&numbering, slides));
         Ok(Problem {
             dim: corners.dim,
+            surface_mesh: corners.surface,
             order: numbering.order,
             elem_order: numbering.elem_order,
             elements: adj.elements,
@@ -264,6 +273,13 @@ impl Problem {
             + csr(&self.neighbours)
             + csr(&self.colors)
             + self.sliding.as_ref().map_or(0, |s| s.bytes())
+    }
+
+    /// Only x and y move: a planar problem (the z rows of every block are
+    /// the identity and its gradients' z are zero).
+    #[inline]
+    pub fn in_plane(&self) -> bool {
+        self.dim == 2 && !self.surface_mesh
     }
 
     /// Number of vertices.

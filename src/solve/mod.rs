@@ -775,7 +775,7 @@ pub(crate) fn in_mesh_frame<T>(
         // three coordinates, on its plane) and from the frame; a vertex that
         // did not move keeps its bits
         let moved = p.scatter(&x);
-        let coords = if p.plane.is_some() { 3 } else { p.dim };
+        let coords = if p.plane.is_some() || p.surface_mesh { 3 } else { p.dim };
         for (new, &old) in p.order.iter().enumerate() {
             if p.free[new] && x[new] != x0[new] {
                 let global = frame.to_global(&moved[old as usize]);

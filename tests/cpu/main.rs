@@ -29,6 +29,7 @@ mod real_meshes;
 mod reference;
 mod report;
 mod rezone;
+mod surface;
 mod targets;
 mod units;
 mod untangle;

@@ -19,9 +19,19 @@ pub fn first_inversion(p: &Problem, x: &[Vec3], y: &[Vec3]) -> f64 {
 
 /// One corner's fraction.
 pub fn corner_first_inversion(p: &Problem, x: &[Vec3], y: &[Vec3], c: usize) -> f64 {
-    let tet = &p.shape(c).tet;
-    let s0 = tet.s_rest(&p.corner_points(x, c), usize::MAX);
-    let s1 = tet.s_rest(&p.corner_points(y, c), usize::MAX);
+    let shape = p.shape(c);
+    let tet = &shape.tet;
+    let mut s0 = tet.s_rest(&p.corner_points(x, c), usize::MAX);
+    let mut s1 = tet.s_rest(&p.corner_points(y, c), usize::MAX);
+    if shape.is_surface() {
+        // in a frame with the element's normal as z, the planar determinant
+        // is the area facing that normal
+        let axes = crate::metric::surface::frame_of(&shape.normal);
+        (s0, s1) = (
+            crate::metric::surface::in_frame(&axes, &s0),
+            crate::metric::surface::in_frame(&axes, &s1),
+        );
+    }
     let e = [0, 1, 2].map(|i| [0, 1, 2].map(|j| s1[i][j] - s0[i][j]));
     crate::metric::det_path::first_inversion(&s0, &e, p.dim)
 }

@@ -64,8 +64,12 @@ pub fn min_det(p: &Problem, x: &[Vec3]) -> f64 {
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|c| {
-            let s = p.shape(c).tet.s_rest(&p.corner_points(x, c), usize::MAX);
-            if p.dim == 2 {
+            let shape = p.shape(c);
+            let s = shape.tet.s_rest(&p.corner_points(x, c), usize::MAX);
+            if shape.is_surface() {
+                let (a, b) = ([s[0][0], s[1][0], s[2][0]], [s[0][1], s[1][1], s[2][1]]);
+                crate::metric::mat3::dot(&crate::metric::mat3::cross(&a, &b), &shape.normal)
+            } else if p.dim == 2 {
                 s[0][0] * s[1][1] - s[0][1] * s[1][0]
             } else {
                 crate::metric::mat3::det(&s)

@@ -396,7 +396,7 @@ impl SymHessian {
             free_index,
             ranges,
             matrix: SymBlockCsr {
-                planar: p.dim == 2,
+                planar: p.in_plane(),
                 ..SymBlockCsr::from_pattern(row_offsets, cols)
             },
         }

@@ -1,0 +1,479 @@
+//! Surface meshes (triangles and quadrilaterals in 3D): each element measured
+//! in its own tangent plane, every vertex sliding on the surface, features
+//! and corners kept. A perturbed sphere comes back onto its own
+//! triangulation repaired and unfolded, a perturbed cube skin keeps its
+//! corners, edges and faces, the result does not depend on units or pose,
+//! an open sheet keeps its rim, and the derivatives match finite differences.
+
+use crate::common;
+
+use common::options;
+use meshsmooth::Mesh;
+use meshsmooth::backend::cpu::project_boundary::closest_on_triangle;
+use meshsmooth::generate;
+use meshsmooth::mesh::ElementKind;
+use meshsmooth::metric::corner::ideal_corner;
+use meshsmooth::metric::corner_model::{CornerShape, Model, Template};
+use meshsmooth::metric::mat3::{Vec3, cross, dot, sub};
+use meshsmooth::metric::smetric::MetricKind;
+use meshsmooth::problem::{Boundary, BoundaryMode, Problem, ProblemOptions};
+use meshsmooth::solve::{self, Device, Info, Method, Params, StopReason};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn norm(a: &Vec3) -> f64 {
+    dot(a, a).sqrt()
+}
+
+fn unit(a: Vec3) -> Vec3 {
+    let l = norm(&a);
+    a.map(|c| c / l)
+}
+
+/// F of a surface mesh at its points (a surface problem of its own).
+fn objective(mesh: &Mesh) -> f64 {
+    let p = Problem::new(mesh).unwrap();
+    assert!(p.surface_mesh, "not read as a surface");
+    let x = p.gather(&mesh.points);
+    (0..p.num_corners()).map(|c| p.corner_term(&x, c).unwrap()).sum()
+}
+
+fn smooth_with(mesh: &mut Mesh, po: &ProblemOptions, method: Method) -> Info {
+    let mut params = Params::default();
+    params.max_iter = if method == Method::Bcd { 400 } else { 200 };
+    solve::smooth_mesh(mesh, po, &options(method, &params, Device::Cpu), &mut |_| true).unwrap()
+}
+
+fn smooth(mesh: &mut Mesh, method: Method) -> Info {
+    smooth_with(mesh, &ProblemOptions::default(), method)
+}
+
+/// The normal of element `e` (Newell's, unnormalised).
+fn normal(mesh: &Mesh, points: &[Vec3], e: usize) -> Vec3 {
+    let vs = mesh.element(e);
+    let o = points[vs[0] as usize];
+    let mut n = [0.0; 3];
+    for i in 1..vs.len() - 1 {
+        let c = cross(&sub(&points[vs[i] as usize], &o), &sub(&points[vs[i + 1] as usize], &o));
+        for k in 0..3 {
+            n[k] += c[k];
+        }
+    }
+    n
+}
+
+/// Elements whose normal turned by more than a right angle from `before`.
+fn flipped(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Vec<usize> {
+    (0..mesh.num_elements())
+        .filter(|&e| !(dot(&normal(mesh, before, e), &normal(mesh, after, e)) > 0.0))
+        .collect()
+}
+
+/// Moves every vertex of a sphere mesh by `lo..hi` of its shortest edge in a
+/// random tangent direction and back onto the sphere, shortening moves that
+/// would fold a triangle.
+fn perturb_on_sphere(m: &mut Mesh, lo: f64, hi: f64, seed: u64) {
+    let nb = meshsmooth::mesh::topology::vertex_neighbours(m);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let start = m.points.clone();
+    for v in 0..m.num_points() {
+        let p = m.points[v];
+        let h = nb
+            .of(v)
+            .iter()
+            .map(|&w| norm(&sub(&m.points[w as usize], &p)))
+            .fold(f64::INFINITY, f64::min);
+        let n = unit(p);
+        let a = if n[0].abs() < 0.9 {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+        let t1 = unit(cross(&n, &a));
+        let t2 = cross(&n, &t1);
+        let angle = rng.random_range(0.0..std::f64::consts::TAU);
+        let mut step = h * rng.random_range(lo..hi);
+        loop {
+            let q: Vec3 = std::array::from_fn(|k| p[k] + step * (angle.cos() * t1[k] + angle.sin() * t2[k]));
+            m.points[v] = unit(q);
+            if flipped(m, &start, &m.points).is_empty() {
+                break;
+            }
+            step *= 0.7;
+            if step < 1e-3 * h {
+                m.points[v] = p;
+                break;
+            }
+        }
+    }
+}
+
+/// Distance from `p` to the nearest triangle of `mesh` at `points`
+/// (quadrilaterals as two triangles).
+fn distance_to(mesh: &Mesh, points: &[Vec3], p: &Vec3) -> f64 {
+    (0..mesh.num_elements())
+        .flat_map(|e| {
+            let vs = mesh.element(e);
+            (1..vs.len() - 1).map(move |i| [vs[0], vs[i], vs[i + 1]])
+        })
+        .map(|t| {
+            let tri = t.map(|v| points[v as usize]);
+            norm(&sub(p, &closest_on_triangle(p, &tri)))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// A sphere slid within itself and smoothed by each method: every vertex on
+/// the input's triangulation (1e-9) and within 0.008 of the sphere, at least
+/// 70% of the quality lost repaired, no triangle folded; the three methods
+/// reach the same F.
+#[test]
+fn a_perturbed_sphere_is_repaired_on_its_own_triangulation() {
+    let sphere = generate::sphere(16);
+    let f_ideal = objective(&sphere);
+    let mut start = sphere.clone();
+    perturb_on_sphere(&mut start, 0.2, 0.4, 3);
+    let f_start = objective(&start);
+    assert!(
+        f_start > f_ideal + 0.05,
+        "too mild a perturbation: {f_start} vs {f_ideal}"
+    );
+    let mut finals = Vec::new();
+    for method in [Method::Newton, Method::Bcd, Method::Nlcg] {
+        let mut m = start.clone();
+        let info = smooth(&mut m, method);
+        assert!(
+            matches!(
+                info.stop,
+                StopReason::Converged | StopReason::Stalled | StopReason::SmallStep | StopReason::MaxIterations
+            ),
+            "{method:?}: {:?}",
+            info.stop
+        );
+        let f = objective(&m);
+        assert!(
+            (f - info.objective).abs() < 1e-9 * f,
+            "{method:?}: written {f}, solver {}",
+            info.objective
+        );
+        let repaired = (f_start - f) / (f_start - f_ideal);
+        assert!(
+            repaired >= 0.7,
+            "{method:?}: repaired {repaired} (F {f_start} -> {f}, ideal {f_ideal})"
+        );
+        assert!(
+            flipped(&m, &start.points, &m.points).is_empty(),
+            "{method:?} folded triangles"
+        );
+        for (v, p) in m.points.iter().enumerate() {
+            let d = distance_to(&start, &start.points, p);
+            assert!(d < 1e-9, "{method:?}: vertex {v} left the input's surface by {d}");
+            assert!(
+                (norm(p) - 1.0).abs() <= 0.008,
+                "{method:?}: vertex {v} at radius {}",
+                norm(p)
+            );
+        }
+        finals.push(f);
+    }
+    for f in &finals {
+        assert!((f - finals[0]).abs() < 1e-4 * finals[0], "methods disagree: {finals:?}");
+    }
+}
+
+/// Perturbs a cube skin of side 1 with `n` cells a face: face vertices within
+/// their face and edge vertices along their edge by up to `alpha` cells.
+fn perturb_on_cube(m: &mut Mesh, n: usize, alpha: f64, seed: u64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let on = |c: f64| c == 0.0 || c == 1.0;
+    for p in &mut m.points {
+        if p.iter().filter(|&&c| on(c)).count() == 3 {
+            continue;
+        }
+        for c in p.iter_mut() {
+            if !on(*c) {
+                *c += rng.random_range(-alpha..alpha) / n as f64;
+            }
+        }
+    }
+}
+
+/// Corners exactly in place, edge vertices on their edges and face vertices
+/// on their faces (1e-9), and some of each moved.
+fn check_on_cube(start: &Mesh, end: &Mesh) {
+    let on = |c: f64| c == 0.0 || c == 1.0;
+    let mut moved = [0usize; 3];
+    for (v, (a, b)) in start.points.iter().zip(&end.points).enumerate() {
+        let bound: Vec<usize> = (0..3).filter(|&k| on(a[k])).collect();
+        match bound.len() {
+            3 => assert_eq!(a, b, "corner {v} moved"),
+            n => {
+                for &k in &bound {
+                    assert!(
+                        (b[k] - a[k]).abs() <= 1e-9,
+                        "vertex {v} ({n} bound) left its side: {a:?} -> {b:?}"
+                    );
+                }
+                assert!(
+                    b.iter().all(|&c| (-1e-9..=1.0 + 1e-9).contains(&c)),
+                    "vertex {v} left the cube: {b:?}"
+                );
+                if norm(&sub(a, b)) > 1e-6 {
+                    moved[n] += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        moved[1] > 0 && moved[2] > 0,
+        "face and edge vertices should slide: {moved:?}"
+    );
+}
+
+#[test]
+fn a_perturbed_cube_skin_keeps_corners_edges_and_faces() {
+    let n = 6;
+    for triangles in [true, false] {
+        let cube = generate::cube_surface(n, 1.0, triangles);
+        let f_ideal = objective(&cube);
+        let mut start = cube.clone();
+        perturb_on_cube(&mut start, n, 0.35, 5);
+        let f_start = objective(&start);
+        for method in [Method::Newton, Method::Bcd] {
+            let mut m = start.clone();
+            smooth(&mut m, method);
+            check_on_cube(&start, &m);
+            let f = objective(&m);
+            let repaired = (f_start - f) / (f_start - f_ideal);
+            assert!(
+                repaired >= 0.7,
+                "{method:?}, triangles {triangles}: repaired {repaired} ({f_start} -> {f}, ideal {f_ideal})"
+            );
+            assert!(flipped(&m, &start.points, &m.points).is_empty());
+        }
+    }
+}
+
+/// The same sphere scaled by 2^10, rotated and moved far away smooths to the
+/// same shape: the solver runs in the mesh's frame, and the surface metric
+/// is a function of the tangent-plane geometry only.
+#[test]
+fn surface_results_do_not_depend_on_units_or_pose() {
+    let mut start = generate::sphere(6);
+    perturb_on_sphere(&mut start, 0.2, 0.4, 9);
+    let (c, s) = (0.6f64, 0.8f64);
+    let pose = |p: &Vec3| -> Vec3 {
+        let r = [c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]];
+        [1024.0 * r[0] + 5e4, 1024.0 * r[1] - 3e3, 1024.0 * r[2] + 7.0]
+    };
+    let mut moved = Mesh {
+        points: start.points.iter().map(pose).collect(),
+        ..start.clone()
+    };
+    let mut plain = start.clone();
+    let a = smooth(&mut plain, Method::Newton);
+    let b = smooth(&mut moved, Method::Newton);
+    assert_eq!(a.iterations, b.iterations);
+    assert!(
+        (a.objective - b.objective).abs() < 1e-10 * a.objective,
+        "{} vs {}",
+        a.objective,
+        b.objective
+    );
+    for (p, q) in plain.points.iter().zip(&moved.points) {
+        let d = norm(&sub(&pose(p), q));
+        assert!(d < 1e-7 * 1024.0, "{p:?} posed is {:?}, solved {q:?}", pose(p));
+    }
+}
+
+/// A quarter cylinder (an open sheet): its rim stays where it is by default,
+/// and with a sliding boundary its straight sides slide along themselves and
+/// its corners stay; interior vertices stay on the sheet.
+#[test]
+fn an_open_sheet_keeps_its_rim_or_slides_along_it() {
+    let grid = generate::tri_grid(8, 6, [std::f64::consts::FRAC_PI_2, 1.0]);
+    let bend = |p: &Vec3| -> Vec3 { [p[0].sin(), p[1], p[0].cos()] };
+    let sheet = Mesh {
+        points: grid.points.iter().map(bend).collect(),
+        ..grid.clone()
+    };
+    // perturb in the parameter plane, then bend: every vertex stays on the cylinder
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let (hx, hy) = (std::f64::consts::FRAC_PI_2 / 8.0, 1.0 / 6.0);
+    let x_max = std::f64::consts::FRAC_PI_2;
+    let flat: Vec<Vec3> = grid
+        .points
+        .iter()
+        .map(|p| {
+            let inside_x = p[0] > 0.0 && p[0] < x_max - 1e-12;
+            let inside_y = p[1] > 0.0 && p[1] < 1.0;
+            let dx = if inside_x {
+                rng.random_range(-0.3..0.3) * hx
+            } else {
+                0.0
+            };
+            let dy = if inside_y {
+                rng.random_range(-0.3..0.3) * hy
+            } else {
+                0.0
+            };
+            [p[0] + dx, p[1] + dy, 0.0]
+        })
+        .collect();
+    let start = Mesh {
+        points: flat.iter().map(bend).collect(),
+        ..grid.clone()
+    };
+    let rim = meshsmooth::mesh::topology::skin_vertices(&grid);
+    let f_start = objective(&start);
+
+    let mut kept = start.clone();
+    smooth(&mut kept, Method::Newton);
+    for v in 0..kept.num_points() {
+        if rim[v] {
+            assert_eq!(kept.points[v], start.points[v], "rim vertex {v} moved");
+        } else {
+            let p = kept.points[v];
+            let r = (p[0] * p[0] + p[2] * p[2]).sqrt();
+            assert!((r - 1.0).abs() < 0.01, "vertex {v} off the cylinder: r = {r}");
+        }
+    }
+    assert!(objective(&kept) < f_start);
+
+    let mut po = ProblemOptions::default();
+    po.boundary = Boundary {
+        mode: BoundaryMode::Slide,
+        ..Default::default()
+    };
+    // the start's curved sides are polylines on the cylinder: how far their
+    // segments sag below it bounds where a vertex sliding on them can be
+    let sag = (0..grid.num_elements())
+        .flat_map(|e| {
+            let vs = grid.element(e).to_vec();
+            (0..3).map(move |i| (vs[i] as usize, vs[(i + 1) % 3] as usize))
+        })
+        .filter(|&(a, b)| rim[a] && rim[b] && grid.points[a][1] == grid.points[b][1])
+        .map(|(a, b)| {
+            let m: Vec3 = std::array::from_fn(|k| 0.5 * (start.points[a][k] + start.points[b][k]));
+            1.0 - (m[0] * m[0] + m[2] * m[2]).sqrt()
+        })
+        .fold(0.0, f64::max);
+    let mut slid = start.clone();
+    smooth_with(&mut slid, &po, Method::Newton);
+    let mut side_moved = 0;
+    for v in (0..slid.num_points()).filter(|&v| rim[v]) {
+        let (a, b) = (start.points[v], slid.points[v]);
+        let g = grid.points[v];
+        let corner = (g[0] == 0.0 || g[0] >= x_max - 1e-12) && (g[1] == 0.0 || g[1] == 1.0);
+        if corner {
+            assert_eq!(a, b, "corner {v} moved");
+        } else if g[1] == 0.0 || g[1] == 1.0 {
+            // a curved side: it stays at its height, on the cylinder (within a facet's sag)
+            assert!((b[1] - a[1]).abs() < 1e-12, "curved-side vertex {v}: {a:?} -> {b:?}");
+            let r = (b[0] * b[0] + b[2] * b[2]).sqrt();
+            assert!(
+                r <= 1.0 + 1e-12 && 1.0 - r <= sag + 1e-12,
+                "curved-side vertex {v}: {a:?} -> {b:?}, r = {r}"
+            );
+        } else {
+            // a straight side along y: x and z kept
+            assert!(
+                (b[0] - a[0]).abs() < 1e-12 && (b[2] - a[2]).abs() < 1e-12,
+                "side vertex {v}: {a:?} -> {b:?}"
+            );
+            side_moved += usize::from((b[1] - a[1]).abs() > 1e-6 * hy);
+        }
+    }
+    assert!(side_moved > 0, "no straight-side vertex slid");
+    assert!(objective(&slid) < objective(&kept), "sliding the rim should help");
+    let _ = sheet;
+}
+
+/// The surface corner's gradient and Hessian blocks through the corner
+/// model (every template) against central differences of its value and
+/// gradient, at random tilted triangles and quadrilateral corners.
+#[test]
+fn surface_corner_derivatives_match_finite_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    for kind in [ElementKind::Triangle, ElementKind::Quadrilateral] {
+        for template in [Template::Harmonic, Template::Average] {
+            let mut model = Model::default();
+            model.metric = MetricKind::InverseMeanRatio;
+            model.template = template;
+            for _ in 0..20 {
+                let x: [Vec3; 4] = {
+                    let o: Vec3 = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+                    let a: Vec3 = std::array::from_fn(|k| o[k] + [1.0, 0.1, 0.3][k] + rng.random_range(-0.3..0.3));
+                    let b: Vec3 = std::array::from_fn(|k| o[k] + [0.2, 0.9, -0.4][k] + rng.random_range(-0.3..0.3));
+                    [o, a, b, o]
+                };
+                let n = unit(cross(&sub(&x[1], &x[0]), &sub(&x[2], &x[0])));
+                let shape = CornerShape::from_w(&ideal_corner(kind), 2).unwrap().on_surface(n);
+                let mut blocks = [[[[0.0; 3]; 3]; 4]; 4];
+                let (v, g) = model.blocks(&shape, &x, &mut blocks).unwrap();
+                assert_eq!(v, model.value(&shape, &x).unwrap());
+                let h = 1e-6;
+                for k in 0..3 {
+                    for a in 0..3 {
+                        let at = |t: f64| {
+                            let mut y = x;
+                            y[k][a] += t;
+                            if k == 0 {
+                                y[3] = y[0];
+                            }
+                            y
+                        };
+                        let fd =
+                            (model.value(&shape, &at(h)).unwrap() - model.value(&shape, &at(-h)).unwrap()) / (2.0 * h);
+                        assert!(
+                            (fd - g[k][a]).abs() < 1e-7 * (1.0 + g[k][a].abs()),
+                            "{kind} {template:?} grad {k}{a}: {fd} vs {}",
+                            g[k][a]
+                        );
+                        let (gp, gm) = (
+                            model.gradient(&shape, &at(h)).unwrap().1,
+                            model.gradient(&shape, &at(-h)).unwrap().1,
+                        );
+                        for l in 0..3 {
+                            for b in 0..3 {
+                                let fd = (gp[l][b] - gm[l][b]) / (2.0 * h);
+                                let an = blocks[l][k][b][a];
+                                assert!(
+                                    (fd - an).abs() < 1e-6 * (1.0 + an.abs()),
+                                    "{kind} {template:?} H[{l}{b}][{k}{a}]: {fd} vs {an}"
+                                );
+                            }
+                        }
+                    }
+                }
+                // the BCD path: one vertex's value, gradient and block from S
+                let rest = shape.tet.s_rest(&x, usize::MAX);
+                let (vb, gb, hb) = model
+                    .vertex_gradient_hessian_of_s(&shape, rest, shape.tet.b(1))
+                    .unwrap();
+                assert!((vb - v).abs() < 1e-14 * v && gb == g[1] && hb == blocks[1][1]);
+            }
+        }
+    }
+}
+
+/// What a surface mesh cannot be smoothed with is refused saying so.
+#[test]
+fn surface_meshes_refuse_size_metrics_and_references() {
+    let sphere = generate::sphere(3);
+    for metric in [MetricKind::TargetShapeSize, MetricKind::ShapeSize] {
+        let mut po = ProblemOptions::default();
+        po.metric = metric;
+        po.reference = Some(&sphere);
+        let err = Problem::with_options(&sphere, &po).unwrap_err().to_string();
+        assert!(err.contains("surface mesh"), "{metric:?}: {err}");
+    }
+    let mut po = ProblemOptions::default();
+    po.reference = Some(&sphere);
+    let err = Problem::with_options(&sphere, &po).unwrap_err().to_string();
+    assert!(err.contains("surface mesh") && err.contains("reference"), "{err}");
+    // a planar mesh stays planar: no surface, no sliding
+    let flat = generate::tri_grid(3, 3, [1.0, 1.0]);
+    let p = Problem::new(&flat).unwrap();
+    assert!(!p.surface_mesh && p.sliding.is_none());
+}
