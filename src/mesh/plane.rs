@@ -140,8 +140,11 @@ struct Fit {
 /// [`PLANARITY_TOLERANCE`]). Such a mesh is optimised in 3D, each element in
 /// its own tangent plane, every vertex sliding on the surface.
 pub fn is_surface(mesh: &Mesh, points: &[Vec3]) -> bool {
-    matches!(Plane::best(mesh, points), Ok(Some(f)) if f.distance > PLANARITY_TOLERANCE * f.extent)
-        || (mesh.dim() == 2 && matches!(Plane::best(mesh, points), Err(_)) && spans_space(points))
+    match Plane::best(mesh, points) {
+        Ok(Some(f)) => f.distance > PLANARITY_TOLERANCE * f.extent,
+        Ok(None) => false,
+        Err(_) => mesh.dim() == 2 && spans_space(points),
+    }
 }
 
 /// Points that do not all lie on one plane through the first three (a

@@ -397,9 +397,11 @@ fn surface_corner_derivatives_match_finite_differences() {
     let mut rng = ChaCha8Rng::seed_from_u64(17);
     for kind in [ElementKind::Triangle, ElementKind::Quadrilateral] {
         for template in [Template::Harmonic, Template::Average] {
-            let mut model = Model::default();
-            model.metric = MetricKind::InverseMeanRatio;
-            model.template = template;
+            let model = Model {
+                metric: MetricKind::InverseMeanRatio,
+                template,
+                ..Default::default()
+            };
             for _ in 0..20 {
                 let x: [Vec3; 4] = {
                     let o: Vec3 = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
