@@ -164,7 +164,7 @@ mod tests {
 
     #[test]
     fn spheres_and_cubes_are_closed_welded_and_wound_outward() {
-        for n in [1, 2, 5] {
+        for n in [1, 2, 3, 4, 5, 6, 16] {
             let s = sphere(n);
             assert_eq!(s.num_elements(), 8 * n * n);
             assert_eq!(s.num_points(), 4 * n * n + 2);

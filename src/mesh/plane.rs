@@ -90,14 +90,7 @@ impl Plane {
                 e[2][k] = s;
                 e
             }
-            None => {
-                // e1 along the coordinate axis least aligned with n, projected into the plane
-                let k = (0..3).min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap();
-                let mut a = [0.0; 3];
-                a[k] = 1.0;
-                let e1 = unit(sub(&a, &n.map(|c| c * n[k])));
-                [e1, cross(&n, &e1), n]
-            }
+            None => axes_with_normal(&n),
         };
         let plane = Plane { origin, axes };
         let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
@@ -125,6 +118,16 @@ impl Plane {
         let [e1, e2, _] = &self.axes;
         std::array::from_fn(|k| self.origin[k] + q[0] * e1[k] + q[1] * e2[k])
     }
+}
+
+/// Right-handed orthonormal axes (e1, e2, n) for the unit normal `n`: e1
+/// along the coordinate axis least aligned with n, projected into the plane.
+pub fn axes_with_normal(n: &Vec3) -> [Vec3; 3] {
+    let k = (0..3).min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap();
+    let mut a = [0.0; 3];
+    a[k] = 1.0;
+    let e1 = unit(sub(&a, &n.map(|c| c * n[k])));
+    [e1, cross(n, &e1), *n]
 }
 
 /// A fitted plane and how far the mesh is from it.

@@ -213,19 +213,11 @@ impl Model {
         let s = shape.tet.s_rest(x, usize::MAX);
         if shape.is_surface() {
             let p = surface::parts(self.template, &s, &shape.normal)?;
-            let mut out = [[0.0; 3]; 4];
-            for (k, o) in out.iter_mut().enumerate().take(3) {
-                *o = p.gradient(shape.tet.b(k));
-            }
-            return Some((p.value, out));
+            return Some((p.value, three_vertex_gradient(shape, |b| p.gradient(b))));
         }
         if self.planar(n) {
             let p = planar::parts(&s)?;
-            let mut out = [[0.0; 3]; 4];
-            for (k, o) in out.iter_mut().enumerate().take(3) {
-                *o = p.gradient(shape.tet.b(k));
-            }
-            return Some((p.eta, out));
+            return Some((p.eta, three_vertex_gradient(shape, |b| p.gradient(b))));
         }
         let (v, g) = self.eval(shape, &s, None)?;
         let mut out = [[0.0; 3]; 4];
@@ -262,10 +254,14 @@ impl Model {
         let n = shape.n;
         let s = shape.tet.s_rest(x, usize::MAX);
         if shape.is_surface() {
-            return surface_blocks(self.template, shape, &s, out);
+            let p = surface::parts(self.template, &s, &shape.normal)?;
+            let grad = three_vertex_blocks(shape, out, false, |b| p.gradient(b), |a, b| p.block(a, b));
+            return Some((p.value, grad));
         }
         if self.planar(n) {
-            return planar_blocks(shape, &s, out);
+            let p = planar::parts(&s)?;
+            let grad = three_vertex_blocks(shape, out, true, |b| p.gradient(b), |a, b| p.block(a, b));
+            return Some((p.eta, grad));
         }
         let mut h = SHess::default();
         let (v, g) = self.eval(shape, &s, Some(&mut h))?;
@@ -292,46 +288,37 @@ impl Model {
     }
 }
 
-/// `Model::upper_blocks` for a surface corner (3 vertices) through `surface.rs`.
-fn surface_blocks(
-    template: Template,
-    shape: &CornerShape,
-    s: &Mat3,
-    out: &mut [[Mat3; 4]; 4],
-) -> Option<(f64, [Vec3; 4])> {
-    let p = surface::parts(template, s, &shape.normal)?;
-    let mut grad = [[0.0; 3]; 4];
-    for k in 0..4 {
-        for l in k..4 {
-            out[k][l] = if l < 3 {
-                p.block(shape.tet.b(k), shape.tet.b(l))
-            } else {
-                [[0.0; 3]; 3]
-            };
-        }
-        if k < 3 {
-            grad[k] = p.gradient(shape.tet.b(k));
-        }
+/// The gradient of a corner with three vertices (planar or surface) from
+/// the gradient for a vertex's B row.
+fn three_vertex_gradient(shape: &CornerShape, gradient: impl Fn(&Vec3) -> Vec3) -> [Vec3; 4] {
+    let mut out = [[0.0; 3]; 4];
+    for (k, o) in out.iter_mut().enumerate().take(3) {
+        *o = gradient(shape.tet.b(k));
     }
-    Some((p.value, grad))
+    out
 }
 
-/// `Model::upper_blocks` for a planar corner (3 vertices) through `planar.rs`.
-fn planar_blocks(shape: &CornerShape, s: &Mat3, out: &mut [[Mat3; 4]; 4]) -> Option<(f64, [Vec3; 4])> {
-    let p = planar::parts(s)?;
-    let mut grad = [[0.0; 3]; 4];
+/// `Model::upper_blocks` for a corner with three vertices from the gradient
+/// and Hessian block for B rows; `pin_z` puts 1 on the z diagonal of a
+/// planar corner's vertices, whose z never moves.
+fn three_vertex_blocks(
+    shape: &CornerShape,
+    out: &mut [[Mat3; 4]; 4],
+    pin_z: bool,
+    gradient: impl Fn(&Vec3) -> Vec3,
+    block: impl Fn(&Vec3, &Vec3) -> Mat3,
+) -> [Vec3; 4] {
     for k in 0..4 {
         for l in k..4 {
             out[k][l] = if l < 3 {
-                p.block(shape.tet.b(k), shape.tet.b(l))
+                block(shape.tet.b(k), shape.tet.b(l))
             } else {
                 [[0.0; 3]; 3]
             };
         }
-        if k < 3 {
-            grad[k] = p.gradient(shape.tet.b(k));
+        if pin_z && k < 3 {
             out[k][k][2][2] = 1.0;
         }
     }
-    Some((p.eta, grad))
+    three_vertex_gradient(shape, gradient)
 }

@@ -186,7 +186,7 @@ impl<'a> Measured<'a> {
     fn in_frame(&self, mesh: &Mesh, e: usize) -> Option<([Vec3; 8], usize)> {
         let vs = mesh.element(e);
         let normal = surface::element_normal(&self.points, vs)?;
-        let axes = surface::frame_of(&normal);
+        let axes = crate::mesh::plane::axes_with_normal(&normal);
         let o = self.points[vs[0] as usize];
         let mut x = [[0.0; 3]; 8];
         for (slot, &v) in x.iter_mut().zip(vs) {

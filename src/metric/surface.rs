@@ -50,6 +50,13 @@ fn at_b(a: &Mat3, b: &Mat3) -> Mat3 {
 
 /// The signed area d (positive along `normal`) and f = |S|^2; `None` when
 /// the corner is degenerate or folded against `normal`.
+/// (s0 x s1) . `normal`: the corner's area as seen along its reference
+/// normal, positive while it faces that way.
+pub fn facing_area(s: &Mat3, normal: &Vec3) -> f64 {
+    let sc = columns(s);
+    dot(&cross(&sc[0], &sc[1]), normal)
+}
+
 fn invariants(s: &Mat3, normal: &Vec3) -> Option<(f64, f64, Vec3, [Vec3; 2])> {
     let sc = columns(s);
     let c = cross(&sc[0], &sc[1]);
@@ -174,19 +181,6 @@ pub fn in_frame(axes: &Mat3, s: &Mat3) -> Mat3 {
     std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| axes[i][k] * s[k][j]).sum()))
 }
 
-/// Right-handed orthonormal axes (e1, e2, n) with n along `normal` (unit).
-pub fn frame_of(normal: &Vec3) -> Mat3 {
-    let k = (0..3)
-        .min_by(|&a, &b| normal[a].abs().total_cmp(&normal[b].abs()))
-        .unwrap();
-    let mut a = [0.0; 3];
-    a[k] = 1.0;
-    let p: Vec3 = std::array::from_fn(|i| a[i] - normal[i] * normal[k]);
-    let l = dot(&p, &p).sqrt();
-    let e1 = p.map(|v| v / l);
-    [e1, cross(normal, &e1), *normal]
-}
-
 /// The unit Newell normal of the polygon `vs` at `points`; `None` when it has no area.
 pub fn element_normal(points: &[Vec3], vs: &[u32]) -> Option<Vec3> {
     let mut n = [0.0; 3];
@@ -293,7 +287,7 @@ mod tests {
             let l = dot(&v, &v).sqrt();
             v.map(|c| c / l)
         };
-        let ax = frame_of(&n);
+        let ax = crate::mesh::plane::axes_with_normal(&n);
         assert!(dot(&cross(&ax[0], &ax[1]), &ax[2]) > 1.0 - 1e-14);
         let s = s_of([[1.0, 0.2, 0.3], [-0.1, 0.5, 0.7]]);
         let c = cross(&columns(&s)[0], &columns(&s)[1]);

@@ -291,30 +291,11 @@ pub fn skin_classes(
         None => return Ok(None),
     };
     Ok(Some(if surface_mesh && opts.boundary.mode == BoundaryMode::Fixed {
-        classes.keeping(&open_boundary(mesh))
+        // its skin: the open rim, on edges of one element only
+        classes.keeping(&crate::mesh::topology::skin_vertices(mesh))
     } else {
         classes
     }))
-}
-
-/// Per vertex of a surface mesh: on an edge of one element only (its open
-/// boundary curves).
-fn open_boundary(mesh: &Mesh) -> Vec<bool> {
-    let mut count: HashMap<(u32, u32), u32> = HashMap::new();
-    for e in 0..mesh.num_elements() {
-        let vs = mesh.element(e);
-        for i in 0..vs.len() {
-            *count.entry(edge_key(vs[i], vs[(i + 1) % vs.len()])).or_default() += 1;
-        }
-    }
-    let mut out = vec![false; mesh.num_points()];
-    for ((a, b), c) in count {
-        if c == 1 {
-            out[a as usize] = true;
-            out[b as usize] = true;
-        }
-    }
-    out
 }
 
 /// The faces the sliding vertices of `mesh` lie on: a surface mesh's own

@@ -27,7 +27,7 @@ use crate::backend::cpu::project_boundary::closest_on_triangle;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::mesh::topology::Csr;
-use crate::metric::mat3::{Vec3, cross, dot, sub};
+use crate::metric::mat3::{Vec3, dot, sub};
 use rstar::{AABB, PointDistance, RTree, RTreeObject};
 use std::collections::HashMap;
 
@@ -131,18 +131,11 @@ impl Geometry {
             ));
         }
         let cos_feature = feature_angle.to_radians().cos();
-        let newell = |f: &[u32]| -> Vec3 {
-            let mut n = [0.0; 3];
-            let o = &points[f[0] as usize];
-            for i in 1..f.len() - 1 {
-                let c = cross(&sub(&points[f[i] as usize], o), &sub(&points[f[i + 1] as usize], o));
-                for k in 0..3 {
-                    n[k] += c[k];
-                }
-            }
-            unit(n)
-        };
-        let face_normal: Vec<Vec3> = faces.iter().map(|f| newell(f)).collect();
+        // a face without area has no normal: zero, so no edge of it is smooth
+        let face_normal: Vec<Vec3> = faces
+            .iter()
+            .map(|f| crate::metric::surface::element_normal(points, f).unwrap_or([0.0; 3]))
+            .collect();
         // each edge with its faces and the direction each traverses it in
         let mut edges: HashMap<(u32, u32), Vec<(u32, bool)>> = HashMap::new();
         for (fi, f) in faces.iter().enumerate() {

@@ -32,60 +32,7 @@ fn ext(f: Format) -> &'static str {
 /// A triangulated unit sphere: an octahedron with each face split `n`
 /// times per edge, projected onto the sphere.
 fn sphere(n: usize) -> Mesh {
-    let corners: [[f64; 3]; 6] = [
-        [1.0, 0.0, 0.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, -1.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [0.0, 0.0, -1.0],
-    ];
-    let faces = [
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
-    let mut points: Vec<[f64; 3]> = Vec::new();
-    let mut ids = std::collections::HashMap::new();
-    let mut id = |p: [f64; 3], points: &mut Vec<[f64; 3]>| {
-        let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-        let q = p.map(|x| x / l + 0.0);
-        let key = q.map(|x| (x * 1e9).round() as i64);
-        *ids.entry(key).or_insert_with(|| {
-            points.push(q);
-            points.len() - 1
-        }) as u32
-    };
-    let mut tris = Vec::new();
-    for f in faces {
-        let [a, b, c] = f.map(|i| corners[i]);
-        let at = |i: usize, j: usize| {
-            let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
-            [0, 1, 2].map(|k| a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]))
-        };
-        for i in 0..n {
-            for j in 0..n - i {
-                let p0 = id(at(i, j), &mut points);
-                let p1 = id(at(i + 1, j), &mut points);
-                let p2 = id(at(i, j + 1), &mut points);
-                tris.push([p0, p1, p2]);
-                if i + j + 1 < n {
-                    let p3 = id(at(i + 1, j + 1), &mut points);
-                    tris.push([p1, p3, p2]);
-                }
-            }
-        }
-    }
-    let mut m = Mesh::new(points);
-    for t in tris {
-        m.push_element(ElementKind::Triangle, &t);
-    }
-    m
+    meshsmooth::generate::sphere(n)
 }
 
 /// A unit cube's surface of quadrilaterals, `n` by `n` on each side.

@@ -26,7 +26,7 @@ pub fn corner_first_inversion(p: &Problem, x: &[Vec3], y: &[Vec3], c: usize) -> 
     if shape.is_surface() {
         // in a frame with the element's normal as z, the planar determinant
         // is the area facing that normal
-        let axes = crate::metric::surface::frame_of(&shape.normal);
+        let axes = crate::mesh::plane::axes_with_normal(&shape.normal);
         (s0, s1) = (
             crate::metric::surface::in_frame(&axes, &s0),
             crate::metric::surface::in_frame(&axes, &s1),

@@ -67,8 +67,7 @@ pub fn min_det(p: &Problem, x: &[Vec3]) -> f64 {
             let shape = p.shape(c);
             let s = shape.tet.s_rest(&p.corner_points(x, c), usize::MAX);
             if shape.is_surface() {
-                let (a, b) = ([s[0][0], s[1][0], s[2][0]], [s[0][1], s[1][1], s[2][1]]);
-                crate::metric::mat3::dot(&crate::metric::mat3::cross(&a, &b), &shape.normal)
+                crate::metric::surface::facing_area(&s, &shape.normal)
             } else if p.dim == 2 {
                 s[0][0] * s[1][1] - s[0][1] * s[1][0]
             } else {
