@@ -80,7 +80,7 @@ fn patch_value(v: u32, at: vec3<real>) -> Eta {
         } else {
             rest = corner_rest(packed >> 2u, cr.b, k);
         }
-        let r = model_value_of_s(model, s_with(rest, cr.b[k], at), model_rjm(model, cr.b));
+        let r = model_value_of_s(model, s_with(rest, cr.b[k], at), model_aux(model, cr));
         if !r.ok {
             return Eta(real(0.0), false);
         }
@@ -118,7 +118,7 @@ fn main(
         if it - first < CACHE {
             cache_put(it - first, rest);
         }
-        let r = model_vertex_gh(model, s_with(rest, cr.b[k], xv), cr.b[k], model_rjm(model, cr.b));
+        let r = model_vertex_gh(model, s_with(rest, cr.b[k], xv), cr.b[k], model_aux(model, cr));
         if !r.ok {
             return;
         }

@@ -29,9 +29,11 @@ fn store_block(base: u32, k: u32, l: u32, blk: mat3x3<real>, w: real) {
 }
 
 // `Model::blocks` through the structured S-Hessian.
-fn general_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) -> bool {
+fn general_blocks(base: u32, s: mat3x3<real>, cr: CornerRef) -> bool {
+    let b = cr.b;
+    let w = cr.w;
     let n = model.dim;
-    let m = model_eval(model, s, model_rjm(model, b), true);
+    let m = model_eval(model, s, model_aux(model, cr), true);
     if !m.ok {
         return false;
     }
@@ -86,6 +88,34 @@ fn planar_blocks(base: u32, s: mat3x3<real>, b: array<vec3<real>, 4>, w: real) -
 }
 #endif
 
+#if SURFACE
+// `corner_model::three_vertex_blocks` of a surface corner: three vertices
+// moving in 3D, the fourth's blocks zero.
+fn surface_blocks(base: u32, s: mat3x3<real>, cr: CornerRef) -> bool {
+    let p = surface_parts(model.tmpl, s, cr.n);
+    if !p.ok {
+        return false;
+    }
+    for (var k = 0u; k < 4u; k++) {
+        var g = vec3<real>(real(0.0));
+        if k < 3u {
+            g = surface_gradient(p, cr.b[k]);
+        }
+        elem_set(base + 3u * k, g[0] * cr.w);
+        elem_set(base + 3u * k + 1u, g[1] * cr.w);
+        elem_set(base + 3u * k + 2u, g[2] * cr.w);
+        for (var l = k; l < 4u; l++) {
+            var blk = mat3x3<real>();
+            if l < 3u {
+                blk = surface_block(p, cr.b[k], cr.b[l]);
+            }
+            store_block(base, k, l, blk, cr.w);
+        }
+    }
+    return true;
+}
+#endif
+
 @compute @workgroup_size(64)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -108,9 +138,14 @@ fn main(
 #if PLANAR
     ok = planar_blocks(base, s, b, w);
 #endif
+#if SURFACE
+    ok = surface_blocks(base, s, cr);
+#endif
 #if !FAST
 #if !PLANAR
-    ok = general_blocks(base, s, b, w);
+#if !SURFACE
+    ok = general_blocks(base, s, cr);
+#endif
 #endif
     if ok {
         return;

@@ -42,7 +42,11 @@ fn main(
         );
         let s0 = s_of(corner_points(c), cr.b);
         let s1 = s_of(y, cr.b);
-        t = first_inversion(s0, s1 - s0, model.dim);
+        if any(cr.n != vec3<real>(real(0.0))) {
+            t = first_root(facing_coefficients(s0, s1 - s0, cr.n));
+        } else {
+            t = first_inversion(s0, s1 - s0, model.dim);
+        }
     }
     let total = tree_reduce(lid, vec4<real>(real(0.0), t, -REAL_MAX, real(0.0)));
     if lid == 0u && group < (op.n + 63u) / 64u {

@@ -32,7 +32,11 @@ fn main(
     if c < op.n {
         let cr = corner_ref(c);
         let s = s_of(corner_points(c), cr.b);
+#if SURFACE
+        dmin = surface_facing_area(s, cr.n);
+#else
         dmin = det_n(s, model.dim);
+#endif
         var ok = false;
         var g_s = mat3x3<real>();
 #if FAST
@@ -48,12 +52,20 @@ fn main(
         term = p.eta;
         g_s = mat3x3<real>(vec3<real>(p.g0, real(0.0)), vec3<real>(p.g1, real(0.0)), vec3<real>(real(0.0)));
 #endif
+#if SURFACE
+        let p = surface_parts(model.tmpl, s, cr.n);
+        ok = p.ok;
+        term = p.value;
+        g_s = surface_grad_s(p);
+#endif
 #if !FAST
 #if !PLANAR
-        let m = model_eval(model, s, model_rjm(model, cr.b), false);
+#if !SURFACE
+        let m = model_eval(model, s, model_aux(model, cr), false);
         ok = m.ok;
         term = m.v;
         g_s = m.g;
+#endif
 #endif
 #endif
         if ok {

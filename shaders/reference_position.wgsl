@@ -38,7 +38,7 @@ fn patch_value(v: u32, at: vec3<real>) -> Eta {
     for (var it = first; it < inc_offsets[v + 1u]; it++) {
         let packed = inc_items_get(it);
         let cr = corner_ref(packed >> 2u);
-        let r = model_value_of_s(model, s_with(rest_of(it, first), cr.b[packed & 3u], at), model_rjm(model, cr.b));
+        let r = model_value_of_s(model, s_with(rest_of(it, first), cr.b[packed & 3u], at), model_aux(model, cr));
         if !r.ok {
             return Eta(real(0.0), false);
         }
@@ -63,7 +63,7 @@ fn patch_step(v: u32, xv: vec3<real>, min_step_sq: real) -> Step {
         let packed = inc_items_get(it);
         let k = packed & 3u;
         let cr = corner_ref(packed >> 2u);
-        let r = model_vertex_gh(model, s_with(rest_of(it, first), cr.b[k], xv), cr.b[k], model_rjm(model, cr.b));
+        let r = model_vertex_gh(model, s_with(rest_of(it, first), cr.b[k], xv), cr.b[k], model_aux(model, cr));
         if !r.ok {
             return out;
         }

@@ -902,13 +902,7 @@ impl Smoother {
         if let Some(msg) = tangled.then(|| solve::untangle::convention_problem(mesh)).flatten() {
             return Err(Error::InvalidMesh(msg));
         }
-        let (backend, note) = if self.device == DeviceChoice::Auto && crate::mesh::plane::is_surface(mesh, &mesh.points)
-        {
-            // the GPU kernels measure planar and volume elements only
-            (Backend::Cpu, None)
-        } else {
-            self.backend(&[self.method, untangle_method(self.method)])?
-        };
+        let (backend, note) = self.backend(&[self.method, untangle_method(self.method)])?;
         let unused = ruled.unused;
         // the skin is topology: one for the reports before and after
         let skin = crate::mesh::topology::skin_vertices(mesh);

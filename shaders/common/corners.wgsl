@@ -8,12 +8,17 @@ struct CornerRef {
     b: array<vec3<real>, 4>,
     // the corner's weight in F
     w: real,
+    // a surface corner's unit reference normal (rows 1-3's w); zero otherwise
+    n: vec3<real>,
 }
 
 fn corner_ref(c: u32) -> CornerRef {
     let t = 4u * corners_get(CORNER_STRIDE * c + 4u);
     let r0 = shapes[t];
-    return CornerRef(array<vec3<real>, 4>(r0.xyz, shapes[t + 1u].xyz, shapes[t + 2u].xyz, shapes[t + 3u].xyz), r0.w);
+    let r1 = shapes[t + 1u];
+    let r2 = shapes[t + 2u];
+    let r3 = shapes[t + 3u];
+    return CornerRef(array<vec3<real>, 4>(r0.xyz, r1.xyz, r2.xyz, r3.xyz), r0.w, vec3<real>(r1.w, r2.w, r3.w));
 }
 
 fn corner_point(v: u32) -> vec3<real> {

@@ -47,6 +47,10 @@ fn mul_vec(m: mat3x3<real>, v: vec3<real>) -> vec3<real> {
     );
 }
 
+fn cross3(a: vec3<real>, b: vec3<real>) -> vec3<real> {
+    return vec3<real>(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]);
+}
+
 fn dot3(a: vec3<real>, b: vec3<real>) -> real {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }

@@ -8,6 +8,9 @@
 #if PLANAR
 #import planar
 #endif
+#if SURFACE
+#import surface
+#endif
 
 // `Model::templated`: Average is g(m) = 1 - 1/m, g' = 1/m^2, g'' = -2/m^3.
 fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
@@ -27,13 +30,20 @@ fn templated(model: Model, m: MetricEval, hess: bool) -> MetricEval {
     return out;
 }
 
-// The reference-Jacobian metric's M of a corner with B rows `b` (`Model::eval`
-// on the CPU); the other metrics do not read it.
-fn model_rjm(model: Model, b: array<vec3<real>, 4>) -> mat3x3<real> {
+// What a corner's term reads beyond S: the reference-Jacobian metric's M
+// (`Model::eval` on the CPU), or a surface corner's reference normal as row
+// 0; the other forms read nothing.
+fn model_aux(model: Model, cr: CornerRef) -> mat3x3<real> {
 #if RJ
-    return rj_weight(b);
-#else
+    return rj_weight(cr.b);
+#endif
+#if SURFACE
+    return mat3x3<real>(cr.n, vec3<real>(real(0.0)), vec3<real>(real(0.0)));
+#endif
+#if !RJ
+#if !SURFACE
     return mat3x3<real>();
+#endif
 #endif
 }
 
@@ -53,10 +63,15 @@ fn model_value_of_s(model: Model, s: mat3x3<real>, rjm: mat3x3<real>) -> Eta {
 #if PLANAR
     return planar_value_of_s(s);
 #endif
+#if SURFACE
+    return surface_value_of_s(model.tmpl, s, rjm[0]);
+#endif
 #if !FAST
 #if !PLANAR
+#if !SURFACE
     let m = model_eval(model, s, rjm, false);
     return Eta(m.v, m.ok);
+#endif
 #endif
 #endif
 }
@@ -80,8 +95,22 @@ fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<rea
     out.hess[2][2] = real(1.0);
     return out;
 #endif
+#if SURFACE
+    // a surface vertex moves in 3D (its projector keeps it on the surface)
+    var out: VertexGH;
+    let p = surface_parts(model.tmpl, s, rjm[0]);
+    out.ok = p.ok;
+    if !p.ok {
+        return out;
+    }
+    out.eta = p.value;
+    out.grad = surface_gradient(p, b);
+    out.hess = surface_block(p, b, b);
+    return out;
+#endif
 #if !FAST
 #if !PLANAR
+#if !SURFACE
     var out: VertexGH;
     let m = model_eval(model, s, rjm, true);
     out.ok = m.ok;
@@ -96,6 +125,7 @@ fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<rea
         out.hess[2][2] = real(1.0);
     }
     return out;
+#endif
 #endif
 #endif
 }

@@ -58,10 +58,25 @@ fn bracketed_root(c: vec4<real>, lo_in: real, hi_in: real) -> real {
     return hi;
 }
 
+// (c0, c1, c2, 0) of a surface corner's area facing its normal n along
+// A + t B: n . ((a0 + t b0) x (a1 + t b1)) for the columns a_j, b_j
+fn facing_coefficients(a: mat3x3<real>, b: mat3x3<real>, n: vec3<real>) -> vec4<real> {
+    let a0 = vec3<real>(a[0][0], a[1][0], a[2][0]);
+    let a1 = vec3<real>(a[0][1], a[1][1], a[2][1]);
+    let b0 = vec3<real>(b[0][0], b[1][0], b[2][0]);
+    let b1 = vec3<real>(b[0][1], b[1][1], b[2][1]);
+    let c1 = dot3(cross3(a0, b1), n) + dot3(cross3(b0, a1), n);
+    return vec4<real>(dot3(cross3(a0, a1), n), c1, dot3(cross3(b0, b1), n), real(0.0));
+}
+
 // The smallest t in (0, 1] with det(A + t B) <= 0; REAL_MAX when there is
 // none; 0 when det A <= 0 already
 fn first_inversion(a: mat3x3<real>, b: mat3x3<real>, dim: u32) -> real {
-    let c = det_coefficients(a, b, dim);
+    return first_root(det_coefficients(a, b, dim));
+}
+
+// The smallest t in (0, 1] at which the cubic `c` is not positive
+fn first_root(c: vec4<real>) -> real {
     if !(c[0] > real(0.0)) {
         return real(0.0);
     }

@@ -36,10 +36,6 @@ struct SRow {
     w2: vec3<real>,
 }
 
-fn cross3(a: vec3<real>, b: vec3<real>) -> vec3<real> {
-    return vec3<real>(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]);
-}
-
 fn scaled3(m: mat3x3<real>, c: real) -> mat3x3<real> {
     return mat3x3<real>(m[0] * c, m[1] * c, m[2] * c);
 }

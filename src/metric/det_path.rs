@@ -5,7 +5,7 @@
 //! hard planar meshes most of its trials were steps halved until nothing
 //! inverted.
 
-use super::mat3::{Mat3, cofactor, det, frob_dot};
+use super::mat3::{Mat3, Vec3, cofactor, cross, det, dot, frob_dot};
 
 /// Coefficients (c0, c1, c2, c3) of det(A + t B) (the leading 2x2 blocks when `dim` is 2).
 pub fn det_coefficients(a: &Mat3, b: &Mat3, dim: usize) -> [f64; 4] {
@@ -20,10 +20,25 @@ pub fn det_coefficients(a: &Mat3, b: &Mat3, dim: usize) -> [f64; 4] {
     [det(a), frob_dot(&cofactor(a), b), frob_dot(&cofactor(b), a), det(b)]
 }
 
+/// Coefficients (c0, c1, c2, 0) of the area of a surface corner's S = A + t B
+/// facing its reference normal `n` (`surface::facing_area`):
+/// n . ((a0 + t b0) x (a1 + t b1)) for the columns a_j, b_j.
+pub fn facing_coefficients(a: &Mat3, b: &Mat3, n: &Vec3) -> [f64; 4] {
+    let col = |m: &Mat3, j: usize| [m[0][j], m[1][j], m[2][j]];
+    let (a0, a1, b0, b1) = (col(a, 0), col(a, 1), col(b, 0), col(b, 1));
+    let c1 = dot(&cross(&a0, &b1), n) + dot(&cross(&b0, &a1), n);
+    [dot(&cross(&a0, &a1), n), c1, dot(&cross(&b0, &b1), n), 0.0]
+}
+
 /// The smallest t in (0, 1] with det(A + t B) <= 0, +inf when the
 /// determinant stays positive on (0, 1], 0 when det A <= 0 already.
 pub fn first_inversion(a: &Mat3, b: &Mat3, dim: usize) -> f64 {
-    let c = det_coefficients(a, b, dim);
+    first_root(det_coefficients(a, b, dim))
+}
+
+/// The smallest t in (0, 1] at which the cubic with coefficients `c` is not
+/// positive (+inf when there is none, 0 when c0 <= 0).
+pub fn first_root(c: [f64; 4]) -> f64 {
     let p = |t: f64| c[0] + t * (c[1] + t * (c[2] + t * c[3]));
     if !(c[0] > 0.0) {
         return 0.0;

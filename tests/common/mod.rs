@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod surface;
 
 use meshsmooth::backend::gpu::{GpuContext, GpuOptions, Precision};
 use meshsmooth::generate::{self, PerturbOptions, Perturbation};

@@ -14,5 +14,6 @@ mod gpu_metrics;
 mod gpu_newton;
 mod gpu_nlcg;
 mod gpu_split;
+mod gpu_surface;
 mod gpu_untangle;
 mod kernels;

@@ -21,17 +21,12 @@ pub fn first_inversion(p: &Problem, x: &[Vec3], y: &[Vec3]) -> f64 {
 pub fn corner_first_inversion(p: &Problem, x: &[Vec3], y: &[Vec3], c: usize) -> f64 {
     let shape = p.shape(c);
     let tet = &shape.tet;
-    let mut s0 = tet.s_rest(&p.corner_points(x, c), usize::MAX);
-    let mut s1 = tet.s_rest(&p.corner_points(y, c), usize::MAX);
-    if shape.is_surface() {
-        // in a frame with the element's normal as z, the planar determinant
-        // is the area facing that normal
-        let axes = crate::mesh::plane::axes_with_normal(&shape.normal);
-        (s0, s1) = (
-            crate::metric::surface::in_frame(&axes, &s0),
-            crate::metric::surface::in_frame(&axes, &s1),
-        );
-    }
+    let s0 = tet.s_rest(&p.corner_points(x, c), usize::MAX);
+    let s1 = tet.s_rest(&p.corner_points(y, c), usize::MAX);
     let e = [0, 1, 2].map(|i| [0, 1, 2].map(|j| s1[i][j] - s0[i][j]));
+    if shape.is_surface() {
+        let c = crate::metric::det_path::facing_coefficients(&s0, &e, &shape.normal);
+        return crate::metric::det_path::first_root(c);
+    }
     crate::metric::det_path::first_inversion(&s0, &e, p.dim)
 }

@@ -161,11 +161,6 @@ impl<'c> GpuBackend<'c> {
                 x.len()
             )));
         }
-        if p.surface_mesh {
-            return Err(Error::Unsupported(
-                "surface meshes are smoothed on the CPU for now: use --device cpu (the GPU kernels measure planar and volume elements only)".into(),
-            ));
-        }
         let r = ctx.real_size();
         let layout = match ctx.layout {
             DeviceLayout::Problem => SweepLayout::identity(p),

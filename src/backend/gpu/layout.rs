@@ -121,10 +121,12 @@ pub(crate) const METRIC_SS: u32 = 4;
 pub(crate) const TEMPLATE_HARMONIC: u32 = 0;
 pub(crate) const TEMPLATE_AVERAGE: u32 = 1;
 /// `ModelUniform::closed`: the structured general path, the tetrahedral
-/// inverse mean ratio (`Model::fast`), the planar 2x2 forms (`Model::planar`).
+/// inverse mean ratio (`Model::fast`), the planar 2x2 forms (`Model::planar`),
+/// a surface mesh's corners (`metric::surface`).
 pub(crate) const CLOSED_NONE: u32 = 0;
 pub(crate) const CLOSED_TET: u32 = 1;
 pub(crate) const CLOSED_PLANAR: u32 = 2;
+pub(crate) const CLOSED_SURFACE: u32 = 3;
 
 /// The constants Rust and WGSL share, generated into every kernel's prelude
 /// (`Real::prelude`); no WGSL file defines them.
@@ -178,7 +180,12 @@ impl ModelUniform {
     }
 
     pub fn of(p: &Problem) -> ModelUniform {
-        Self::from_model(&p.model, p.dim)
+        let mut m = Self::from_model(&p.model, p.dim);
+        if p.surface_mesh {
+            // every corner of a surface mesh is measured in its own plane
+            m.closed = CLOSED_SURFACE;
+        }
+        m
     }
 
     /// The uniform of `m` in dimension `dim`.
@@ -209,7 +216,8 @@ impl ModelUniform {
     }
 }
 
-/// Reals per `shapes` table entry: four `vec4` rows, b_k in .xyz, the weight in row 0's w.
+/// Reals per `shapes` table entry: four `vec4` rows, b_k in .xyz, the weight in
+/// row 0's w, a surface corner's reference normal in rows 1-3's w.
 const TABLE_ENTRY: usize = 16;
 
 /// The corners as the solver kernels read them (`CORNER_STRIDE` u32 each:
@@ -226,7 +234,12 @@ pub(crate) fn corner_tables(p: &Problem) -> (Vec<u32>, Vec<f64>) {
             let tet = &p.shapes[shape as usize].tet;
             for k in 0..4 {
                 table.extend_from_slice(tet.b(k));
-                table.push(if k == 0 { w } else { 0.0 });
+                // a surface corner's normal in rows 1-3's w (`corner_ref`)
+                table.push(if k == 0 {
+                    w
+                } else {
+                    p.shapes[shape as usize].normal[k - 1]
+                });
             }
             (table.len() / TABLE_ENTRY - 1) as u32
         });

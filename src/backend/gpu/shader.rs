@@ -9,7 +9,9 @@
 //! and a test checks it against naga's reflection of the WGSL.
 
 use super::context::{GpuContext, KernelForms};
-use super::layout::{CLOSED_PLANAR, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_SS, METRIC_TMP, ModelUniform};
+use super::layout::{
+    CLOSED_PLANAR, CLOSED_SURFACE, CLOSED_TET, METRIC_CN, METRIC_IMR, METRIC_RJ, METRIC_SS, METRIC_TMP, ModelUniform,
+};
 use std::collections::HashSet;
 
 /// Floating-point precision of the device arithmetic.
@@ -57,6 +59,7 @@ const SHARED: &[(&str, &str)] = &[
         include_str!("../../../shaders/metric/reference_jacobian.wgsl"),
     ),
     ("planar", include_str!("../../../shaders/metric/planar.wgsl")),
+    ("surface", include_str!("../../../shaders/metric/surface.wgsl")),
     ("det_path", include_str!("../../../shaders/metric/det_path.wgsl")),
     ("shess", include_str!("../../../shaders/metric/shess.wgsl")),
     ("smetric", include_str!("../../../shaders/metric/smetric.wgsl")),
@@ -281,6 +284,8 @@ tests: {
 pub enum Form {
     Fast,
     Planar,
+    /// A surface mesh's corners (`surface.wgsl`), which only it measures.
+    Surface,
     Imr,
     Cn,
     Tmp,
@@ -290,9 +295,10 @@ pub enum Form {
 }
 
 impl Form {
-    pub const ALL: [Form; 7] = [
+    pub const ALL: [Form; 8] = [
         Form::Fast,
         Form::Planar,
+        Form::Surface,
         Form::Imr,
         Form::Cn,
         Form::Tmp,
@@ -305,6 +311,7 @@ impl Form {
         match model.closed {
             CLOSED_TET => return Form::Fast,
             CLOSED_PLANAR => return Form::Planar,
+            CLOSED_SURFACE => return Form::Surface,
             _ => {}
         }
         Form::general(model)
@@ -314,7 +321,9 @@ impl Form {
     pub(crate) fn on(model: &ModelUniform, ctx: &GpuContext) -> Form {
         match ctx.forms {
             KernelForms::Closed => Form::of(model),
-            KernelForms::General => Form::general(model),
+            // no general instance measures a surface corner
+            KernelForms::General if model.closed != CLOSED_SURFACE => Form::general(model),
+            KernelForms::General => Form::Surface,
             KernelForms::Auto => match Form::of(model) {
                 Form::Fast if !ctx.is_software() && !ctx.is_f64() => Form::general(model),
                 form => form,
@@ -340,6 +349,7 @@ impl Form {
         match self {
             Form::Fast => "FAST",
             Form::Planar => "PLANAR",
+            Form::Surface => "SURFACE",
             Form::Imr => "IMR",
             Form::Cn => "CN",
             Form::Tmp => "TMP",
@@ -530,7 +540,7 @@ fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32, base: Option
 /// Appends `src` to `out` with every `#import name` replaced by that shared
 /// file (once per kernel, imports first), keeping `#if NAME` / `#if !NAME`
 /// ... `#else` ... `#endif` blocks according to `form` (NAME one of FAST,
-/// PLANAR, IMR, CN, TMP, RJ).
+/// PLANAR, SURFACE, IMR, CN, TMP, RJ, SS).
 fn preprocess(src: &str, form: Form, seen: &mut HashSet<&'static str>, out: &mut String) {
     // one entry per open #if: is its current branch kept?
     let mut keep: Vec<bool> = Vec::new();
@@ -915,6 +925,12 @@ mod tests {
             assert_eq!(
                 src.contains("fn planar_parts("),
                 v.form == Form::Planar,
+                "{}",
+                v.label()
+            );
+            assert_eq!(
+                src.contains("fn surface_parts("),
+                v.form == Form::Surface,
                 "{}",
                 v.label()
             );
