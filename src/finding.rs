@@ -16,8 +16,9 @@ pub struct Finding {
     pub against: usize,
     /// The run's numbers behind the count ("lead 2.1, 2.8, 3.5"), or empty.
     pub numbers: String,
-    /// Why it may not hold here, said when it does not.
-    pub cause: &'static str,
+    /// Why it may not hold here, said when it does not; may carry the run's
+    /// own numbers for that cause.
+    pub cause: String,
 }
 
 impl Finding {
@@ -41,7 +42,7 @@ pub fn markdown(intro: &str, findings: &[Finding]) -> String {
         "\n## Findings\n\n{intro}\n\n| finding | cases that bear it out | verdict | numbers | likely cause where it fails |\n|---|---:|---|---|---|\n"
     );
     for f in findings {
-        let cause = if f.holds == f.of { "" } else { f.cause };
+        let cause = if f.holds == f.of { "" } else { f.cause.as_str() };
         s.push_str(&format!(
             "| {} | {} of {} | {} | {} | {cause} |\n",
             f.claim,

@@ -55,7 +55,7 @@ impl Tally {
                 "{} faster, {} slower, {} undecided (Mann-Whitney, p <= {ALPHA})",
                 self.faster, self.slower, self.undecided
             ),
-            cause: "the schemes' times differ by less than their spread over the repeats, or the other way",
+            cause: "the schemes' times differ by less than their spread over the repeats, or the other way".into(),
         }
     }
 }
@@ -82,7 +82,7 @@ impl Count {
             of: self.of,
             against: 0,
             numbers: self.items.join("; "),
-            cause,
+            cause: cause.into(),
         }
     }
 }

@@ -56,6 +56,27 @@ pub fn skipped(reason: &str) {
     let _ = std::io::stderr().write_all(format!("{test}: skipped: {reason}\n").as_bytes());
 }
 
+/// Whether the Gmsh that the unstructured ducts run (`MESHSMOOTH_GMSH`, else
+/// `gmsh` on the PATH) answers; where it does not, the test that needs it
+/// for `what` skips (said, see [`skipped`]) except under `CI`, which must
+/// have it (see `.ci/install-test-deps`) and so fails instead.
+pub fn gmsh_for(what: &str) -> bool {
+    let program = std::env::var_os("MESHSMOOTH_GMSH").unwrap_or_else(|| "gmsh".into());
+    let ok = std::process::Command::new(&program)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "no Gmsh ({}), and CI must run {what} (see .ci/install-test-deps)",
+            program.to_string_lossy()
+        );
+        skipped(&format!("no Gmsh for {what} (install gmsh or set MESHSMOOTH_GMSH)"));
+    }
+    ok
+}
+
 /// A Python that imports `modules` (`"meshio, vtk"`): `MESHSMOOTH_PYTHON`,
 /// else the checkout's `.venv`; `None` (said, see [`skipped`]) where there is
 /// none, except under `CI`, which must have it for the tests of `what` (see

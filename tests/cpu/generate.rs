@@ -230,6 +230,9 @@ fn perturbation_text_rejects_bad_input() {
 /// default duct of `generate duct`; a narrower one fills up sooner).
 #[test]
 fn unstructured_duct_has_a_spread_and_large_shifts_do_not_saturate() {
+    if !crate::common::gmsh_for("the unstructured duct's test") {
+        return;
+    }
     let duct = meshsmooth::generate::unstructured_duct(meshsmooth::generate::duct_size_for(4200)).unwrap();
     let n = duct.num_points();
     assert!((3800..4600).contains(&n), "{n} vertices");
