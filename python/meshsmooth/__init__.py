@@ -581,7 +581,7 @@ def write(
     ``inverse_mean_ratio``; refuses (writing nothing) a mesh with inverted
     cells. ``format`` (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2,
     msh2-binary, msh4, msh4-binary, medit, abaqus, openfoam, openfoam-binary,
-    stl, stl-ascii, obj, ply, ply-ascii)
+    stl, stl-ascii, obj, ply, ply-ascii, vtp, vtp-ascii, vtp-zlib)
     defaults to the extension's; ``openfoam`` writes ``path`` as an OpenFOAM
     case folder (its faces built from the cells, one ``defaultFaces`` patch)."""
     p = _check_points(points)

@@ -20,9 +20,8 @@ use std::path::Path;
 pub(super) fn output_format(path: &Path, name: Option<&str>) -> Result<Format> {
     match name {
         Some(n) => Format::from_name(n).ok_or_else(|| {
-            Error::InvalidArgument(format!(
-                "unknown format '{n}' (expected vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary, medit, abaqus, openfoam or openfoam-binary)"
-            ))
+            let names: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
+            Error::InvalidArgument(format!("unknown format '{n}' (expected one of {})", names.join(", ")))
         }),
         None => Format::from_path(path),
     }

@@ -222,8 +222,9 @@ pub struct SmoothArgs {
     /// Write the iteration history as CSV (iteration, seconds, objective, gradient norm).
     #[arg(long, value_name = "FILE.csv")]
     pub history: Option<PathBuf>,
-    /// Output format: vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary, medit, abaqus,
-    /// openfoam, openfoam-binary (-o then names a case folder).
+    /// Output format: vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, vtp, vtp-ascii, vtp-zlib, msh2, msh2-binary, msh4,
+    /// msh4-binary, medit, abaqus, exodus, vtkhdf, stl, stl-ascii, obj, ply, ply-ascii, openfoam, openfoam-binary (-o
+    /// then names a case folder).
     #[arg(long)]
     pub format: Option<String>,
     /// Write the bare mesh: drop the input's point, cell and field arrays and Gmsh groups

@@ -140,7 +140,8 @@ pub(super) fn mesh_format(flag: &str, path: &Path, name: Option<&str>, input: Op
     if name.is_none() && (path.as_os_str() == "-" || (path.extension().is_none() && is_stdout(path))) {
         return Err(refuse(format!(
             "{flag} {} names standard output, which has no extension to tell the mesh format: \
-             give --format (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, msh2, msh2-binary, msh4, msh4-binary, medit or abaqus)",
+             give --format (vtk, vtk-binary, vtu, vtu-binary, vtu-zlib, vtp, vtp-ascii, vtp-zlib, msh2, msh2-binary, msh4, \
+             msh4-binary, medit, abaqus, stl, stl-ascii, obj, ply or ply-ascii)",
             path.display()
         )));
     }

@@ -44,7 +44,12 @@
 //!   STL, quadrilaterals) and no lower cells; STL's solids and OBJ's groups
 //!   read as element sets, which their writers put back; PLY's extra vertex
 //!   and face properties are point and cell arrays (see `stl`, `obj`, `ply`);
-//! - `cell_data` is written to VTK/VTU and PLY only (other formats check its length).
+//! - VTK XML PolyData (`.vtp`) holds triangles and quadrilaterals, with
+//!   vertices and lines as lower cells, and keeps what a `.vtu` keeps; its
+//!   cells are in VTK's order (vertices, lines, polygons), and so are its
+//!   cell arrays and the cell numbers of its element sets (see `vtu`);
+//! - `cell_data` is written to VTK/VTU/VTP, PLY, Exodus and VTKHDF only
+//!   (other formats check its length).
 
 mod abaqus;
 mod atomic;
@@ -117,6 +122,13 @@ pub enum Format {
     Exodus,
     /// VTKHDF (`.vtkhdf`, `.hdf`): VTK's HDF5 format, an UnstructuredGrid (cargo feature `vtkhdf`).
     VtkHdf,
+    /// VTK XML PolyData (`.vtp`), inline base64, uncompressed: surfaces
+    /// (triangles and quadrilaterals) with vertices and lines as lower cells.
+    Vtp,
+    /// VTK XML PolyData, ASCII.
+    VtpAscii,
+    /// VTK XML PolyData, inline base64 with zlib blocks (`vtkZLibDataCompressor`).
+    VtpZlib,
     /// OpenFOAM polyMesh case (a folder), ASCII.
     OpenFoam,
     /// OpenFOAM polyMesh case, binary.
@@ -147,11 +159,11 @@ const NO_VTKHDF: &str = "a VTKHDF (HDF5) file, which this build of meshsmooth ca
 /// (and its compressor attribute) sits within the header.
 const HEAD_BYTES: u64 = 64 << 10;
 
-const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), .exo/.e (Exodus II), .vtkhdf/.hdf (VTKHDF), .stl (STL), .obj (Wavefront OBJ), .ply (PLY), an OpenFOAM case folder or its .foam file";
+const EXTENSIONS: &str = ".vtk (legacy VTK), .vtu (VTK XML), .pvtu (VTK XML pieces: read, or written by smooth --pieces), .vtp (VTK XML PolyData), .msh (Gmsh 2.2/4.1), .mesh (Medit), .inp (Abaqus), .exo/.e (Exodus II), .vtkhdf/.hdf (VTKHDF), .stl (STL), .obj (Wavefront OBJ), .ply (PLY), an OpenFOAM case folder or its .foam file";
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 20] = [
+    pub const ALL: [Format; 23] = [
         Format::VtkAscii,
         Format::VtkBinary,
         Format::VtuAscii,
@@ -172,6 +184,9 @@ impl Format {
         Format::Obj,
         Format::PlyBinary,
         Format::PlyAscii,
+        Format::Vtp,
+        Format::VtpAscii,
+        Format::VtpZlib,
     ];
 
     /// Default format for a file name's extension (used for writing; reading
@@ -194,6 +209,7 @@ impl Format {
         match ext.as_deref() {
             Some("vtk") => Ok(Format::VtkAscii),
             Some("vtu") => Ok(Format::VtuAscii),
+            Some("vtp") => Ok(Format::Vtp),
             Some("msh") => Ok(Format::Msh41Ascii),
             Some("mesh") => Ok(Format::Medit),
             Some("inp") => Ok(Format::Abaqus),
@@ -226,11 +242,15 @@ impl Format {
         let Some(from) = from else {
             return Ok(default);
         };
-        let (binary, compressed) = (from.is_binary(), from == Format::VtuZlib);
+        let (binary, compressed) = (from.is_binary(), matches!(from, Format::VtuZlib | Format::VtpZlib));
         Ok(match default {
             Format::VtkAscii if binary => Format::VtkBinary,
             Format::VtuAscii if compressed => Format::VtuZlib,
             Format::VtuAscii if binary => Format::VtuBinary,
+            // PolyData defaults to base64: an ASCII one stays ASCII, and a
+            // compressed VTK XML input (grid or PolyData) gives compressed
+            Format::Vtp if compressed => Format::VtpZlib,
+            Format::Vtp if from == Format::VtpAscii => from,
             Format::Msh41Ascii if matches!(from, Format::Msh22Ascii | Format::Msh22Binary) => from,
             Format::Msh41Ascii if binary => Format::Msh41Binary,
             Format::OpenFoam if binary => Format::OpenFoamBinary,
@@ -255,7 +275,14 @@ impl Format {
                 | Format::PlyBinary
                 | Format::Exodus
                 | Format::VtkHdf
+                | Format::Vtp
+                | Format::VtpZlib
         )
+    }
+
+    /// Whether the format is VTK XML PolyData (`.vtp`), in any encoding.
+    fn is_poly_data(self) -> bool {
+        matches!(self, Format::Vtp | Format::VtpAscii | Format::VtpZlib)
     }
 
     /// Whether the format is an OpenFOAM case (a folder, not a file).
@@ -311,9 +338,19 @@ impl Format {
                 if text.contains("PUnstructuredGrid") {
                     return None;
                 }
-                Some(if text.contains("compressor=") {
+                let binary = text.contains("format=\"binary\"") || text.contains("format=\"appended\"");
+                let compressed = text.contains("compressor=");
+                if text.contains("type=\"PolyData\"") {
+                    // VTK names a compressor in its ASCII files too
+                    return Some(match (binary, compressed) {
+                        (false, _) => Format::VtpAscii,
+                        (true, false) => Format::Vtp,
+                        (true, true) => Format::VtpZlib,
+                    });
+                }
+                Some(if compressed {
                     Format::VtuZlib
-                } else if text.contains("format=\"binary\"") || text.contains("format=\"appended\"") {
+                } else if binary {
                     Format::VtuBinary
                 } else {
                     Format::VtuAscii
@@ -374,6 +411,9 @@ impl Format {
             Format::Abaqus => "abaqus",
             Format::Exodus => "exodus",
             Format::VtkHdf => "vtkhdf",
+            Format::Vtp => "vtp",
+            Format::VtpAscii => "vtp-ascii",
+            Format::VtpZlib => "vtp-zlib",
             Format::OpenFoam => "openfoam",
             Format::OpenFoamBinary => "openfoam-binary",
             Format::StlBinary => "stl",
@@ -386,25 +426,27 @@ impl Format {
 
     /// Whether the format stores lower-dimensional cells (boundary faces and
     /// lines, points) and their cell arrays: every format but the surface
-    /// formats (STL, OBJ, PLY), which hold the elements only.
+    /// formats STL, OBJ and PLY, which hold the elements only (VTK PolyData
+    /// holds lines and points, not faces).
     pub fn keeps_lower_cells(self) -> bool {
         match self {
             Format::VtkAscii | Format::VtkBinary | Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => true,
             Format::Msh22Ascii | Format::Msh22Binary | Format::Msh41Ascii | Format::Msh41Binary => true,
             Format::Medit | Format::Abaqus | Format::Exodus | Format::VtkHdf => true,
             Format::OpenFoam | Format::OpenFoamBinary => true,
+            Format::Vtp | Format::VtpAscii | Format::VtpZlib => true,
             Format::StlBinary | Format::StlAscii | Format::Obj | Format::PlyBinary | Format::PlyAscii => false,
         }
     }
 
-    /// Whether the format holds surfaces only (triangles, and for OBJ and
-    /// PLY quadrilaterals): STL, OBJ, PLY.
+    /// Whether the format holds surfaces only (triangles, and for OBJ, PLY
+    /// and VTP quadrilaterals): STL, OBJ, PLY, VTK PolyData.
     pub fn is_surface_only(self) -> bool {
-        !self.keeps_lower_cells()
+        !self.keeps_lower_cells() || self.is_poly_data()
     }
 
     /// Whether the format stores per-element data given to [`write`]
-    /// (VTK, VTU and PLY).
+    /// (VTK, VTU, VTP, PLY, Exodus, VTKHDF).
     pub fn keeps_cell_data(self) -> bool {
         matches!(
             self,
@@ -417,6 +459,9 @@ impl Format {
                 | Format::PlyAscii
                 | Format::Exodus
                 | Format::VtkHdf
+                | Format::Vtp
+                | Format::VtpAscii
+                | Format::VtpZlib
         )
     }
 }
@@ -544,6 +589,7 @@ fn read_file(path: &Path, index_allowed: bool, limits: &ReadLimits) -> Result<Me
         None => match Format::from_path(path)? {
             Format::VtkAscii | Format::VtkBinary => Family::Vtk,
             Format::VtuAscii | Format::VtuBinary | Format::VtuZlib => Family::Vtu,
+            Format::Vtp | Format::VtpAscii | Format::VtpZlib => Family::Vtu,
             Format::Medit => Family::Medit,
             Format::Abaqus => Family::Abaqus,
             Format::Exodus => Family::Exodus,
@@ -769,6 +815,9 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: Format, cell_data: &[
         Format::VtuAscii => vtu::write(w, mesh, cell_data, vtu::Encoding::Ascii),
         Format::VtuBinary => vtu::write(w, mesh, cell_data, vtu::Encoding::Base64),
         Format::VtuZlib => vtu::write(w, mesh, cell_data, vtu::Encoding::Zlib),
+        Format::Vtp => vtu::write_poly(w, mesh, cell_data, vtu::Encoding::Base64),
+        Format::VtpAscii => vtu::write_poly(w, mesh, cell_data, vtu::Encoding::Ascii),
+        Format::VtpZlib => vtu::write_poly(w, mesh, cell_data, vtu::Encoding::Zlib),
         Format::Msh22Ascii => gmsh::write22(w, mesh, cell_data, false),
         Format::Msh22Binary => gmsh::write22(w, mesh, cell_data, true),
         Format::Msh41Ascii => gmsh::write41(w, mesh, cell_data, false),
@@ -819,12 +868,27 @@ fn check_kinds_fit(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
         if let Some((e, k)) = bad {
             let holds = if matches!(format, Format::StlBinary | Format::StlAscii) {
                 "triangles only (split quadrilaterals first, or write OBJ or PLY)"
+            } else if format.is_poly_data() {
+                "surfaces of triangles and quadrilaterals only (write a volume mesh as .vtu)"
             } else {
                 "triangles and quadrilaterals only"
             };
             return Err(Error::InvalidArgument(format!(
                 "cannot write {}: element {e} is a {k}, and the {format} format holds {holds}",
                 path.display()
+            )));
+        }
+        if format.is_poly_data()
+            && let Some(c) = mesh
+                .lower
+                .iter()
+                .position(|(k, _)| !matches!(k, LowerKind::Vertex | LowerKind::Line))
+        {
+            return Err(Error::InvalidArgument(format!(
+                "cannot write {}: boundary cell {c} is a {}, and the {format} format holds vertices and lines \
+                 as boundary cells only (write .vtu)",
+                path.display(),
+                format!("{:?}", mesh.lower[c].0).to_lowercase()
             )));
         }
         return Ok(());
@@ -891,21 +955,31 @@ const ELEMENT_SET_FIELD: &str = "element_set:";
 
 /// The field arrays a VTK/VTU writer writes: the input's, then one per set.
 pub(crate) fn out_field_arrays(mesh: &Mesh) -> Vec<std::borrow::Cow<'_, DataArray>> {
-    let ids = |prefix: &str, name: &str, ids: &[u32]| {
+    out_field_arrays_from(mesh, 0)
+}
+
+/// [`out_field_arrays`] for a file whose element `e` is its cell
+/// `first_element + e` (a PolyData's elements follow its vertices and lines).
+pub(crate) fn out_field_arrays_from(mesh: &Mesh, first_element: usize) -> Vec<std::borrow::Cow<'_, DataArray>> {
+    let ids = |prefix: &str, name: &str, ids: &[u32], first: usize| {
         std::borrow::Cow::Owned(DataArray::new(
             format!("{prefix}{name}"),
             ValueType::I64,
             1,
-            Values::Int(ids.iter().map(|&i| i64::from(i)).collect()),
+            Values::Int(ids.iter().map(|&i| i64::from(i) + first as i64).collect()),
         ))
     };
     let data = &mesh.data;
     let mut out: Vec<std::borrow::Cow<DataArray>> = data.field.iter().map(std::borrow::Cow::Borrowed).collect();
-    out.extend(data.node_sets.iter().map(|s| ids(NODE_SET_FIELD, &s.name, &s.vertices)));
+    out.extend(
+        data.node_sets
+            .iter()
+            .map(|s| ids(NODE_SET_FIELD, &s.name, &s.vertices, 0)),
+    );
     out.extend(
         data.element_sets
             .iter()
-            .map(|s| ids(ELEMENT_SET_FIELD, &s.name, &s.elements)),
+            .map(|s| ids(ELEMENT_SET_FIELD, &s.name, &s.elements, first_element)),
     );
     out
 }

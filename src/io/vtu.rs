@@ -1,4 +1,4 @@
-//! VTK XML unstructured grids (`.vtu`), one Piece.
+//! VTK XML unstructured grids (`.vtu`) and PolyData (`.vtp`), one Piece.
 //!
 //! Read: every mode VTK writes — ascii, inline binary (base64), appended raw
 //! and appended base64 — uncompressed or with VTK's zlib, LZ4 or LZMA block
@@ -8,7 +8,17 @@
 //! is streamed (linear in the file size) and must be complete: a file cut
 //! anywhere is refused with the byte offset.
 //!
-//! Written: ascii, inline base64, or inline base64 with zlib blocks.
+//! A PolyData's `Verts`, `Lines` and `Polys` read as the cells of an
+//! UnstructuredGrid in VTK's cell order (vertices, lines, polygons): single
+//! vertices, segments, triangles and quadrilaterals; poly-vertices,
+//! polylines, larger polygons and triangle strips are refused naming the
+//! cell.
+//!
+//! Written: ascii, inline base64, or inline base64 with zlib blocks; a
+//! PolyData ([`write_poly`]) as surfaces of triangles and quadrilaterals with
+//! their boundary vertices and lines, its uncompressed base64 arrays each one
+//! run over header and data as VTK writes them (VTK reads a PolyData's cell
+//! arrays part by part from offsets into that run).
 
 use std::io::Write;
 use std::path::Path;
@@ -26,9 +36,9 @@ use super::lex::{Endian, NumVal, Scalar, as_index, clip, empty_values, push_val}
 use super::limits::Budget;
 use super::vtk::{vtk_shape, vtk_type_name};
 use super::vtk_cells::{cell_types, lower_connectivity, out_cell_arrays};
-use super::{CellData, RawMesh, Shape, WriteResult, check_cell_data, fmt_f64};
+use super::{CellData, RawMesh, Shape, WriteError, WriteResult, check_cell_data, fmt_f64};
 use crate::error::{Error, Location, Result};
-use crate::mesh::{DataArray, ElementKind, Mesh, ValueType, Values};
+use crate::mesh::{DataArray, ElementKind, LowerKind, Mesh, ValueType, Values};
 
 /// Element type of an XML array.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -75,11 +85,22 @@ pub(crate) fn xml_type_name(t: ValueType) -> &'static str {
 enum Section {
     Points,
     Cells,
+    /// A PolyData's `Verts`, `Lines`, `Polys` or `Strips` (index into [`POLY_PARTS`]).
+    Poly(usize),
     PointData,
     CellData,
     FieldData,
     Other,
 }
+
+/// A PolyData's cell sections, in its cells' order (VTK numbers them
+/// vertices, lines, polygons, strips), with the `Piece` count of each.
+const POLY_PARTS: [(&str, &str); 4] = [
+    ("Verts", "NumberOfVerts"),
+    ("Lines", "NumberOfLines"),
+    ("Polys", "NumberOfPolys"),
+    ("Strips", "NumberOfStrips"),
+];
 
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Storage {
@@ -122,6 +143,10 @@ struct Ctx<'a> {
     layout: Layout,
     appended: Option<Appended<'a>>,
     counts: Option<(usize, usize)>,
+    /// File offset of the `<Piece>` tag.
+    piece_at: usize,
+    /// A PolyData file's cell count of each of [`POLY_PARTS`] (`None`: an UnstructuredGrid).
+    poly: Option<[usize; 4]>,
     budget: &'a Budget,
     /// The last offset, once the offsets are read: the connectivity's length.
     conn_len: std::cell::Cell<Option<usize>>,
@@ -146,6 +171,7 @@ impl Ctx<'_> {
             }
             (Section::Cells, Some((_, nc))) if s.name == "polyhedron_offsets" => Some(nc + 1),
             (Section::Cells, _) if s.name == "connectivity" => self.conn_len.get(),
+            (Section::Poly(k), _) if s.name == "offsets" => self.poly.map(|c| c[k]),
             _ => None,
         };
         let implied = implied.or(s.tuples.map(|t| t.saturating_mul(k)));
@@ -523,6 +549,8 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
         },
         appended,
         counts: None,
+        piece_at: 0,
+        poly: None,
         budget,
         conn_len: std::cell::Cell::new(None),
     };
@@ -561,7 +589,17 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
                                 ctx.err(tag_pos, format!("Piece: {k} must be a count, found '{}'", clip(&v)))
                             })
                         };
-                        let (np, nc) = (num("NumberOfPoints")?, num("NumberOfCells")?);
+                        let np = num("NumberOfPoints")?;
+                        let nc = if ctx.poly.is_some() {
+                            let mut c = [0; 4];
+                            for (k, (_, key)) in POLY_PARTS.iter().enumerate() {
+                                c[k] = if attr(e, key).is_some() { num(key)? } else { 0 };
+                            }
+                            ctx.poly = Some(c);
+                            c.iter().fold(0usize, |a, &b| a.saturating_add(b))
+                        } else {
+                            num("NumberOfCells")?
+                        };
                         // coordinates, and an offset, a type and a vertex per cell
                         let least = (np as u64)
                             .saturating_mul(24)
@@ -574,11 +612,16 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
                             ));
                         }
                         ctx.counts = Some((np, nc));
+                        ctx.piece_at = tag_pos;
                     }
                     "DataArray" | "Array" if pending.is_none() => {
                         let section = match parent {
                             "Points" => Section::Points,
-                            "Cells" => Section::Cells,
+                            // a PolyData's cells are in its Verts, Lines, Polys and Strips
+                            "Cells" if ctx.poly.is_none() => Section::Cells,
+                            p if ctx.poly.is_some() && POLY_PARTS.iter().any(|(n, _)| *n == p) => {
+                                Section::Poly(POLY_PARTS.iter().position(|(n, _)| *n == p).unwrap_or(0))
+                            }
                             "PointData" => Section::PointData,
                             "CellData" => Section::CellData,
                             "FieldData" => Section::FieldData,
@@ -658,13 +701,18 @@ pub(crate) fn read(path: &Path, data: &[u8], budget: &Budget) -> Result<RawMesh>
 }
 
 fn vtkfile(ctx: &mut Ctx, e: &BytesStart, at: usize) -> Result<()> {
-    if let Some(t) = attr(e, "type")
-        && t != "UnstructuredGrid"
-    {
-        return Err(ctx.err(
-            at,
-            format!("VTKFile type '{}' is not supported; only UnstructuredGrid is", clip(&t)),
-        ));
+    match attr(e, "type").as_deref() {
+        None | Some("UnstructuredGrid") => {}
+        Some("PolyData") => ctx.poly = Some([0; 4]),
+        Some(t) => {
+            return Err(ctx.err(
+                at,
+                format!(
+                    "VTKFile type '{}' is not supported; UnstructuredGrid (.vtu) and PolyData (.vtp) are",
+                    clip(t)
+                ),
+            ));
+        }
     }
     if let Some(c) = attr(e, "compressor")
         && !c.is_empty()
@@ -761,6 +809,23 @@ fn data_array(s: &Spec<'_>, d: Decoded) -> DataArray {
     }
 }
 
+/// `a`, read from `s`, if it has a tuple for each of the `want` points or cells.
+fn sized(ctx: &Ctx, s: &Spec<'_>, a: DataArray, want: usize, what: &str) -> Result<DataArray> {
+    if a.values.len() == want.saturating_mul(a.components) {
+        return Ok(a);
+    }
+    Err(ctx.err(
+        s.at,
+        format!(
+            "array '{}' has {} values, expected {} ({want} {what} x {} components)",
+            clip(&a.name),
+            a.values.len(),
+            want.saturating_mul(a.components),
+            a.components
+        ),
+    ))
+}
+
 fn numbers(ctx: &Ctx, s: &Spec<'_>, d: Decoded) -> Result<Vec<f64>> {
     match d {
         Decoded::Num(_, Values::Int(v)) => Ok(v.into_iter().map(|x| x as f64).collect()),
@@ -783,9 +848,13 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
     let offsets_first = |s: &&Spec<'_>| !(s.section == Section::Cells && s.name == "offsets");
     let mut order: Vec<&Spec<'_>> = specs.iter().collect();
     order.sort_by_key(offsets_first);
+    if let Some(counts) = ctx.poly {
+        let (c, o, t) = poly_cells(ctx, &specs, counts, file_len)?;
+        (conn, offs, types) = (Some(c), Some(o), Some(t));
+    }
     for s in order {
-        if s.section == Section::Other {
-            continue; // arrays outside the grid: not ours
+        if matches!(s.section, Section::Other | Section::Poly(_)) {
+            continue; // arrays outside the grid: not ours; a PolyData's cells: read above
         }
         if s.section == Section::Cells
             && s.name == "connectivity"
@@ -834,10 +903,10 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
             Section::PointData if s.name == "fixed" && s.components == 1 && s.ty != Ty::Str => {
                 fixed = Some((numbers(ctx, s, d)?, s.at));
             }
-            Section::PointData => raw.point_data.push(data_array(s, d)),
-            Section::CellData => raw.cell_data.push(data_array(s, d)),
+            Section::PointData => raw.point_data.push(sized(ctx, s, data_array(s, d), np, "points")?),
+            Section::CellData => raw.cell_data.push(sized(ctx, s, data_array(s, d), nc, "cells")?),
             Section::FieldData => raw.field_data.push(data_array(s, d)),
-            Section::Other => {}
+            Section::Other | Section::Poly(_) => {}
         }
     }
     let (pts, pat) = pts.ok_or_else(|| missing("<Points> DataArray"))?;
@@ -855,26 +924,6 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
     }
     if types.len() != nc {
         return Err(count_err(tat, "types", nc, types.len()));
-    }
-    for a in raw.point_data.iter().chain(&raw.cell_data) {
-        let (want, what) = if raw.point_data.iter().any(|p| std::ptr::eq(p, a)) {
-            (np, "points")
-        } else {
-            (nc, "cells")
-        };
-        if a.values.len() != want * a.components {
-            return Err(Error::parse(
-                ctx.path,
-                None,
-                format!(
-                    "array '{}' has {} values, expected {} ({want} {what} x {} components)",
-                    clip(&a.name),
-                    a.values.len(),
-                    want * a.components,
-                    a.components
-                ),
-            ));
-        }
     }
     if pts.par_iter().all(|c| c.is_finite()) {
         raw.points = pts.par_chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
@@ -913,6 +962,139 @@ fn assemble(ctx: &Ctx, specs: Vec<Spec<'_>>, file_len: usize) -> Result<RawMesh>
         }
     }
     Ok(raw)
+}
+
+/// An array with the file offset it is located at.
+type Located = (Ints, usize);
+
+/// A PolyData's cells as an UnstructuredGrid's connectivity, offsets and
+/// types, located at the first cell section's connectivity: its vertices,
+/// lines and polygons in VTK's cell order (vertices, lines, polygons,
+/// strips). Each cell is checked here, its errors located at its own
+/// section and naming it by its cell number and its place in the section:
+/// a vertex id past the points, a poly-vertex, a polyline, a polygon of
+/// more than four sides and any triangle strip are refused.
+fn poly_cells(
+    ctx: &Ctx,
+    specs: &[Spec<'_>],
+    counts: [usize; 4],
+    file_len: usize,
+) -> Result<(Located, Located, Located)> {
+    let np = ctx.counts.map_or(0, |(np, _)| np);
+    let (mut conn, mut offs, mut types) = (Vec::new(), Vec::new(), Vec::new());
+    let mut at = None;
+    let mut first = 0;
+    for (k, (part, key)) in POLY_PARTS.iter().enumerate() {
+        let count = counts[k];
+        if count == 0 {
+            continue;
+        }
+        let get = |name: &str| {
+            specs
+                .iter()
+                .find(|s| s.section == Section::Poly(k) && s.name == name)
+                .ok_or_else(|| {
+                    ctx.err(
+                        ctx.piece_at,
+                        format!("missing {part} DataArray '{name}' ({key} is {count})"),
+                    )
+                })
+        };
+        let (cs, os) = (get("connectivity")?, get("offsets")?);
+        if k == 3 {
+            return Err(ctx.err(
+                cs.at,
+                format!(
+                    "cell {first} (Strips 0) is a triangle strip, one of {count} ({key}): strips are not supported \
+                     (split them into triangles, e.g. with vtkTriangleFilter)"
+                ),
+            ));
+        }
+        at.get_or_insert(cs.at);
+        let c = ids(ctx, cs, ctx.decode(cs, file_len)?)?;
+        let o = ids(ctx, os, ctx.decode(os, file_len)?)?;
+        if o.len() != count {
+            return Err(ctx.err(
+                os.at,
+                format!("{part} offsets: expected {count} values ({key}), found {}", o.len()),
+            ));
+        }
+        let mut start = 0usize;
+        for (i, &end) in o.iter().enumerate() {
+            let cell = first + i;
+            let end = usize::try_from(end)
+                .ok()
+                .filter(|&e| e >= start && e <= c.len())
+                .ok_or_else(|| {
+                    ctx.err(
+                        os.at,
+                        format!(
+                            "{part} offset {i} is {end}; offsets must increase up to the connectivity size {}",
+                            c.len()
+                        ),
+                    )
+                })?;
+            let n = end - start;
+            let what = |m: String| ctx.err(os.at, format!("cell {cell} ({part} {i}) is {m}"));
+            let t = match (k, n) {
+                (0, 1) => 1,
+                (1, 2) => 3,
+                (2, 3) => 5,
+                (2, 4) => 9,
+                (0, _) => {
+                    return Err(what(format!(
+                        "a poly-vertex of {n} points: only single vertices are supported"
+                    )));
+                }
+                (1, _) => {
+                    return Err(what(format!(
+                        "a polyline of {n} points: only single segments are supported"
+                    )));
+                }
+                _ => {
+                    return Err(what(format!(
+                        "a polygon of {n} vertices: triangles and quadrilaterals are supported"
+                    )));
+                }
+            };
+            let vs = &c[start..end];
+            if let Some(&v) = vs.iter().find(|&&v| usize::try_from(v).map_or(true, |v| v >= np)) {
+                return Err(ctx.err(
+                    cs.at,
+                    format!("cell {cell} ({part} {i}) refers to vertex {v}, but the file has {np} points"),
+                ));
+            }
+            conn.extend_from_slice(vs);
+            offs.push(conn.len() as i64);
+            types.push(t);
+            start = end;
+        }
+        first += count;
+    }
+    let at = at.unwrap_or(0);
+    Ok(((Ints::I(conn), at), (Ints::I(offs), at), (Ints::I(types), at)))
+}
+
+/// A cell array's values as integers: a float array's must be whole.
+fn ids(ctx: &Ctx, s: &Spec<'_>, d: Decoded) -> Result<Vec<i64>> {
+    match d {
+        Decoded::Num(_, Values::Int(v)) => Ok(v),
+        Decoded::Num(_, Values::Float(v)) => v
+            .into_iter()
+            .map(|x| {
+                // whole and within i64 (NaN fails both)
+                if x.fract() == 0.0 && x.abs() < 9.0e18 {
+                    Ok(x as i64)
+                } else {
+                    Err(ctx.err(
+                        s.at,
+                        format!("'{}' holds {x}, which is not a whole number", clip(&s.name)),
+                    ))
+                }
+            })
+            .collect(),
+        _ => Err(ctx.err(s.at, format!("'{}' must hold numbers, not strings", clip(&s.name)))),
+    }
 }
 
 /// Connectivity, offsets or types as read: integers stay integers (a
@@ -1378,6 +1560,12 @@ fn array_text(w: &mut dyn Write, a: &DataArray, rows: Option<&[usize]>) -> std::
 struct Out<'w> {
     w: &'w mut dyn Write,
     enc: Encoding,
+    /// Uncompressed base64 as one run over the byte-count header and the
+    /// data, as VTK writes it, rather than the header in its own padded run
+    /// (which VTK and meshio read, and meshsmooth reads fastest). VTK reads
+    /// a PolyData's cell arrays from an offset into that run (the vertices',
+    /// lines' and polygons' parts apart), so a `.vtp` needs it.
+    joint: bool,
 }
 
 impl Out<'_> {
@@ -1405,6 +1593,11 @@ impl Out<'_> {
                 Values::Float(v) if a.ty.size() > 0 => {
                     self.b64_values(v.len(), a.ty.size(), |i, out| push_float(out, a.ty, v[i]))?
                 }
+                _ if self.joint => {
+                    let data = array_bytes(a);
+                    let joint = [&(data.len() as u64).to_le_bytes()[..], &data].concat();
+                    writeln!(self.w, "{}", b64_encode(&joint))?;
+                }
                 _ => {
                     let data = array_bytes(a);
                     let header = (data.len() as u64).to_le_bytes();
@@ -1428,9 +1621,26 @@ impl Out<'_> {
         // values per piece: a multiple of 3, so every piece but the last is a
         // whole number of base64 quanta and the pieces join with no padding
         const PIECE: usize = 3 << 14;
-        self.w
-            .write_all(B64.encode(((n * size) as u64).to_le_bytes()).as_bytes())?;
-        write_pieces(self.w, n, PIECE, |range, out| {
+        let header = ((n * size) as u64).to_le_bytes();
+        // joint: the header and the first values up to a whole number of
+        // base64 quanta (at most two values: 8 + k * size is a multiple of 3
+        // for some k < 3 as size is 1, 2, 4 or 8), then the rest in pieces
+        let head = if self.joint {
+            (0..3).find(|k| (8 + k * size).is_multiple_of(3)).unwrap_or(0).min(n)
+        } else {
+            0
+        };
+        if self.joint {
+            let mut bytes = header.to_vec();
+            for i in 0..head {
+                push(i, &mut bytes);
+            }
+            self.w.write_all(B64.encode(bytes).as_bytes())?;
+        } else {
+            self.w.write_all(B64.encode(header).as_bytes())?;
+        }
+        write_pieces(self.w, n - head, PIECE, |range, out| {
+            let range = range.start + head..range.end + head;
             let mut bytes = Vec::with_capacity(range.len() * size);
             for i in range {
                 push(i, &mut bytes);
@@ -1480,7 +1690,7 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>"
     )?;
     writeln!(w, "  <UnstructuredGrid>")?;
-    let mut o = Out { w, enc };
+    let mut o = Out { w, enc, joint: false };
     let field = super::out_field_arrays(mesh);
     if !field.is_empty() {
         writeln!(o.w, "    <FieldData>")?;
@@ -1604,6 +1814,113 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
     }
     writeln!(o.w, "    </Piece>")?;
     writeln!(o.w, "  </UnstructuredGrid>")?;
+    writeln!(o.w, "</VTKFile>")?;
+    Ok(())
+}
+
+/// Writes a surface mesh as VTK XML PolyData (`.vtp`): its points-only and
+/// line boundary cells as `Verts` and `Lines`, its triangles and
+/// quadrilaterals as `Polys`, cell arrays in that order (VTK's), arrays in
+/// `enc`. A mesh of volumes, or with boundary faces, is refused: a `.vtu`
+/// holds it.
+pub(crate) fn write_poly(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc: Encoding) -> WriteResult {
+    let refuse = |what: String| {
+        WriteError::Other(Error::InvalidArgument(format!(
+            "VTK PolyData holds surfaces: {what}; write .vtu"
+        )))
+    };
+    if let Some(e) = mesh.kinds.iter().position(|k| k.dim() != 2) {
+        return Err(refuse(format!("element {e} is a {}", mesh.kinds[e].name())));
+    }
+    if let Some(c) = mesh
+        .lower
+        .iter()
+        .position(|(k, _)| !matches!(k, LowerKind::Vertex | LowerKind::Line))
+    {
+        return Err(refuse(format!("boundary cell {c} is a face")));
+    }
+    check_cell_data(mesh, cell_data)?;
+    let (n, ne) = (mesh.num_points(), mesh.num_elements());
+    // VTK's cell order: vertices, lines, polygons
+    let verts: Vec<usize> = (0..mesh.lower.len())
+        .filter(|&c| mesh.lower[c].0 == LowerKind::Vertex)
+        .collect();
+    let lines: Vec<usize> = (0..mesh.lower.len())
+        .filter(|&c| mesh.lower[c].0 == LowerKind::Line)
+        .collect();
+    let rows: Vec<usize> = verts.iter().chain(&lines).map(|&c| ne + c).chain(0..ne).collect();
+    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    let compressor = if enc == Encoding::Zlib {
+        " compressor=\"vtkZLibDataCompressor\""
+    } else {
+        ""
+    };
+    writeln!(
+        w,
+        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>"
+    )?;
+    writeln!(w, "  <PolyData>")?;
+    let mut o = Out { w, enc, joint: true };
+    // the sets' elements by their cells' numbers in the file
+    let field = super::out_field_arrays_from(mesh, verts.len() + lines.len());
+    if !field.is_empty() {
+        writeln!(o.w, "    <FieldData>")?;
+        for a in &field {
+            o.array("      ", a)?;
+        }
+        writeln!(o.w, "    </FieldData>")?;
+    }
+    writeln!(
+        o.w,
+        "    <Piece NumberOfPoints=\"{n}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" NumberOfStrips=\"0\" NumberOfPolys=\"{ne}\">",
+        verts.len(),
+        lines.len()
+    )?;
+    let points_data: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
+    if !mesh.fixed.is_empty() || !points_data.is_empty() {
+        writeln!(o.w, "      <PointData>")?;
+        if !mesh.fixed.is_empty() {
+            let f = Values::Int(mesh.fixed.iter().map(|&f| f as i64).collect());
+            o.array("        ", &DataArray::new("fixed", ValueType::I32, 1, f))?;
+        }
+        for a in points_data {
+            o.array("        ", a)?;
+        }
+        writeln!(o.w, "      </PointData>")?;
+    }
+    let cells = out_cell_arrays(mesh, cell_data);
+    if !cells.is_empty() {
+        writeln!(o.w, "      <CellData>")?;
+        for a in &cells {
+            o.array("        ", &a.select(&rows))?;
+        }
+        writeln!(o.w, "      </CellData>")?;
+    }
+    writeln!(o.w, "      <Points>")?;
+    let pts = Values::Float(mesh.points.iter().flatten().copied().collect());
+    o.array("        ", &DataArray::new("Points", ValueType::F64, 3, pts))?;
+    writeln!(o.w, "      </Points>")?;
+    let lower = |c: &[usize]| -> Vec<&[u32]> { c.iter().map(|&c| &mesh.lower[c].1[..]).collect() };
+    let polys: Vec<&[u32]> = (0..ne).map(|e| mesh.element(e)).collect();
+    for (tag, cells) in [("Verts", lower(&verts)), ("Lines", lower(&lines)), ("Polys", polys)] {
+        writeln!(o.w, "      <{tag}>")?;
+        let conn = Values::Int(cells.iter().flat_map(|c| c.iter().map(|&v| i64::from(v))).collect());
+        o.array("        ", &DataArray::new("connectivity", ValueType::I64, 1, conn))?;
+        let mut end = 0;
+        let offs = Values::Int(
+            cells
+                .iter()
+                .map(|c| {
+                    end += c.len() as i64;
+                    end
+                })
+                .collect(),
+        );
+        o.array("        ", &DataArray::new("offsets", ValueType::I64, 1, offs))?;
+        writeln!(o.w, "      </{tag}>")?;
+    }
+    writeln!(o.w, "    </Piece>")?;
+    writeln!(o.w, "  </PolyData>")?;
     writeln!(o.w, "</VTKFile>")?;
     Ok(())
 }
