@@ -1568,7 +1568,77 @@ struct Out<'w> {
     joint: bool,
 }
 
+/// The XML declaration and the `VTKFile` and dataset (`kind`) tags of a
+/// file whose arrays are in `enc`.
+fn begin(w: &mut dyn Write, kind: &str, enc: Encoding) -> WriteResult {
+    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    let compressor = if enc == Encoding::Zlib {
+        " compressor=\"vtkZLibDataCompressor\""
+    } else {
+        ""
+    };
+    writeln!(
+        w,
+        "<VTKFile type=\"{kind}\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>"
+    )?;
+    writeln!(w, "  <{kind}>")?;
+    Ok(())
+}
+
 impl Out<'_> {
+    /// The dataset's `FieldData`, where it has any.
+    fn field_data(&mut self, field: &[std::borrow::Cow<'_, DataArray>]) -> WriteResult {
+        if !field.is_empty() {
+            writeln!(self.w, "    <FieldData>")?;
+            for a in field {
+                self.array("      ", a)?;
+            }
+            writeln!(self.w, "    </FieldData>")?;
+        }
+        Ok(())
+    }
+
+    /// The piece's `PointData`: the fixed flags, then the point arrays.
+    fn point_data(&mut self, mesh: &Mesh) -> WriteResult {
+        let points_data: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
+        if !mesh.fixed.is_empty() || !points_data.is_empty() {
+            writeln!(self.w, "      <PointData>")?;
+            if !mesh.fixed.is_empty() {
+                let f = Values::Int(mesh.fixed.iter().map(|&f| f as i64).collect());
+                self.array("        ", &DataArray::new("fixed", ValueType::I32, 1, f))?;
+            }
+            for a in points_data {
+                self.array("        ", a)?;
+            }
+            writeln!(self.w, "      </PointData>")?;
+        }
+        Ok(())
+    }
+
+    /// The piece's `CellData` in the file's cell order (`rows`: each file
+    /// cell's row of the arrays; `None`: the arrays' own order).
+    fn cell_data(&mut self, cells: &[std::borrow::Cow<'_, DataArray>], rows: Option<&[usize]>) -> WriteResult {
+        if !cells.is_empty() {
+            writeln!(self.w, "      <CellData>")?;
+            for a in cells {
+                match rows {
+                    Some(rows) => self.array("        ", &a.select(rows))?,
+                    None => self.array("        ", a)?,
+                }
+            }
+            writeln!(self.w, "      </CellData>")?;
+        }
+        Ok(())
+    }
+
+    /// Closes the piece, the dataset (`kind`) and the file.
+    fn end(&mut self, kind: &str) -> WriteResult {
+        writeln!(self.w, "    </Piece>")?;
+        writeln!(self.w, "  </{kind}>")?;
+        writeln!(self.w, "</VTKFile>")?;
+        Ok(())
+    }
+
     fn array(&mut self, indent: &str, a: &DataArray) -> WriteResult {
         self.array_rows(indent, a, None)
     }
@@ -1679,46 +1749,13 @@ impl Out<'_> {
 pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc: Encoding) -> WriteResult {
     let n = mesh.num_points();
     let ne = mesh.num_elements();
-    writeln!(w, "<?xml version=\"1.0\"?>")?;
-    let compressor = if enc == Encoding::Zlib {
-        " compressor=\"vtkZLibDataCompressor\""
-    } else {
-        ""
-    };
-    writeln!(
-        w,
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>"
-    )?;
-    writeln!(w, "  <UnstructuredGrid>")?;
+    begin(w, "UnstructuredGrid", enc)?;
     let mut o = Out { w, enc, joint: false };
-    let field = super::out_field_arrays(mesh);
-    if !field.is_empty() {
-        writeln!(o.w, "    <FieldData>")?;
-        for a in &field {
-            o.array("      ", a)?;
-        }
-        writeln!(o.w, "    </FieldData>")?;
-    }
+    o.field_data(&super::out_field_arrays(mesh))?;
     // the lower cells follow the elements (see `vtk_cells`)
     let nc = ne + mesh.lower.len();
     writeln!(o.w, "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{nc}\">")?;
-    let points_data: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
-    if !mesh.fixed.is_empty() || !points_data.is_empty() {
-        writeln!(o.w, "      <PointData>")?;
-        if !mesh.fixed.is_empty() {
-            let f = DataArray::new(
-                "fixed",
-                ValueType::I32,
-                1,
-                Values::Int(mesh.fixed.iter().map(|&f| f as i64).collect()),
-            );
-            o.array("        ", &f)?;
-        }
-        for a in points_data {
-            o.array("        ", a)?;
-        }
-        writeln!(o.w, "      </PointData>")?;
-    }
+    o.point_data(mesh)?;
     let ids = &mesh.conn[mesh.offsets[0]..mesh.offsets[ne]];
     let (lower_ids, lower_ends) = lower_connectivity(mesh, ids.len());
     let types: Vec<u8> = cell_types(mesh).collect();
@@ -1804,18 +1841,8 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData], enc:
     }
     writeln!(o.w, "      </Cells>")?;
     check_cell_data(mesh, cell_data)?;
-    let cells = out_cell_arrays(mesh, cell_data);
-    if !cells.is_empty() {
-        writeln!(o.w, "      <CellData>")?;
-        for a in &cells {
-            o.array("        ", a)?;
-        }
-        writeln!(o.w, "      </CellData>")?;
-    }
-    writeln!(o.w, "    </Piece>")?;
-    writeln!(o.w, "  </UnstructuredGrid>")?;
-    writeln!(o.w, "</VTKFile>")?;
-    Ok(())
+    o.cell_data(&out_cell_arrays(mesh, cell_data), None)?;
+    o.end("UnstructuredGrid")
 }
 
 /// Writes a surface mesh as VTK XML PolyData (`.vtp`): its points-only and
@@ -1849,53 +1876,18 @@ pub(crate) fn write_poly(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData],
         .filter(|&c| mesh.lower[c].0 == LowerKind::Line)
         .collect();
     let rows: Vec<usize> = verts.iter().chain(&lines).map(|&c| ne + c).chain(0..ne).collect();
-    writeln!(w, "<?xml version=\"1.0\"?>")?;
-    let compressor = if enc == Encoding::Zlib {
-        " compressor=\"vtkZLibDataCompressor\""
-    } else {
-        ""
-    };
-    writeln!(
-        w,
-        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>"
-    )?;
-    writeln!(w, "  <PolyData>")?;
+    begin(w, "PolyData", enc)?;
     let mut o = Out { w, enc, joint: true };
     // the sets' elements by their cells' numbers in the file
-    let field = super::out_field_arrays_from(mesh, verts.len() + lines.len());
-    if !field.is_empty() {
-        writeln!(o.w, "    <FieldData>")?;
-        for a in &field {
-            o.array("      ", a)?;
-        }
-        writeln!(o.w, "    </FieldData>")?;
-    }
+    o.field_data(&super::out_field_arrays_from(mesh, verts.len() + lines.len()))?;
     writeln!(
         o.w,
         "    <Piece NumberOfPoints=\"{n}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" NumberOfStrips=\"0\" NumberOfPolys=\"{ne}\">",
         verts.len(),
         lines.len()
     )?;
-    let points_data: Vec<&DataArray> = mesh.data.point.iter().filter(|a| a.name != "fixed").collect();
-    if !mesh.fixed.is_empty() || !points_data.is_empty() {
-        writeln!(o.w, "      <PointData>")?;
-        if !mesh.fixed.is_empty() {
-            let f = Values::Int(mesh.fixed.iter().map(|&f| f as i64).collect());
-            o.array("        ", &DataArray::new("fixed", ValueType::I32, 1, f))?;
-        }
-        for a in points_data {
-            o.array("        ", a)?;
-        }
-        writeln!(o.w, "      </PointData>")?;
-    }
-    let cells = out_cell_arrays(mesh, cell_data);
-    if !cells.is_empty() {
-        writeln!(o.w, "      <CellData>")?;
-        for a in &cells {
-            o.array("        ", &a.select(&rows))?;
-        }
-        writeln!(o.w, "      </CellData>")?;
-    }
+    o.point_data(mesh)?;
+    o.cell_data(&out_cell_arrays(mesh, cell_data), Some(&rows))?;
     writeln!(o.w, "      <Points>")?;
     let pts = Values::Float(mesh.points.iter().flatten().copied().collect());
     o.array("        ", &DataArray::new("Points", ValueType::F64, 3, pts))?;
@@ -1919,10 +1911,7 @@ pub(crate) fn write_poly(w: &mut dyn Write, mesh: &Mesh, cell_data: &[CellData],
         o.array("        ", &DataArray::new("offsets", ValueType::I64, 1, offs))?;
         writeln!(o.w, "      </{tag}>")?;
     }
-    writeln!(o.w, "    </Piece>")?;
-    writeln!(o.w, "  </PolyData>")?;
-    writeln!(o.w, "</VTKFile>")?;
-    Ok(())
+    o.end("PolyData")
 }
 
 /// A `.pvtu` index over pieces shaped like `piece` (same arrays, as
