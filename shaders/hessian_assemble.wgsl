@@ -141,12 +141,10 @@ fn main(
 #if SURFACE
     ok = surface_blocks(base, s, cr);
 #endif
-#if !FAST
-#if !PLANAR
-#if !SURFACE
+#if GENERAL
     ok = general_blocks(base, s, cr);
 #endif
-#endif
+#if !FAST
     if ok {
         return;
     }

@@ -58,15 +58,11 @@ fn main(
         term = p.value;
         g_s = surface_grad_s(p);
 #endif
-#if !FAST
-#if !PLANAR
-#if !SURFACE
+#if GENERAL
         let m = model_eval(model, s, model_aux(model, cr), false);
         ok = m.ok;
         term = m.v;
         g_s = m.g;
-#endif
-#endif
 #endif
         if ok {
             term = cr.w * term;

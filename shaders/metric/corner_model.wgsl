@@ -66,13 +66,9 @@ fn model_value_of_s(model: Model, s: mat3x3<real>, rjm: mat3x3<real>) -> Eta {
 #if SURFACE
     return surface_value_of_s(model.tmpl, s, rjm[0]);
 #endif
-#if !FAST
-#if !PLANAR
-#if !SURFACE
+#if GENERAL
     let m = model_eval(model, s, rjm, false);
     return Eta(m.v, m.ok);
-#endif
-#endif
 #endif
 }
 
@@ -108,9 +104,7 @@ fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<rea
     out.hess = surface_block(p, b, b);
     return out;
 #endif
-#if !FAST
-#if !PLANAR
-#if !SURFACE
+#if GENERAL
     var out: VertexGH;
     let m = model_eval(model, s, rjm, true);
     out.ok = m.ok;
@@ -125,7 +119,5 @@ fn model_vertex_gh(model: Model, s: mat3x3<real>, b: vec3<real>, rjm: mat3x3<rea
         out.hess[2][2] = real(1.0);
     }
     return out;
-#endif
-#endif
 #endif
 }

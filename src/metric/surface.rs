@@ -174,13 +174,6 @@ impl Parts {
     }
 }
 
-/// `s` in the frame of rows `axes`: R S, whose leading 2x2 determinant is
-/// (s0 x s1) . axes[2] when the axes are right-handed and orthonormal (the
-/// planar inversion tests read it so).
-pub fn in_frame(axes: &Mat3, s: &Mat3) -> Mat3 {
-    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| axes[i][k] * s[k][j]).sum()))
-}
-
 /// The unit Newell normal of the polygon `vs` at `points`; `None` when it has no area.
 pub fn element_normal(points: &[Vec3], vs: &[u32]) -> Option<Vec3> {
     let mut n = [0.0; 3];
@@ -281,18 +274,31 @@ mod tests {
     }
 
     #[test]
-    fn frames_are_right_handed_and_read_the_signed_area() {
+    fn frames_are_right_handed_and_the_facing_area_is_its_polynomial() {
         let n = {
             let v = [0.2, -0.9, 0.4];
             let l = dot(&v, &v).sqrt();
             v.map(|c| c / l)
         };
+        // the axes the reports measure a surface element in
         let ax = crate::mesh::plane::axes_with_normal(&n);
         assert!(dot(&cross(&ax[0], &ax[1]), &ax[2]) > 1.0 - 1e-14);
+        // S in those axes has the facing area as its leading 2x2 determinant
         let s = s_of([[1.0, 0.2, 0.3], [-0.1, 0.5, 0.7]]);
-        let c = cross(&columns(&s)[0], &columns(&s)[1]);
-        let r = in_frame(&ax, &s);
+        let r: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| ax[i][k] * s[k][j]).sum()));
         let det2 = r[0][0] * r[1][1] - r[0][1] * r[1][0];
-        assert!((det2 - dot(&c, &n)).abs() < 1e-14);
+        assert!((det2 - facing_area(&s, &n)).abs() < 1e-14);
+        // the inversion bound's coefficients give the facing area along a straight move
+        let e = s_of([[-0.4, 0.9, 0.1], [0.3, -0.8, 0.2]]);
+        let c = super::super::det_path::facing_coefficients(&s, &e, &n);
+        for t in [0.0, 0.3, 1.0, 2.5] {
+            let st: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| s[i][j] + t * e[i][j]));
+            let want = facing_area(&st, &n);
+            let got = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+            assert!(
+                (got - want).abs() < 1e-14 * (1.0 + want.abs()),
+                "t {t}: {got} vs {want}"
+            );
+        }
     }
 }

@@ -311,7 +311,6 @@ impl Form {
         match model.closed {
             CLOSED_TET => return Form::Fast,
             CLOSED_PLANAR => return Form::Planar,
-            CLOSED_SURFACE => return Form::Surface,
             _ => {}
         }
         Form::general(model)
@@ -321,9 +320,7 @@ impl Form {
     pub(crate) fn on(model: &ModelUniform, ctx: &GpuContext) -> Form {
         match ctx.forms {
             KernelForms::Closed => Form::of(model),
-            // no general instance measures a surface corner
-            KernelForms::General if model.closed != CLOSED_SURFACE => Form::general(model),
-            KernelForms::General => Form::Surface,
+            KernelForms::General => Form::general(model),
             KernelForms::Auto => match Form::of(model) {
                 Form::Fast if !ctx.is_software() && !ctx.is_f64() => Form::general(model),
                 form => form,
@@ -331,8 +328,12 @@ impl Form {
         }
     }
 
-    /// The general instance of the model's metric, closed forms or not.
+    /// The general instance of the model's metric, closed forms or not; a
+    /// surface mesh's, which no general instance measures, is `Surface`.
     pub(crate) fn general(model: &ModelUniform) -> Form {
+        if model.closed == CLOSED_SURFACE {
+            return Form::Surface;
+        }
         match model.metric {
             METRIC_IMR => Form::Imr,
             METRIC_CN => Form::Cn,
@@ -341,6 +342,12 @@ impl Form {
             METRIC_SS => Form::Ss,
             m => unreachable!("metric id {m} has no kernel form"),
         }
+    }
+
+    /// Whether `#if name` holds in this instance: its own flag, or
+    /// [`GENERAL`] in an instance of the general corner path.
+    fn satisfies(self, name: &str) -> bool {
+        name == self.flag() || (name == GENERAL && !matches!(self, Form::Fast | Form::Planar | Form::Surface))
     }
 
     /// The preprocessor flag that `#if NAME` tests; every other form
@@ -358,6 +365,10 @@ impl Form {
         }
     }
 }
+
+/// The condition every general instance satisfies (`#if GENERAL`): none of
+/// the closed forms.
+const GENERAL: &str = "GENERAL";
 
 /// Split bindings one kernel may have (`Binding::split`).
 pub const MAX_SPLIT: usize = 4;
@@ -540,7 +551,8 @@ fn split_accessors(b: &Binding, ty: &str, parts: usize, shift: u32, base: Option
 /// Appends `src` to `out` with every `#import name` replaced by that shared
 /// file (once per kernel, imports first), keeping `#if NAME` / `#if !NAME`
 /// ... `#else` ... `#endif` blocks according to `form` (NAME one of FAST,
-/// PLANAR, SURFACE, IMR, CN, TMP, RJ, SS).
+/// PLANAR, SURFACE, IMR, CN, TMP, RJ, SS, or GENERAL: any of the general
+/// instances).
 fn preprocess(src: &str, form: Form, seen: &mut HashSet<&'static str>, out: &mut String) {
     // one entry per open #if: is its current branch kept?
     let mut keep: Vec<bool> = Vec::new();
@@ -552,10 +564,10 @@ fn preprocess(src: &str, form: Form, seen: &mut HashSet<&'static str>, out: &mut
                 None => (false, cond.trim()),
             };
             assert!(
-                Form::ALL.iter().any(|f| f.flag() == name),
+                name == GENERAL || Form::ALL.iter().any(|f| f.flag() == name),
                 "unknown WGSL condition '{name}'"
             );
-            keep.push((name == form.flag()) != negated);
+            keep.push(form.satisfies(name) != negated);
             continue;
         }
         match t {
