@@ -130,7 +130,7 @@ fn main(
     // a sliding vertex: the step in its tangent space, each trial put back on the boundary
     let slide = slides(v);
     if slide {
-        let p = projector(v);
+        let p = active_projector(v, xv, g);
         g = mul_vec(p, g);
         h = constrain_hessian(p, h);
     }

@@ -81,7 +81,11 @@ impl FixRules {
             .map(|g| Ok((g.clone(), Group::resolve(mesh, g, "free_groups")?)))
             .collect::<Result<_>>()?;
         if !freed.is_empty() || self.release_facets {
-            let skin = if self.release_facets {
+            // a surface mesh's curves (its lines) are its boundary, wherever they run
+            let surface = self.release_facets && super::plane::is_surface(mesh, &mesh.points);
+            let skin = if surface {
+                vec![true; n]
+            } else if self.release_facets {
                 super::topology::skin_vertices(mesh)
             } else {
                 vec![false; n]

@@ -409,6 +409,82 @@ pub(crate) fn with_user_fixed(mesh: &Mesh, mut fixed: Vec<bool>) -> Vec<bool> {
     fixed
 }
 
+/// A surface mesh's faces must make a manifold, orientable surface: every
+/// edge in at most two faces, and a choice of side for each face such that
+/// two faces sharing an edge run along it in opposite directions (the faces
+/// need not be wound that way already: each keeps its own side). The error
+/// names the first edge (0-based vertex ids) and faces that break it.
+pub fn check_surface(mesh: &Mesh) -> Result<(), String> {
+    let faces: Vec<usize> = (0..mesh.num_elements())
+        .filter(|&e| mesh.element(e).len() >= 3)
+        .collect();
+    // edge -> (face, runs from the lower id to the higher)
+    let mut edges: HashMap<(u32, u32), Vec<(usize, bool)>> = HashMap::new();
+    for &e in &faces {
+        let vs = mesh.element(e);
+        for i in 0..vs.len() {
+            let (a, b) = (vs[i], vs[(i + 1) % vs.len()]);
+            edges.entry((a.min(b), a.max(b))).or_default().push((e, a < b));
+        }
+    }
+    let mut keys: Vec<&(u32, u32)> = edges.keys().collect();
+    keys.sort_unstable();
+    for k in &keys {
+        let on = &edges[*k];
+        if on.len() > 2 {
+            let list: Vec<String> = on.iter().map(|(e, _)| e.to_string()).collect();
+            return Err(format!(
+                "the surface is not manifold: the edge between vertices {} and {} (0-based) is shared by {} faces \
+                 (elements {}); a surface mesh has at most two faces on an edge",
+                k.0,
+                k.1,
+                on.len(),
+                list.join(", ")
+            ));
+        }
+    }
+    // a side for each face, spread face to face across shared edges
+    let mut flip: Vec<Option<bool>> = vec![None; mesh.num_elements()];
+    let mut queue = std::collections::VecDeque::new();
+    for &start in &faces {
+        if flip[start].is_some() {
+            continue;
+        }
+        flip[start] = Some(false);
+        queue.push_back(start);
+        while let Some(e) = queue.pop_front() {
+            let vs = mesh.element(e);
+            for i in 0..vs.len() {
+                let (a, b) = (vs[i], vs[(i + 1) % vs.len()]);
+                let on = &edges[&(a.min(b), a.max(b))];
+                let Some(&(f, f_up)) = on.iter().find(|(f, _)| *f != e) else {
+                    continue;
+                };
+                // e's direction along the edge once flipped as chosen; f must run against it
+                let e_up = (a < b) != flip[e].unwrap();
+                let want = f_up == e_up;
+                match flip[f] {
+                    None => {
+                        flip[f] = Some(want);
+                        queue.push_back(f);
+                    }
+                    Some(has) if has != want => {
+                        return Err(format!(
+                            "the surface is not orientable: across the edge between vertices {} and {} (0-based) \
+                             (elements {e} and {f}) the faces' sides cannot be chosen consistently \
+                             (a Moebius strip or the like); a surface mesh needs a consistent normal",
+                            a.min(b),
+                            a.max(b)
+                        ));
+                    }
+                    Some(_) => {}
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -473,5 +549,64 @@ mod tests {
         m.fixed = vec![false; 9];
         m.fixed[4] = true;
         assert!(fixed_vertices(&m).iter().all(|&f| f));
+    }
+
+    fn triangles(n_points: usize, tris: &[[u32; 3]]) -> Mesh {
+        let mut m = Mesh::new(vec![[0.0; 3]; n_points]);
+        for t in tris {
+            m.push_element(ElementKind::Triangle, t);
+        }
+        m
+    }
+
+    /// An octahedron's faces, one wound the other way: orientable all the
+    /// same (each face keeps its own side).
+    #[test]
+    fn a_closed_surface_with_a_reversed_face_passes() {
+        let mut tris = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        assert_eq!(check_surface(&triangles(6, &tris)), Ok(()));
+        tris[3] = [0, 3, 4];
+        assert_eq!(check_surface(&triangles(6, &tris)), Ok(()));
+    }
+
+    #[test]
+    fn a_fin_on_an_edge_is_not_manifold() {
+        let m = triangles(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]);
+        let e = check_surface(&m).unwrap_err();
+        assert!(
+            e.contains("not manifold") && e.contains("vertices 0 and 1") && e.contains("elements 0, 1, 2"),
+            "{e}"
+        );
+    }
+
+    /// A strip of 6 quads' triangles closed with a half twist.
+    #[test]
+    fn a_moebius_strip_is_not_orientable() {
+        let n = 6u32;
+        let (a, b) = (|i: u32| 2 * (i % n), |i: u32| 2 * (i % n) + 1);
+        let mut tris = Vec::new();
+        for i in 0..n - 1 {
+            tris.push([a(i), b(i), b(i + 1)]);
+            tris.push([a(i), b(i + 1), a(i + 1)]);
+        }
+        // the twist: rails swap
+        tris.push([a(n - 1), b(n - 1), a(0)]);
+        tris.push([a(n - 1), a(0), b(0)]);
+        let e = check_surface(&triangles(2 * n as usize, &tris)).unwrap_err();
+        assert!(e.contains("not orientable"), "{e}");
+        // the same strip closed without the twist is a band: orientable
+        let mut band = tris[..tris.len() - 2].to_vec();
+        band.push([a(n - 1), b(n - 1), b(0)]);
+        band.push([a(n - 1), b(0), a(0)]);
+        assert_eq!(check_surface(&triangles(2 * n as usize, &band)), Ok(()));
     }
 }

@@ -23,13 +23,12 @@
 //!   as 0.4–0.5 mean edge lengths (measured on Gmsh spheres and cylinders,
 //!   README "Sliding boundary"), while a solve there moved boundary vertices
 //!   at most 0.37; a vertex at the end of its list stays on the list's rim.
-//! - P is not updated as a vertex slides over a curved surface: the tangent
-//!   plane of the start is used throughout (the projection keeps the vertex on
-//!   the surface; only the search direction is from the start's plane). A
-//!   solve on a curved boundary may therefore end `Stalled` a little above the
-//!   tolerance instead of `Converged`. Refreshing P at the current closest
-//!   point does not fix that (measured, README "Sliding boundary"): the
-//!   boundary is faceted, and the minimiser sits on its creases.
+//! - P is the start's only until the first gradient: the solvers use the
+//!   projector of the constraint active where the gradient mapping leads the
+//!   vertex (`backend::cpu::project_boundary::active_projector`): its face,
+//!   the crease it sits on, or none where it is stationary on a crease. The
+//!   boundary is faceted and the minimiser sits on its creases, where no
+//!   tangent plane makes the projected gradient vanish.
 
 use super::numbering::Numbering;
 use crate::mesh::topology::Csr;
@@ -87,8 +86,10 @@ pub enum VertexClass {
 /// The sliding constraints in the problem's numbering.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sliding {
-    /// Per vertex: the projector onto the directions it may move in (the
-    /// identity off the boundary).
+    /// Per vertex: the projector onto the directions it may move in at the
+    /// start (the identity off the boundary); the solvers take the active
+    /// constraint's (`project_boundary::active_projector`), smart Laplace and
+    /// the sweep orderings this one.
     pub projector: Vec<Mat3>,
     /// Per vertex: indices into `primitives` it is projected onto; empty for
     /// a vertex that does not slide.
@@ -265,6 +266,16 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
 
+/// The edges of a mesh's line cells (its file's curves: Gmsh's curve
+/// elements, VTK lines): on a surface mesh they are feature curves.
+fn file_curves(mesh: &Mesh) -> Vec<(u32, u32)> {
+    mesh.lower
+        .iter()
+        .filter(|(k, _)| *k == crate::mesh::LowerKind::Line)
+        .flat_map(|(_, vs)| vs.windows(2).map(|w| (w[0], w[1])))
+        .collect()
+}
+
 /// The skin's classes where the boundary slides (`None` where it is fixed):
 /// on the geometry `opts.surface` when one is given (which makes it slide),
 /// else on the mesh's own skin.
@@ -274,6 +285,9 @@ pub fn skin_classes(
     opts: &super::ProblemOptions,
 ) -> crate::error::Result<Option<SkinClasses>> {
     let surface_mesh = crate::mesh::plane::is_surface(mesh, points);
+    if surface_mesh {
+        crate::mesh::topology::check_surface(mesh).map_err(crate::error::Error::InvalidMesh)?;
+    }
     let angle = opts.boundary.feature_angle;
     let classes = match opts.surface {
         Some(g) => {
@@ -283,10 +297,12 @@ pub fn skin_classes(
                         .into(),
                 ));
             }
-            super::geometry::Geometry::new(g, &g.points, angle)?.classify(mesh, points)?
+            super::geometry::Geometry::new(g, &g.points, angle, &[])?.classify(mesh, points)?
         }
         // a surface mesh slides on itself: its faces are the geometry
-        None if surface_mesh => super::geometry::Geometry::new(mesh, points, angle)?.classify(mesh, points)?,
+        None if surface_mesh => {
+            super::geometry::Geometry::new(mesh, points, angle, &file_curves(mesh))?.classify(mesh, points)?
+        }
         None if opts.boundary.mode == BoundaryMode::Slide => classify(mesh, points, angle),
         None => return Ok(None),
     };

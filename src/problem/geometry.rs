@@ -114,8 +114,11 @@ fn groups(parent: &mut [u32]) -> (Vec<u32>, usize) {
 
 impl Geometry {
     /// Classifies `geometry` (a surface or a volume mesh, at `points`) with
-    /// faces meeting at more than `feature_angle` degrees forming feature edges.
-    pub fn new(geometry: &Mesh, points: &[Vec3], feature_angle: f64) -> Result<Geometry> {
+    /// faces meeting at more than `feature_angle` degrees forming feature
+    /// edges, and so do the edges in `curves` (vertex pairs: a surface mesh's
+    /// own curves from its file).
+    pub fn new(geometry: &Mesh, points: &[Vec3], feature_angle: f64, curves: &[(u32, u32)]) -> Result<Geometry> {
+        let curves: std::collections::HashSet<(u32, u32)> = curves.iter().map(|&(a, b)| (a.min(b), a.max(b))).collect();
         // faces: a volume mesh's skin, or the surface's own elements
         let faces: Vec<Vec<u32>> = if geometry.dim() == 3 {
             boundary::skin_faces(geometry, points)
@@ -147,7 +150,7 @@ impl Geometry {
         let mut parent: Vec<u32> = (0..faces.len() as u32).collect();
         let mut feature: Vec<(u32, u32)> = Vec::new();
         for (&key, fs) in &edges {
-            let smooth = fs.len() == 2 && {
+            let smooth = fs.len() == 2 && !curves.contains(&key) && {
                 let (na, nb) = (&face_normal[fs[0].0 as usize], &face_normal[fs[1].0 as usize]);
                 // two faces wound alike traverse their edge in opposite directions
                 let s = if fs[0].1 != fs[1].1 { 1.0 } else { -1.0 };

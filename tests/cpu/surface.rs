@@ -39,10 +39,10 @@ fn smooth(mesh: &mut Mesh, method: Method) -> Info {
     smooth_with(mesh, &ProblemOptions::default(), method)
 }
 
-/// A sphere slid within itself and smoothed by each method: every vertex on
-/// the input's triangulation (1e-9) and within 0.008 of the sphere, at least
-/// 70% of the quality lost repaired, no triangle folded; the three methods
-/// reach the same F.
+/// A sphere slid within itself and smoothed by each method: Newton and BCD
+/// end converged, every vertex on the input's triangulation (1e-9) and
+/// within 0.008 of the sphere, at least 70% of the quality lost repaired, no
+/// triangle folded; the three methods reach the same F.
 #[test]
 fn a_perturbed_sphere_is_repaired_on_its_own_triangulation() {
     let sphere = generate::sphere(16);
@@ -58,13 +58,21 @@ fn a_perturbed_sphere_is_repaired_on_its_own_triangulation() {
     for method in [Method::Newton, Method::Bcd, Method::Nlcg] {
         let mut m = start.clone();
         let info = smooth(&mut m, method);
+        // the active constraint's projector makes |P g| the gradient mapping
+        // of the faceted surface: Newton and BCD reach the tolerance on it
+        let converges = method != Method::Nlcg;
         assert!(
-            matches!(
-                info.stop,
-                StopReason::Converged | StopReason::Stalled | StopReason::SmallStep | StopReason::MaxIterations
-            ),
-            "{method:?}: {:?}",
-            info.stop
+            if converges {
+                info.stop == StopReason::Converged
+            } else {
+                matches!(
+                    info.stop,
+                    StopReason::Converged | StopReason::SmallStep | StopReason::MaxIterations
+                )
+            },
+            "{method:?}: {:?} at |g| {:e}",
+            info.stop,
+            info.grad_norm
         );
         let f = objective(&m);
         assert!(
@@ -271,35 +279,161 @@ fn a_perturbed_cube_skin_keeps_corners_edges_and_faces() {
     }
 }
 
-/// The same sphere scaled by 2^10, rotated and moved far away smooths to the
-/// same shape: the solver runs in the mesh's frame, and the surface metric
-/// is a function of the tangent-plane geometry only.
+/// Gmsh's cube (OpenCASCADE `Box`, `-2 -clmax 0.15`, .msh), each face vertex
+/// moved within its face and each edge vertex along its edge by up to 0.3 of
+/// its shortest edge (shortened where a triangle would flip), smoothed by
+/// Newton and BCD: corners exactly in place, edge vertices on their edges
+/// and face vertices on their faces (1e-9), at least 70% of the quality lost
+/// repaired against the unperturbed Gmsh mesh smoothed the same way, no
+/// triangle flipped.
+#[test]
+fn a_perturbed_gmsh_cube_keeps_corners_edges_and_faces() {
+    if !common::gmsh_for("the Gmsh cube surface test") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let geo = dir.path().join("cube.geo");
+    std::fs::write(&geo, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 1};\n").unwrap();
+    let msh = dir.path().join("cube.msh");
+    let run = std::process::Command::new("gmsh")
+        .args(["-2", "-clmax", "0.15", "-format", "msh4", "-o"])
+        .arg(&msh)
+        .arg(&geo)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let cube = meshsmooth::io::read(&msh).unwrap();
+    // the file's curves (Gmsh's line elements on the cube's edges) are kept
+    // unless the boundary slides: then they are feature curves
+    assert!(cube.fixed.iter().filter(|&&f| f).count() > 40);
+    let mut slide = ProblemOptions::default();
+    slide.boundary = Boundary {
+        mode: BoundaryMode::Slide,
+        feature_angle: 30.0,
+    };
+    let released = |m: &Mesh| Mesh {
+        fixed: Vec::new(),
+        ..m.clone()
+    };
+    let mut best = released(&cube);
+    smooth_with(&mut best, &slide, Method::Newton);
+    let f_best = objective(&best);
+
+    let on = |c: f64| c == 0.0 || c == 1.0;
+    let nb = meshsmooth::mesh::topology::vertex_neighbours(&cube);
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let mut start = cube.clone();
+    for v in 0..start.num_points() {
+        let p = start.points[v];
+        if p.iter().all(|&c| on(c)) {
+            continue;
+        }
+        let h = nb
+            .of(v)
+            .iter()
+            .map(|&w| norm(&sub(&start.points[w as usize], &p)))
+            .fold(f64::INFINITY, f64::min);
+        let step: Vec3 = std::array::from_fn(|k| if on(p[k]) { 0.0 } else { rng.random_range(-0.3..0.3) * h });
+        let mut t = 1.0;
+        loop {
+            start.points[v] = std::array::from_fn(|k| p[k] + t * step[k]);
+            let inside = (0..3).all(|k| on(p[k]) || (start.points[v][k] > 0.0 && start.points[v][k] < 1.0));
+            if inside && flipped(&start, &cube.points, &start.points).is_empty() || t < 1e-3 {
+                break;
+            }
+            t *= 0.5;
+        }
+        if t < 1e-3 {
+            start.points[v] = p;
+        }
+    }
+    assert!(flipped(&start, &cube.points, &start.points).is_empty());
+    let f_start = objective(&start);
+    assert!(
+        f_start > f_best + 0.02,
+        "too mild a perturbation: {f_start} vs {f_best}"
+    );
+    for method in [Method::Newton, Method::Bcd] {
+        let mut m = released(&start);
+        let info = smooth_with(&mut m, &slide, method);
+        check_on_cube(&start, &m);
+        let f = objective(&m);
+        let repaired = (f_start - f) / (f_start - f_best);
+        assert!(
+            repaired >= 0.7,
+            "{method:?}: repaired {repaired} ({f_start} -> {f}, unperturbed smoothed {f_best}, {:?})",
+            info.stop
+        );
+        assert!(
+            flipped(&m, &start.points, &m.points).is_empty(),
+            "{method:?} flipped triangles"
+        );
+    }
+    // the CLI: the file's curves kept by default, released by --boundary slide
+    use common::cli::{meshsmooth, s, text};
+    use meshsmooth::io::{self, Format};
+    let src = dir.path().join("start.msh");
+    io::write(&src, &start, Format::from_path(&src).unwrap(), &[]).unwrap();
+    for (extra, edges_move) in [(None, false), (Some("slide"), true)] {
+        let out = dir.path().join("out.msh");
+        let mut args = vec!["smooth", s(&src), "-o", s(&out)];
+        if let Some(b) = extra {
+            args.extend(["--boundary", b]);
+        }
+        let o = meshsmooth(&args);
+        assert!(o.status.success(), "{}", text(&o));
+        let m = io::read(&out).unwrap();
+        let edge_moved = start
+            .points
+            .iter()
+            .zip(&m.points)
+            .any(|(a, b)| a.iter().filter(|&&c| on(c)).count() == 2 && a != b);
+        assert_eq!(edge_moved, edges_move, "--boundary {extra:?}: {}", text(&o));
+        if edges_move {
+            check_on_cube(&start, &m);
+            let f = objective(&m);
+            assert!((f_start - f) / (f_start - f_best) >= 0.7, "CLI: {f_start} -> {f}");
+        }
+    }
+}
+
+/// The same sphere scaled by 2^10 and moved far away smooths to the same
+/// shape, rotated too to the same F: the solver runs in the mesh's frame, and
+/// the surface metric is a function of the tangent-plane geometry only. The
+/// faceted constraint's decisions (face, crease, held) are taken at relative
+/// thresholds, so rounding can change a step late in a solve: positions
+/// agree to 1e-6 edges for the move and scaling; under a rotation the final
+/// positions may differ along the sphere's nearly free rotations (0.01 edges).
 #[test]
 fn surface_results_do_not_depend_on_units_or_pose() {
     let mut start = generate::sphere(6);
     perturb_on_sphere(&mut start, 0.2, 0.4, 9);
-    let (c, s) = (0.6f64, 0.8f64);
-    let pose = |p: &Vec3| -> Vec3 {
-        let r = [c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]];
-        [1024.0 * r[0] + 5e4, 1024.0 * r[1] - 3e3, 1024.0 * r[2] + 7.0]
-    };
-    let mut moved = Mesh {
-        points: start.points.iter().map(pose).collect(),
-        ..start.clone()
+    let edge = {
+        let p = Problem::new(&start).unwrap();
+        p.mean_edge_length(&p.gather(&start.points))
     };
     let mut plain = start.clone();
     let a = smooth(&mut plain, Method::Newton);
-    let b = smooth(&mut moved, Method::Newton);
-    assert_eq!(a.iterations, b.iterations);
-    assert!(
-        (a.objective - b.objective).abs() < 1e-10 * a.objective,
-        "{} vs {}",
-        a.objective,
-        b.objective
-    );
-    for (p, q) in plain.points.iter().zip(&moved.points) {
-        let d = norm(&sub(&pose(p), q));
-        assert!(d < 1e-7 * 1024.0, "{p:?} posed is {:?}, solved {q:?}", pose(p));
+    for ((c, s), within) in [((1.0f64, 0.0f64), 1e-6), ((0.6, 0.8), 1e-2)] {
+        let pose = |p: &Vec3| -> Vec3 {
+            let r = [c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]];
+            [1024.0 * r[0] + 5e4, 1024.0 * r[1] - 3e3, 1024.0 * r[2] + 7.0]
+        };
+        let mut moved = Mesh {
+            points: start.points.iter().map(pose).collect(),
+            ..start.clone()
+        };
+        let b = smooth(&mut moved, Method::Newton);
+        assert!(
+            (a.objective - b.objective).abs() < 1e-7 * a.objective,
+            "{} vs {}",
+            a.objective,
+            b.objective
+        );
+        for (p, q) in plain.points.iter().zip(&moved.points) {
+            let d = norm(&sub(&pose(p), q)) / 1024.0;
+            assert!(d < within * edge, "{p:?} posed is {:?}, solved {q:?}", pose(p));
+        }
     }
 }
 
@@ -495,4 +629,67 @@ fn surface_meshes_refuse_size_metrics_and_references() {
     let flat = generate::tri_grid(3, 3, [1.0, 1.0]);
     let p = Problem::new(&flat).unwrap();
     assert!(!p.surface_mesh && p.sliding.is_none());
+}
+
+/// A fin (three triangles on one edge) and a Moebius strip are refused by
+/// the CLI, naming the edge; nothing is written.
+#[test]
+fn non_manifold_and_non_orientable_surfaces_are_refused() {
+    use common::cli::{meshsmooth, s, text};
+    let dir = tempfile::tempdir().unwrap();
+    let fin = "v 0 0 0\nv 1 0 0\nv 0.5 1 0\nv 0.5 -1 0.2\nv 0.5 0.1 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n";
+    let n = 6;
+    let mut strip = String::new();
+    for i in 0..n {
+        let t = std::f64::consts::TAU * i as f64 / n as f64;
+        let (c, sn) = (t.cos(), t.sin());
+        let h = 0.3 * (t / 2.0).cos();
+        let r = 0.3 * (t / 2.0).sin();
+        strip += &format!(
+            "v {} {} {}\nv {} {} {}\n",
+            (1.0 + r) * c,
+            (1.0 + r) * sn,
+            h,
+            (1.0 - r) * c,
+            (1.0 - r) * sn,
+            -h
+        );
+    }
+    let (a, b) = (|i: usize| 2 * (i % n) + 1, |i: usize| 2 * (i % n) + 2);
+    for i in 0..n - 1 {
+        strip += &format!(
+            "f {} {} {}\nf {} {} {}\n",
+            a(i),
+            b(i),
+            b(i + 1),
+            a(i),
+            b(i + 1),
+            a(i + 1)
+        );
+    }
+    strip += &format!(
+        "f {} {} {}\nf {} {} {}\n",
+        a(n - 1),
+        b(n - 1),
+        a(0),
+        a(n - 1),
+        a(0),
+        b(0)
+    );
+    for (name, text_in, expect) in [
+        ("fin.obj", fin.to_string(), "not manifold"),
+        ("strip.obj", strip, "not orientable"),
+    ] {
+        let src = dir.path().join(name);
+        std::fs::write(&src, text_in).unwrap();
+        let out = dir.path().join(format!("out_{name}"));
+        let o = meshsmooth(&["smooth", s(&src), "-o", s(&out)]);
+        assert!(!o.status.success(), "{name}: {}", text(&o));
+        let said = text(&o);
+        assert!(
+            said.contains(expect) && said.contains("edge between vertices"),
+            "{name}: {said}"
+        );
+        assert!(!out.exists(), "{name}: an output was written");
+    }
 }

@@ -4,7 +4,7 @@
 //! parallel, as the kernel does; `sweep` visits the vertices one at a time in
 //! locality order, which only the CPU can (the sequential BCD is CPU-only).
 
-use super::project_boundary::{constrain_block, project_vertex};
+use super::project_boundary::{active_projector, constrain_block, project_vertex};
 use crate::backend::settings::LineSearch;
 use crate::metric::TetShape;
 use crate::metric::mat3::{Mat3, Vec3, dot, newton_direction};
@@ -107,7 +107,7 @@ pub fn patch_step(p: &Problem, patch: &Patch, v: usize, xv: &Vec3, ls: &LineSear
     // a sliding vertex: the step in its tangent space, each trial put back on the boundary
     let slide = p.sliding.as_ref().filter(|s| s.slides(v));
     let (g, h) = match slide {
-        Some(s) => constrain_block(&s.projector[v], &g, &h),
+        Some(s) => constrain_block(&active_projector(s, v, xv, &g), &g, &h),
         None => (g, h),
     };
     let d = newton_direction(&g, &h);

@@ -273,7 +273,8 @@ impl Backend for CpuBackend<'_> {
         };
         if let (Some(v), Some(mut g)) = (gradient, g) {
             if let Some(s) = &p.sliding {
-                constrain::constrain(&s.projector, &p.free_vertices, &mut g);
+                let active = project_boundary::active_projectors(s, &p.free_vertices, x, &g);
+                constrain::constrain(&active, &p.free_vertices, &mut g);
             }
             self.vectors[v.0 as usize] = g;
         }
@@ -375,8 +376,9 @@ impl Backend for CpuBackend<'_> {
             return Err(crate::error::accepted_step_inverted());
         }
         if let Some(s) = &p.sliding {
-            constrain::constrain(&s.projector, &p.free_vertices, grad);
-            h.matrix.constrain(&s.projector, &p.free_vertices);
+            let active = project_boundary::active_projectors(s, &p.free_vertices, &self.x, grad);
+            constrain::constrain(&active, &p.free_vertices, grad);
+            h.matrix.constrain(&active, &p.free_vertices);
         }
         Ok(())
     }

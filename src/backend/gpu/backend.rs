@@ -553,8 +553,9 @@ impl<'c> GpuBackend<'c> {
         Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
-    /// g <- P g at every free vertex, where the boundary slides.
-    fn constrain(&mut self, g: Vector) -> Result<()> {
+    /// g <- P g at every free vertex, where the boundary slides, with P the
+    /// projector of the constraint active at `x` (kept for `constrain_blocks`).
+    fn constrain(&mut self, g: Vector, x: Buf) -> Result<()> {
         if self.problem.sliding.is_none() {
             return Ok(());
         }
@@ -565,6 +566,7 @@ impl<'c> GpuBackend<'c> {
                 slide_real: Buf::SlideReal,
                 slide_idx: Buf::SlideIdx,
                 free_vertices: Buf::Free,
+                x,
                 y: Buf::Vector(g.0),
             ],
             Op::n(self.n_free),
@@ -878,7 +880,7 @@ impl Backend for GpuBackend<'_> {
         }
         if let Some(g) = gradient {
             self.gradient_gather(Buf::CornerGrad, 12, g)?;
-            self.constrain(g)?;
+            self.constrain(g, x)?;
         }
         Ok(())
     }
@@ -1099,7 +1101,7 @@ impl Backend for GpuBackend<'_> {
         )?;
         self.gradient_gather(Buf::Elem, ELEM_STRIDE, g)?;
         if self.problem.sliding.is_some() {
-            self.constrain(g)?;
+            self.constrain(g, Buf::X)?;
             self.record(
                 Kernel::ConstrainBlocks.plain(),
                 binds![

@@ -35,6 +35,11 @@ impl Real {
             Real::F64 => ("f64", "1.7976931348623157e308"),
         };
         let mut s = format!("alias real = {ty};\nconst REAL_MAX: real = {max};\n");
+        use crate::backend::cpu::project_boundary::{CREASE_SIN, MAPPING_EPS, MAPPING_STEP};
+        s.push_str(&format!(
+            "const MAPPING_STEP: real = {MAPPING_STEP:e};\nconst MAPPING_EPS: real = {MAPPING_EPS:e};\n\
+             const CREASE_SIN: f32 = {CREASE_SIN:e};\n"
+        ));
         for (name, value) in super::layout::PRELUDE_CONSTANTS {
             s.push_str(&format!("const {name}: u32 = {value}u;\n"));
         }
@@ -257,7 +262,9 @@ production: {
     ProjectBoundary = "project_boundary", variants: false, [
         OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), s("x", RW, Re),
     ];
-    Constrain = "constrain", variants: false, [OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), s("y", RW, Re)];
+    Constrain = "constrain", variants: false, [
+        OP, b("slide_real", RW, Re), SLIDE_IDX, b("free_vertices", R, Ui), s("x", R, Re), s("y", RW, Re),
+    ];
     ConstrainBlocks = "constrain_blocks", variants: false, [
         OP, SLIDE_REAL, SLIDE_IDX, b("free_vertices", R, Ui), b("row_offsets", R, Ui), s("cols", R, Ui),
         b("diag", R, Ui), s("blocks", RW, Re),
