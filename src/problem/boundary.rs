@@ -266,6 +266,28 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
 
+/// Feature edges found by their dihedral angle alone, less every chain that
+/// ends nowhere: an edge with an end on no other feature edge is dropped,
+/// again and again, unless `sure` keeps it (a rim, a curve of the file). The
+/// features a user built form closed curves or meet at corners; a poor skin
+/// of a smooth surface (vertices slid along it, its facets now skewed) has
+/// edges sharper than the feature angle too, but they stand alone or in
+/// short open chains and would fix or pin the vertices on them.
+pub(crate) fn without_dangling(mut edges: Vec<(u32, u32)>, sure: impl Fn(&(u32, u32)) -> bool) -> Vec<(u32, u32)> {
+    loop {
+        let mut degree: HashMap<u32, usize> = HashMap::new();
+        for &(a, b) in &edges {
+            *degree.entry(a).or_default() += 1;
+            *degree.entry(b).or_default() += 1;
+        }
+        let before = edges.len();
+        edges.retain(|e| sure(e) || (degree[&e.0] > 1 && degree[&e.1] > 1));
+        if edges.len() == before {
+            return edges;
+        }
+    }
+}
+
 /// The edges of a mesh's line cells (its file's curves: Gmsh's curve
 /// elements, VTK lines): on a surface mesh they are feature curves.
 fn file_curves(mesh: &Mesh) -> Vec<(u32, u32)> {
@@ -360,6 +382,10 @@ pub fn classify(mesh: &Mesh, points: &[Vec3], feature_angle: f64) -> SkinClasses
     };
     let mut feature_edges: Vec<(u32, u32)> = edges.iter().filter(|(_, fs)| is_feature(fs)).map(|(k, _)| *k).collect();
     feature_edges.sort_unstable();
+    if !planar {
+        let sure = |k: &(u32, u32)| edges[k].len() != 2;
+        feature_edges = without_dangling(feature_edges, sure);
+    }
     let feature_set: std::collections::HashSet<(u32, u32)> = feature_edges.iter().copied().collect();
     let feature_at = Csr::from_pairs(
         n,
@@ -558,5 +584,23 @@ impl SkinClasses {
             primitives: self.primitives.clone(),
             counts,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::without_dangling;
+
+    /// A closed loop and a junction of three loops stay; a chain that ends
+    /// nowhere goes, unless `sure` keeps it.
+    #[test]
+    fn dangling_feature_chains_are_dropped() {
+        let loop3 = vec![(0, 1), (1, 2), (0, 2)];
+        assert_eq!(without_dangling(loop3.clone(), |_| false), loop3);
+        let mut with_tail = loop3.clone();
+        with_tail.extend([(2, 3), (3, 4)]);
+        assert_eq!(without_dangling(with_tail.clone(), |_| false), loop3);
+        assert_eq!(without_dangling(with_tail.clone(), |&(a, _)| a == 3), with_tail);
+        assert!(without_dangling(vec![(5, 6), (6, 7)], |_| false).is_empty());
     }
 }

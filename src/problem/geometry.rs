@@ -163,6 +163,17 @@ impl Geometry {
             }
         }
         feature.sort_unstable();
+        let sure = |k: &(u32, u32)| edges[k].len() != 2 || curves.contains(k);
+        let kept = boundary::without_dangling(feature.clone(), sure);
+        if kept.len() != feature.len() {
+            // a dropped edge joins its two faces' patches after all
+            let kept_set: std::collections::HashSet<&(u32, u32)> = kept.iter().collect();
+            for k in feature.iter().filter(|k| !kept_set.contains(k)) {
+                let fs = &edges[k];
+                union(&mut parent, fs[0].0, fs[1].0);
+            }
+            feature = kept;
+        }
         let (patch, patches) = groups(&mut parent);
 
         // vertices on feature edges: two that turn gently join a curve, others are corners
