@@ -61,6 +61,12 @@ pub fn dot(a: &Vec3, b: &Vec3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// a / |a|, or a itself when it is zero.
+pub fn unit(a: Vec3) -> Vec3 {
+    let n = dot(&a, &a).sqrt();
+    if n > 0.0 { a.map(|c| c / n) } else { a }
+}
+
 /// Difference a - b.
 pub fn sub(a: &Vec3, b: &Vec3) -> Vec3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

@@ -34,7 +34,7 @@ use super::numbering::Numbering;
 use crate::mesh::topology::Csr;
 use crate::mesh::{ElementKind, Mesh};
 use crate::metric::mat3::cross;
-use crate::metric::mat3::{Mat3, Vec3, dot, sub};
+use crate::metric::mat3::{Mat3, Vec3, dot, sub, unit};
 use std::collections::{HashMap, VecDeque};
 
 /// Whether boundary vertices stay where they are or slide on the boundary.
@@ -155,11 +155,6 @@ pub struct SkinClasses {
 
 fn norm(a: &Vec3) -> f64 {
     dot(a, a).sqrt()
-}
-
-fn unit(a: Vec3) -> Vec3 {
-    let n = norm(&a);
-    if n > 0.0 { a.map(|c| c / n) } else { a }
 }
 
 pub(crate) const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];

@@ -27,7 +27,7 @@ use crate::backend::cpu::project_boundary::closest_on_triangle;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::mesh::topology::Csr;
-use crate::metric::mat3::{Vec3, dot, sub};
+use crate::metric::mat3::{Vec3, dot, sub, unit};
 use rstar::{AABB, PointDistance, RTree, RTreeObject};
 use std::collections::HashMap;
 
@@ -77,11 +77,6 @@ pub struct Geometry {
     corners: RTree<[f64; 3]>,
     /// Patches, curves and corners, for reports.
     pub counts: [usize; 3],
-}
-
-fn unit(a: Vec3) -> Vec3 {
-    let n = dot(&a, &a).sqrt();
-    if n > 0.0 { a.map(|c| c / n) } else { a }
 }
 
 fn find(parent: &mut [u32], mut i: u32) -> u32 {

@@ -6,7 +6,7 @@
 //! decides between a vertex, an edge and the face, so it is exact for every
 //! triangle shape; a segment is stored as `[a, b, b]`.
 
-use crate::metric::mat3::{Mat3, Vec3, cross, dot, mul_vec, sub};
+use crate::metric::mat3::{Mat3, Vec3, cross, dot, mul_vec, sub, unit};
 use crate::problem::boundary::{IDENTITY, Sliding, line_projector, plane_projector};
 use rayon::prelude::*;
 
@@ -258,11 +258,6 @@ pub fn active_projectors(s: &Sliding, free_vertices: &[u32], x: &[Vec3], g: &[Ve
         out[v] = m;
     }
     out
-}
-
-fn unit(a: Vec3) -> Vec3 {
-    let n = dot(&a, &a).sqrt();
-    if n > 0.0 { a.map(|c| c / n) } else { a }
 }
 
 /// The Newton system of one constrained vertex: P g and P H P + (I - P),
