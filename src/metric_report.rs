@@ -11,6 +11,7 @@ use crate::metric::corner_model::{Model, Template};
 use crate::metric::mat3::Vec3;
 use crate::metric::smetric::MetricKind;
 use crate::problem::{self, Numbering, ProblemOptions, Target};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt;
 
@@ -175,10 +176,27 @@ pub struct SpacingDisplacement {
 
 /// How far the movable vertices went from `before` to `after`, in percent of their local spacing.
 pub fn displacement_percent(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> SpacingDisplacement {
-    let nb = topology::vertex_neighbours(mesh);
-    let fixed = topology::fixed_vertices(mesh);
+    displacement_percent_on(
+        mesh,
+        &topology::fixed_vertices(mesh),
+        &topology::vertex_neighbours(mesh),
+        before,
+        after,
+    )
+}
+
+/// [`displacement_percent`] with the mesh's fixed vertices
+/// ([`topology::fixed_vertices`]) and vertex neighbours at hand.
+pub fn displacement_percent_on(
+    mesh: &Mesh,
+    fixed: &[bool],
+    nb: &topology::Csr,
+    before: &[Vec3],
+    after: &[Vec3],
+) -> SpacingDisplacement {
     let dist = |a: &Vec3, b: &Vec3| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
     let pct: Vec<f64> = (0..mesh.num_points())
+        .into_par_iter()
         .filter(|&v| !fixed[v] && !nb.of(v).is_empty())
         .map(|v| {
             let h = nb

@@ -26,6 +26,7 @@ use crate::backend::gpu::{self, GpuContext, GpuOptions};
 use crate::backend::settings::Precision;
 use crate::error::{Error, Result};
 use crate::mesh::fixing::{FixRules, RuleCount};
+use crate::mesh::topology;
 use crate::metric::corner_model::Template;
 use crate::metric::smetric::MetricKind;
 use crate::metric_report::{self, MetricSummary, SpacingDisplacement};
@@ -588,6 +589,17 @@ impl Smoother {
         Ok(())
     }
 
+    /// Starts, in the background, what a run will need and the mesh does
+    /// not decide: with `device = auto`, the question to the GPU drivers
+    /// (a tenth of a second or more), so that it overlaps with reading the
+    /// input. Optional; [`Smoother::smooth`] works the same without it.
+    pub fn prepare(&self) {
+        #[cfg(feature = "gpu")]
+        if self.device == DeviceChoice::Auto {
+            gpu::list_adapters_in_background();
+        }
+    }
+
     /// Picks the backend for `methods` (see [`DeviceChoice`]); a note says
     /// why `auto` chose the CPU.
     #[cfg_attr(not(feature = "gpu"), allow(unused_variables))]
@@ -905,7 +917,8 @@ impl Smoother {
         let (backend, note) = self.backend(&[self.method, untangle_method(self.method)])?;
         let unused = ruled.unused;
         // the skin is topology: one for the reports before and after
-        let skin = crate::mesh::topology::skin_vertices(mesh);
+        let ve = topology::vertex_elements(mesh);
+        let skin = topology::skin_vertices_with(mesh, &ve);
         let start = self.start(mesh, &skin, &options, ruled, targets, note);
         if !observer(Event::Start(&start)) {
             return Err(Error::InvalidArgument("cancelled before the run began".into()));
@@ -943,12 +956,27 @@ impl Smoother {
             )),
             None => None,
         };
+        // three reports side by side: each has sequential parts
+        let after = &mesh.points;
+        let (quality, (displacement, first_layer)) = rayon::join(
+            || with_unused(quality_report_on_skin(mesh, after, &skin), unused),
+            || {
+                rayon::join(
+                    || {
+                        let fixed = topology::with_user_fixed(mesh, skin.clone());
+                        let nb = topology::vertex_neighbours_with(mesh, &ve);
+                        metric_report::displacement_percent_on(mesh, &fixed, &nb, &begin, after)
+                    },
+                    || first_layer_change_on_skin(mesh, &skin, &ve, &begin, after),
+                )
+            },
+        );
         Ok(Report {
             untangled,
-            quality: with_unused(quality_report_on_skin(mesh, &mesh.points, &skin), unused),
-            displacement: metric_report::displacement_percent(mesh, &begin, &mesh.points),
+            quality,
+            displacement,
             metric,
-            first_layer: first_layer_change_on_skin(mesh, &skin, &begin, &mesh.points),
+            first_layer,
             #[cfg(feature = "mpi")]
             ranks: cluster.and_then(|c| c.report()),
             start,

@@ -366,6 +366,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<()> {
     }
     let mut sink = outputs::MeshSink::open(&a.output)?;
     let began = std::time::Instant::now();
+    settings.prepare();
     #[cfg(feature = "mpi")]
     let mut mesh = read_on_ranks(&a.input, a.quiet)?;
     #[cfg(not(feature = "mpi"))]

@@ -254,7 +254,7 @@ pub fn skin_vertices(mesh: &Mesh) -> Vec<bool> {
 
 /// [`skin_vertices`] from the mesh's [`vertex_elements`], when the caller has
 /// them already (ids must be in range).
-fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
+pub fn skin_vertices_with(mesh: &Mesh, ve: &Csr) -> Vec<bool> {
     let n = mesh.num_points();
     if !mesh.faces.is_empty() {
         return skin_vertices_hashed(mesh);

@@ -115,9 +115,22 @@ fn can_compute(a: &wgpu::Adapter) -> bool {
         && a.limits().max_compute_invocations_per_workgroup >= 64
 }
 
-/// Every adapter wgpu finds, best first.
+/// Every adapter wgpu finds, best first. Asking the drivers takes a tenth
+/// of a second or more, so the answer is kept for the process (adapters do
+/// not come and go during a run).
 pub fn list_adapters() -> Vec<AdapterSummary> {
-    ranked().iter().map(summary).collect()
+    ADAPTERS.get_or_init(|| ranked().iter().map(summary).collect()).clone()
+}
+
+static ADAPTERS: std::sync::OnceLock<Vec<AdapterSummary>> = std::sync::OnceLock::new();
+
+/// Starts [`list_adapters`]'s question to the drivers on a thread of its
+/// own, so that it overlaps with whatever comes before the answer is
+/// needed (reading the input file).
+pub fn list_adapters_in_background() {
+    if ADAPTERS.get().is_none() {
+        std::thread::spawn(|| drop(list_adapters()));
+    }
 }
 
 /// Discrete, integrated, then virtual and CPU adapters. The native compute

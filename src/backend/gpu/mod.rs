@@ -15,5 +15,8 @@ pub(crate) mod sweep_layout;
 
 pub use backend::GpuBackend;
 pub use buffers::{BindingLimits, check_bindings};
-pub use context::{AdapterSummary, DeviceLayout, GpuContext, GpuOptions, KernelForms, Precision, list_adapters};
+pub use context::{
+    AdapterSummary, DeviceLayout, GpuContext, GpuOptions, KernelForms, Precision, list_adapters,
+    list_adapters_in_background,
+};
 pub use probes::{ElementEval, cbrt_eval, mean_ratio_eval};
