@@ -662,48 +662,30 @@ fn quarters(eigen: &[(Vec3, Mat3)]) -> Vec<Mat3> {
         .collect()
 }
 
-/// `passes` rounds of a plain local mean of log G ([`neighbour_means`]):
-/// what the default's detection reads the mesh through. It is the cheap
+/// `passes` rounds of a plain local mean of log G: what the default's
+/// detection reads the mesh through. It is the cheap
 /// cousin of [`regularise`] (every smoothing run with the default target
 /// pays for the detection); the thresholds of [`Intent::keeps_input`] were
 /// measured with it.
-fn mean_regularise(mesh: &Mesh, nb: &Neighbours<'_>, vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
-    // a mean of symmetric matrices: the upper triangle, mirrored
-    const UPPER: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
-    let upper: Vec<[f64; 6]> = vals.iter().map(|v| UPPER.map(|(r, c)| v[r][c])).collect();
-    neighbour_means(mesh, nb, upper, passes)
-        .into_iter()
-        .map(|u| {
-            let mut m = [[0.0; 3]; 3];
-            for (&s, &(r, c)) in u.iter().zip(&UPPER) {
-                m[r][c] = s;
-                m[c][r] = s;
-            }
-            m
-        })
-        .collect()
-}
-
-/// `passes` rounds of a local mean: each vertex takes the mean of its
-/// elements' values, then each element the mean of its vertices'. Its
-/// support is that of the elements sharing a vertex, weighted toward those
-/// that share more; visiting those neighbours element by element cost ten
-/// times as much, and this runs on every default smooth.
-fn neighbour_means<const K: usize>(
-    mesh: &Mesh,
-    nb: &Neighbours<'_>,
-    mut vals: Vec<[f64; K]>,
-    passes: usize,
-) -> Vec<[f64; K]> {
-    let mean = |items: &mut dyn Iterator<Item = [f64; K]>| {
-        let (sum, count) = items.fold(([0.0; K], 0usize), |(mut s, c), v| {
-            s.iter_mut().zip(&v).for_each(|(s, v)| *s += v);
-            (s, c + 1)
-        });
-        sum.map(|s| s / count.max(1) as f64)
+fn mean_regularise(mesh: &Mesh, nb: &Neighbours<'_>, mut vals: Vec<Mat3>, passes: usize) -> Vec<Mat3> {
+    // each vertex takes the mean of its elements' values, then each element
+    // the mean of its vertices': the support of the elements sharing a
+    // vertex, weighted toward those sharing more, for a tenth of the cost of
+    // visiting those neighbours element by element (entry by entry in one
+    // order, so a mean of symmetric matrices stays exactly symmetric)
+    let mean = |items: &mut dyn Iterator<Item = Mat3>| {
+        let (mut sum, mut count) = ([[0.0; 3]; 3], 0usize);
+        for m in items {
+            sum.iter_mut()
+                .flatten()
+                .zip(m.iter().flatten())
+                .for_each(|(s, x)| *s += x);
+            count += 1;
+        }
+        sum.map(|row| row.map(|s| s / count.max(1) as f64))
     };
     for _ in 0..passes {
-        let at_vertices: Vec<[f64; K]> = (0..mesh.num_points())
+        let at_vertices: Vec<Mat3> = (0..mesh.num_points())
             .into_par_iter()
             .map(|v| mean(&mut nb.ve.of(v).iter().map(|&j| vals[j as usize])))
             .collect();
@@ -1101,7 +1083,13 @@ fn in_plane(l: &Vec3, n: usize) -> impl Iterator<Item = f64> + '_ {
 /// distance between the two. `None` where no wall has a stretched layer.
 pub fn first_layer_change(mesh: &Mesh, before: &[Vec3], after: &[Vec3]) -> Option<LayerChange> {
     let ve = vertex_elements(mesh);
-    first_layer_change_on_skin(mesh, &crate::mesh::topology::skin_vertices(mesh), &ve, before, after)
+    first_layer_change_on_skin(
+        mesh,
+        &crate::mesh::topology::skin_vertices_with(mesh, &ve),
+        &ve,
+        before,
+        after,
+    )
 }
 
 /// [`first_layer_change`] with the mesh's skin vertices and
@@ -1208,6 +1196,16 @@ mod tests {
     use super::*;
     use crate::metric::corner::ideal_corner;
 
+    /// Numbers in [-0.5, 0.5) from an xorshift generator.
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     #[test]
     fn reference_elements_start_at_the_ideal_corner_and_have_positive_corners() {
         for kind in ElementKind::ALL {
@@ -1234,13 +1232,7 @@ mod tests {
 
     #[test]
     fn closed_form_eigenvalues_match_the_jacobi_ones() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut r = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut r = uniform(0x2545_f491_4f6c_dd1d);
         let sorted = |mut l: Vec3| {
             l.sort_by(f64::total_cmp);
             l
@@ -1277,13 +1269,7 @@ mod tests {
 
     #[test]
     fn the_closed_form_log_matches_the_jacobi_one() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut r = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut r = uniform(0x9e37_79b9_7f4a_7c15);
         let mut cases: Vec<Mat3> = vec![
             IDENTITY,
             [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0 + 1e-12]],
@@ -1560,9 +1546,7 @@ fn sym_log(m: &Mat3, l: &Vec3, n: usize) -> Mat3 {
     let mut l: Vec<f64> = l[..n].to_vec();
     l.sort_by(|a, b| b.total_cmp(a));
     if !(l[n - 1] > 1e-6 * l[0]) || !l[0].is_finite() {
-        let (l, v) = sym_eigen(m);
-        let fl = l.map(|x| x.max(f64::MIN_POSITIVE).ln());
-        return std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| v[i][k] * fl[k] * v[j][k]).sum()));
+        return sym_fn(m, |x| x.max(f64::MIN_POSITIVE).ln());
     }
     // ln(a / b) / (a - b), stable as a -> b
     let dd = |a: f64, b: f64| {
@@ -1619,9 +1603,11 @@ pub fn intent_of(mesh: &Mesh, shapes: &Shapes<'_>) -> Intent {
     let smooth: Vec<Vec3> = log_values.par_iter().map(|l| l.map(f64::exp)).collect();
     // only an element whose log spread reaches the stretch has a growth
     // (layer_growths), and only those need eigenvectors
-    let stretched = log_values.par_iter().any(|l| {
-        let (hi, lo) = in_plane(l, n).fold((f64::MIN, f64::MAX), |(hi, lo), x| (hi.max(x), lo.min(x)));
-        hi - lo >= 2.0 * ANISOTROPIC_ASPECT.ln() - 1e-6 * hi.abs().max(lo.abs()).max(1.0)
+    // (read on G's eigenvalues, where 2D's z is the 1 that `aspect` drops;
+    // closed forms are good to about 1e-8 of log G's largest)
+    let stretched = smooth.par_iter().zip(&log_values).any(|(l, logs)| {
+        let slack = 1e-6 * logs.iter().fold(1.0f64, |s, x| s.max(x.abs()));
+        aspect(l, n).ln() >= ANISOTROPIC_ASPECT.ln() - slack
     });
     let mut growths = if stretched {
         let log_eigen: Vec<(Vec3, Mat3)> = smoothed_logs.par_iter().map(sym_eigen).collect();
