@@ -3,7 +3,10 @@
 //!
 //! - **Classification.** Skin facets (faces in 3D, edges in 2D) get outward
 //!   normals; a skin edge is a *feature edge* when its two faces meet at more
-//!   than the feature angle or when it does not have exactly two skin faces.
+//!   than the feature angle, and so do its two sides (each face's normal
+//!   summed with its neighbours' across its other edges, so that one skewed
+//!   facet on a smooth surface makes no feature), or when it does not have
+//!   exactly two skin faces.
 //!   In 2D every boundary edge is a feature edge. A vertex with no feature
 //!   edge is a *surface* vertex (it moves in its tangent plane, normal = the
 //!   area-weighted mean of its faces' normals); with exactly two, whose
@@ -375,7 +378,39 @@ pub fn classify(mesh: &Mesh, points: &[Vec3], feature_angle: f64) -> SkinClasses
         let (a, b) = (&facets[fs[0] as usize].normal, &facets[fs[1] as usize].normal);
         dot(a, b) < cos_feature * norm(a) * norm(b)
     };
-    let mut feature_edges: Vec<(u32, u32)> = edges.iter().filter(|(_, fs)| is_feature(fs)).map(|(k, _)| *k).collect();
+    // a facet's normal with those of its neighbours across its other edges:
+    // a crease whose two sides, so widened, meet within the feature angle is
+    // one skewed facet on a smooth surface (a skin slid along a sphere), not
+    // an edge a user built, whose sides stay apart
+    let side = |f: u32, skip: (u32, u32)| -> Vec3 {
+        let vs = &facets[f as usize].vertices;
+        let mut s = facets[f as usize].normal;
+        for i in 0..vs.len() {
+            let key = edge_key(vs[i], vs[(i + 1) % vs.len()]);
+            if key == skip {
+                continue;
+            }
+            if let [g, h] = edges[&key][..] {
+                let o = if g == f { h } else { g };
+                for k in 0..3 {
+                    s[k] += facets[o as usize].normal[k];
+                }
+            }
+        }
+        s
+    };
+    let sides_agree = |key: &(u32, u32), fs: &Vec<u32>| -> bool {
+        if planar || fs.len() != 2 {
+            return false;
+        }
+        let (a, b) = (side(fs[0], *key), side(fs[1], *key));
+        dot(&a, &b) >= cos_feature * norm(&a) * norm(&b)
+    };
+    let mut feature_edges: Vec<(u32, u32)> = edges
+        .iter()
+        .filter(|(k, fs)| is_feature(fs) && !sides_agree(k, fs))
+        .map(|(k, _)| *k)
+        .collect();
     feature_edges.sort_unstable();
     if !planar {
         let sure = |k: &(u32, u32)| edges[k].len() != 2;

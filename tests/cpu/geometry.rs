@@ -166,13 +166,28 @@ fn ball_slides_back_onto_the_sphere_geometry() {
     );
     assert!((objective(&slid) - info.objective).abs() < 1e-9 * info.objective);
 
-    // the mesh's own perturbed skin: fewer vertices slide, and it ends worse
+    // the mesh's own perturbed skin: its sharp but isolated creases are not
+    // features, so every skin vertex slides and the solve comes back as far
     let mut own = start.clone();
-    let own_info = smooth(&mut own, &slide(), 200);
+    let own_info = smooth(&mut own, &slide(), 400);
+    let classes = meshsmooth::problem::boundary::skin_classes(&start, &start.points, &slide())
+        .unwrap()
+        .unwrap();
+    use meshsmooth::problem::boundary::VertexClass;
+    let pinned = classes
+        .class
+        .iter()
+        .filter(|&&c| matches!(c, VertexClass::Edge | VertexClass::Corner))
+        .count();
+    assert_eq!(
+        pinned, 0,
+        "the smooth sphere has no features, yet {pinned} skin vertices are on them"
+    );
+    assert!(metric::inverted_elements(&own, &own.points).is_empty());
+    assert_eq!(own_info.stop, solve::StopReason::Converged, "{own_info:?}");
     assert!(
-        info.objective < own_info.objective,
-        "on the geometry {} vs on the own skin {}",
-        info.objective,
+        own_info.objective <= f_ref + 0.02 * (f_start - f_ref),
+        "own skin F {} against the unperturbed mesh's {f_ref}, start {f_start}",
         own_info.objective
     );
 }
