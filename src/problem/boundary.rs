@@ -371,13 +371,7 @@ pub fn classify(mesh: &Mesh, points: &[Vec3], feature_angle: f64) -> SkinClasses
             }
         }
     }
-    let is_feature = |fs: &Vec<u32>| -> bool {
-        if planar || fs.len() != 2 {
-            return true;
-        }
-        let (a, b) = (&facets[fs[0] as usize].normal, &facets[fs[1] as usize].normal);
-        dot(a, b) < cos_feature * norm(a) * norm(b)
-    };
+    let apart = |a: &Vec3, b: &Vec3| dot(a, b) < cos_feature * norm(a) * norm(b);
     // a facet's normal with those of its neighbours across its other edges:
     // a crease whose two sides, so widened, meet within the feature angle is
     // one skewed facet on a smooth surface (a skin slid along a sphere), not
@@ -399,16 +393,17 @@ pub fn classify(mesh: &Mesh, points: &[Vec3], feature_angle: f64) -> SkinClasses
         }
         s
     };
-    let sides_agree = |key: &(u32, u32), fs: &Vec<u32>| -> bool {
-        if planar || fs.len() != 2 {
-            return false;
+    let is_feature = |key: &(u32, u32), fs: &Vec<u32>| -> bool {
+        match fs[..] {
+            [f, g] if !planar => {
+                apart(&facets[f as usize].normal, &facets[g as usize].normal) && apart(&side(f, *key), &side(g, *key))
+            }
+            _ => true,
         }
-        let (a, b) = (side(fs[0], *key), side(fs[1], *key));
-        dot(&a, &b) >= cos_feature * norm(&a) * norm(&b)
     };
     let mut feature_edges: Vec<(u32, u32)> = edges
         .iter()
-        .filter(|(k, fs)| is_feature(fs) && !sides_agree(k, fs))
+        .filter(|(k, fs)| is_feature(k, fs))
         .map(|(k, _)| *k)
         .collect();
     feature_edges.sort_unstable();
